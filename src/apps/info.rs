@@ -1,0 +1,251 @@
+//! `spt info FILE.ply [--json]`: what a model file holds, how it loads, and the leaf
+//! surfels it gives.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::io::ply::{PlyModel, read_ply};
+use crate::io::{Bounds, GeometryStats};
+use crate::surfel::{LeafSurfels, SurfelStats, leaf_surfels};
+
+#[derive(Debug, Serialize)]
+pub struct ElementInfo {
+    pub name: String,
+    pub count: u64,
+    pub properties: Vec<String>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Present {
+    pub faces: bool,
+    pub normals: bool,
+    pub colors: bool,
+}
+
+#[derive(Debug, Serialize)]
+pub struct SurfelInfo {
+    pub count: usize,
+    pub radius_min: f32,
+    pub radius_median: f32,
+    pub radius_max: f32,
+    pub oriented_normals: bool,
+    #[serde(flatten)]
+    pub stats: SurfelStats,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Timing {
+    pub load_seconds: f64,
+    pub load_mb_per_s: f64,
+    pub surfels_seconds: f64,
+    pub surfels_per_second: f64,
+}
+
+/// Everything `spt info` reports on a PLY file.
+#[derive(Debug, Serialize)]
+pub struct PlyInfo {
+    pub file: String,
+    pub bytes: u64,
+    pub format: String,
+    pub comments: Vec<String>,
+    pub obj_info: Vec<String>,
+    pub elements: Vec<ElementInfo>,
+    /// Bounding box of the finite vertices, in the file's coordinates (exact f64).
+    pub bounds: Bounds,
+    /// Centre of `bounds`: every position is stored relative to it.
+    pub origin: [f64; 3],
+    pub present: Present,
+    pub geometry: GeometryStats,
+    pub surfels: SurfelInfo,
+    pub timing: Timing,
+    /// Peak resident memory of the process (Linux), bytes.
+    pub peak_memory_bytes: Option<u64>,
+}
+
+/// Peak resident set size of this process, from /proc (Linux only).
+pub fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+impl PlyInfo {
+    pub fn gather(path: &Path) -> anyhow::Result<PlyInfo> {
+        let model: PlyModel = read_ply(path)?;
+        let start = Instant::now();
+        let leaves: LeafSurfels = leaf_surfels(&model.geometry);
+        let surfels_seconds = start.elapsed().as_secs_f64();
+        let (radius_min, radius_median, radius_max) = leaves.radius_range().unwrap_or_default();
+        let load_seconds = model.load_time.as_secs_f64();
+        let g = &model.geometry;
+        let h = &model.header;
+        Ok(PlyInfo {
+            file: path.display().to_string(),
+            bytes: model.file_bytes,
+            format: format!("{} {}", h.encoding.name(), h.version),
+            comments: h.comments.clone(),
+            obj_info: h.obj_info.clone(),
+            elements: h
+                .elements
+                .iter()
+                .map(|e| ElementInfo {
+                    name: e.name.clone(),
+                    count: e.count,
+                    properties: e.properties.iter().map(|p| p.declaration()).collect(),
+                })
+                .collect(),
+            bounds: g.bounds,
+            origin: g.origin.to_array(),
+            present: Present {
+                faces: !g.triangles.is_empty(),
+                normals: g.normals.is_some(),
+                colors: g.colors.is_some(),
+            },
+            geometry: model.stats.clone(),
+            surfels: SurfelInfo {
+                count: leaves.surfels.len(),
+                radius_min,
+                radius_median,
+                radius_max,
+                oriented_normals: leaves.oriented_normals,
+                stats: leaves.stats,
+            },
+            timing: Timing {
+                load_seconds,
+                load_mb_per_s: model.file_bytes as f64 / 1e6 / load_seconds.max(1e-9),
+                surfels_seconds,
+                surfels_per_second: leaves.surfels.len() as f64 / surfels_seconds.max(1e-9),
+            },
+            peak_memory_bytes: peak_memory_bytes(),
+        })
+    }
+
+    /// The report as a person reads it.
+    pub fn to_text(&self) -> String {
+        let g = &self.geometry;
+        let s = &self.surfels;
+        let yes = |b: bool| if b { "yes" } else { "no" };
+        let mut out = String::new();
+        let mut line = |k: &str, v: String| out.push_str(&format!("{k:<14}{v}\n"));
+        line("file", format!("{} ({})", self.file, bytes(self.bytes)));
+        line("format", self.format.clone());
+        for c in &self.comments {
+            line("comment", c.clone());
+        }
+        for c in &self.obj_info {
+            line("obj_info", c.clone());
+        }
+        for e in &self.elements {
+            line("element", format!("{} {}", e.name, count(e.count)));
+            for p in &e.properties {
+                line("", format!("property {p}"));
+            }
+        }
+        line(
+            "vertices",
+            format!(
+                "{} read, {} dropped (NaN or infinite coordinates)",
+                count(g.vertices_in_file),
+                count(g.vertices_dropped_nonfinite)
+            ),
+        );
+        if self.present.faces || g.faces_in_file > 0 {
+            line(
+                "faces",
+                format!(
+                    "{} read → {} triangles; skipped: {} with < 3 vertices, {} triangles on dropped vertices",
+                    count(g.faces_in_file),
+                    count(g.triangles),
+                    count(g.faces_with_fewer_than_3_vertices),
+                    count(g.triangles_dropped_nonfinite)
+                ),
+            );
+        }
+        line("bbox min", xyz(self.bounds.min));
+        line("bbox max", xyz(self.bounds.max));
+        line("origin", xyz(self.origin));
+        line(
+            "present",
+            format!(
+                "faces {}, normals {}, colours {}",
+                yes(self.present.faces),
+                yes(self.present.normals),
+                yes(self.present.colors)
+            ),
+        );
+        line(
+            "surfels",
+            format!(
+                "{}, radius min {:.6e} / median {:.6e} / max {:.6e}, normals {}",
+                count(s.count as u64),
+                s.radius_min,
+                s.radius_median,
+                s.radius_max,
+                if s.oriented_normals { "oriented" } else { "unoriented (two-sided)" }
+            ),
+        );
+        let st = &s.stats;
+        line(
+            "",
+            format!(
+                "degenerate triangles {}, isolated vertices {}, cancelled normals {}, given normals {}, fallback radii {}",
+                count(st.degenerate_triangles),
+                count(st.isolated_vertices),
+                count(st.cancelled_normals),
+                count(st.given_normals),
+                count(st.fallback_radii)
+            ),
+        );
+        let t = &self.timing;
+        line("load", format!("{:.1} ms, {:.0} MB/s", t.load_seconds * 1e3, t.load_mb_per_s));
+        line(
+            "surfels time",
+            format!("{:.1} ms, {:.2} M surfels/s", t.surfels_seconds * 1e3, t.surfels_per_second / 1e6),
+        );
+        if let Some(m) = self.peak_memory_bytes {
+            line("peak memory", bytes(m));
+        }
+        out
+    }
+}
+
+fn xyz(p: [f64; 3]) -> String {
+    // `{}` on f64 prints the shortest decimal that reads back to the same double.
+    format!("{} {} {}", p[0], p[1], p[2])
+}
+
+/// 1234567 → "1,234,567".
+pub fn count(n: u64) -> String {
+    let s = n.to_string();
+    let mut out = String::new();
+    for (i, c) in s.chars().enumerate() {
+        if i > 0 && (s.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+fn bytes(n: u64) -> String {
+    match n {
+        n if n >= 1 << 30 => format!("{:.2} GiB", n as f64 / (1u64 << 30) as f64),
+        n if n >= 1 << 20 => format!("{:.1} MiB", n as f64 / (1u64 << 20) as f64),
+        n if n >= 1 << 10 => format!("{:.1} KiB", n as f64 / 1024.0),
+        n => format!("{n} B"),
+    }
+}
+
+/// Runs `spt info`: prints the report as text or JSON.
+pub fn run(path: &Path, json: bool) -> anyhow::Result<()> {
+    let info = PlyInfo::gather(path)?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&info)?);
+    } else {
+        print!("{}", info.to_text());
+    }
+    Ok(())
+}

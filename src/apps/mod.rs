@@ -1,0 +1,3 @@
+//! The command-line applications built on the library.
+
+pub mod info;

@@ -1,0 +1,243 @@
+//! Binary payloads, both byte orders.
+//!
+//! Elements whose rows have a fixed size are handled in bulk: vertex rows are read in
+//! place through [`FixedRows`], and a face element whose polygons are all triangles
+//! (the common case) is decoded in parallel at a fixed stride. Anything else is walked
+//! row by row. Every read is bounds-checked against the payload, and no buffer is
+//! sized by a header count beyond what the remaining bytes can hold.
+
+use rayon::prelude::*;
+
+use super::error::Problem;
+use super::faces::{Faces, check_index};
+use super::fields::{ColumnRows, FixedRows, Plan, VertexRows};
+use super::header::{Element, Header, PropertyKind};
+
+/// The decoded parts of a binary payload.
+pub struct Decoded<'a> {
+    pub vertices: Box<dyn VertexRows + 'a>,
+    pub faces: Option<Faces>,
+}
+
+fn truncated(e: &Element, row: u64) -> Problem {
+    Problem::row(
+        &e.name,
+        row,
+        format!(
+            "the file ends inside this row (the header declares {} rows)",
+            e.count
+        ),
+    )
+}
+
+/// Walks one row of `e` starting at `pos`; calls `visit(property, bytes, list_len)` for
+/// each property (`list_len` is `None` for scalars) and returns the position after it.
+fn walk_row(
+    data: &[u8],
+    mut pos: usize,
+    e: &Element,
+    row: u64,
+    big: bool,
+    mut visit: impl FnMut(usize, &[u8], Option<usize>) -> Result<(), Problem>,
+) -> Result<usize, Problem> {
+    for (pi, p) in e.properties.iter().enumerate() {
+        match p.kind {
+            PropertyKind::Scalar(s) => {
+                let b = data
+                    .get(pos..pos + s.size())
+                    .ok_or_else(|| truncated(e, row))?;
+                visit(pi, b, None)?;
+                pos += s.size();
+            }
+            PropertyKind::List { count, item } => {
+                let cb = data
+                    .get(pos..pos + count.size())
+                    .ok_or_else(|| truncated(e, row))?;
+                let n = count.read_int(cb, big).unwrap_or(0);
+                if n < 0 {
+                    return Err(Problem::row(
+                        &e.name,
+                        row,
+                        format!("list '{}' has a negative length {n}", p.name),
+                    ));
+                }
+                pos += count.size();
+                let len = (n as usize)
+                    .checked_mul(item.size())
+                    .filter(|l| pos + l <= data.len())
+                    .ok_or_else(|| truncated(e, row))?;
+                visit(pi, &data[pos..pos + len], Some(n as usize))?;
+                pos += len;
+            }
+        }
+    }
+    Ok(pos)
+}
+
+/// Decodes a vertex element with list properties, row by row, into columns.
+fn vertex_columns(
+    data: &[u8],
+    pos: &mut usize,
+    e: &Element,
+    plan: &Plan,
+    big: bool,
+) -> Result<ColumnRows, Problem> {
+    let fields = &plan.vertex_fields.fields;
+    let capacity = (e.count as usize).min(data.len() / e.min_row_size().max(1));
+    let mut columns = vec![Vec::with_capacity(capacity); fields.len()];
+    for row in 0..e.count {
+        *pos = walk_row(data, *pos, e, row, big, |pi, b, _| {
+            for (f, field) in fields.iter().enumerate() {
+                if field.property == pi {
+                    columns[f].push(field.scalar.read(b, big));
+                }
+            }
+            Ok(())
+        })?;
+    }
+    Ok(ColumnRows { columns })
+}
+
+/// Faces when every polygon is a triangle: rows have a fixed stride, decoded in
+/// parallel. Returns `Ok(None)` when some row is not a triangle (or the rows cannot all
+/// be triangles), so that the caller falls back to [`faces_by_row`].
+fn faces_fixed_triangles(
+    data: &[u8],
+    pos: usize,
+    e: &Element,
+    list: usize,
+    vertex_count: u64,
+    big: bool,
+) -> Result<Option<(Faces, usize)>, Problem> {
+    let PropertyKind::List { count, item } = e.properties[list].kind else {
+        return Ok(None);
+    };
+    let mut prefix = 0;
+    let mut suffix = 0;
+    for (pi, p) in e.properties.iter().enumerate() {
+        match p.kind {
+            PropertyKind::Scalar(s) if pi < list => prefix += s.size(),
+            PropertyKind::Scalar(s) => suffix += s.size(),
+            PropertyKind::List { .. } if pi == list => {}
+            PropertyKind::List { .. } => return Ok(None),
+        }
+    }
+    let stride = prefix + count.size() + 3 * item.size() + suffix;
+    let rows = e.count as usize;
+    let Some(end) = rows.checked_mul(stride).and_then(|n| n.checked_add(pos)) else {
+        return Ok(None);
+    };
+    if end > data.len() {
+        return Ok(None);
+    }
+    let body = &data[pos..end];
+    let mut triangles = vec![[0u32; 3]; rows];
+    const CHUNK: usize = 1 << 16;
+    let first_bad = triangles
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .map(|(c, out)| {
+            for (k, tri) in out.iter_mut().enumerate() {
+                let row = c * CHUNK + k;
+                let r = &body[row * stride + prefix..];
+                if count.read_int(r, big) != Some(3) {
+                    return Some((row, None));
+                }
+                for (j, t) in tri.iter_mut().enumerate() {
+                    let at = count.size() + j * item.size();
+                    let i = item.read_int(&r[at..], big).unwrap_or(-1);
+                    if let Err(p) = check_index(i, vertex_count, row as u64) {
+                        return Some((row, Some(p)));
+                    }
+                    *t = i as u32;
+                }
+            }
+            None
+        })
+        .find_first(Option::is_some)
+        .flatten();
+    match first_bad {
+        None => Ok(Some((
+            Faces {
+                triangles,
+                polygons: rows as u64,
+                too_short: 0,
+            },
+            end,
+        ))),
+        Some((_, Some(problem))) => Err(problem),
+        Some((_, None)) => Ok(None),
+    }
+}
+
+/// Faces of any shape, row by row.
+fn faces_by_row(
+    data: &[u8],
+    pos: &mut usize,
+    e: &Element,
+    list: usize,
+    vertex_count: u64,
+    big: bool,
+) -> Result<Faces, Problem> {
+    let PropertyKind::List { item, .. } = e.properties[list].kind else {
+        unreachable!("the plan checked that the face indices are a list")
+    };
+    let capacity = (e.count as usize).min(data.len() / e.min_row_size().max(1));
+    let mut faces = Faces::with_capacity(capacity);
+    let mut indices = Vec::new();
+    for row in 0..e.count {
+        *pos = walk_row(data, *pos, e, row, big, |pi, b, n| {
+            if pi == list {
+                indices.clear();
+                indices.extend(
+                    (0..n.unwrap_or(0)).map(|k| item.read_int(&b[k * item.size()..], big).unwrap_or(-1)),
+                );
+            }
+            Ok(())
+        })?;
+        faces.push_polygon(&indices, vertex_count, row)?;
+    }
+    Ok(faces)
+}
+
+/// Decodes the vertex and face elements of a binary payload; skips the others.
+pub fn decode<'a>(data: &'a [u8], header: &Header, plan: &Plan) -> Result<Decoded<'a>, Problem> {
+    let big = matches!(header.encoding, super::header::Encoding::BinaryBigEndian);
+    let vertex_count = header.elements[plan.vertex_element].count;
+    let mut vertices: Option<Box<dyn VertexRows + 'a>> = None;
+    let mut faces = None;
+    let mut pos = 0usize;
+    let needed = plan.faces.map_or(plan.vertex_element, |(f, _)| f.max(plan.vertex_element));
+    for (ei, e) in header.elements.iter().enumerate().take(needed + 1) {
+        let face_list = plan.faces.filter(|(f, _)| *f == ei).map(|(_, l)| l);
+        if let Some(stride) = e.fixed_row_size() {
+            let len = (e.count as usize)
+                .checked_mul(stride)
+                .filter(|&n| pos.checked_add(n).is_some_and(|end| end <= data.len()))
+                .ok_or_else(|| truncated(e, ((data.len() - pos) / stride.max(1)) as u64))?;
+            if ei == plan.vertex_element {
+                let rows = &data[pos..pos + len];
+                vertices = Some(Box::new(FixedRows::new(rows, e, &plan.vertex_fields, big)));
+            }
+            pos += len;
+        } else if ei == plan.vertex_element {
+            vertices = Some(Box::new(vertex_columns(data, &mut pos, e, plan, big)?));
+        } else if let Some(list) = face_list {
+            match faces_fixed_triangles(data, pos, e, list, vertex_count, big)? {
+                Some((f, end)) => {
+                    faces = Some(f);
+                    pos = end;
+                }
+                None => faces = Some(faces_by_row(data, &mut pos, e, list, vertex_count, big)?),
+            }
+        } else {
+            for row in 0..e.count {
+                pos = walk_row(data, pos, e, row, big, |_, _, _| Ok(()))?;
+            }
+        }
+    }
+    Ok(Decoded {
+        vertices: vertices.expect("the vertex element is among the decoded ones"),
+        faces,
+    })
+}

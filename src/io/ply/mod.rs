@@ -1,0 +1,80 @@
+//! PLY in: ASCII and binary (both byte orders), any scalar type, any property order,
+//! unknown properties and elements skipped, polygons fan-triangulated.
+//!
+//! ```text
+//! bytes ─► header (ply-rs-bw) ─► Plan (which fields) ─► binary | ascii decode ─► Geometry
+//! ```
+
+pub(crate) mod ascii;
+pub(crate) mod binary;
+mod error;
+pub(crate) mod faces;
+pub(crate) mod fields;
+pub mod header;
+pub mod scalar;
+pub mod write;
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+pub use error::{Location, PlyError};
+pub use header::{Element, Encoding, Header, Property, PropertyKind};
+pub use scalar::Scalar;
+pub use write::{FaceList, PlyLayout, PolyMesh, write_ply};
+
+use crate::io::geometry::{Geometry, GeometryStats, assemble};
+use error::Problem;
+use fields::Plan;
+
+/// A PLY file read into geometry, with what the file declared and what was dropped.
+#[derive(Debug, Clone)]
+pub struct PlyModel {
+    pub header: Header,
+    pub geometry: Geometry,
+    pub stats: GeometryStats,
+    pub file_bytes: u64,
+    pub load_time: Duration,
+}
+
+/// Reads a PLY file. Errors name the file and, where they can, the header line or the
+/// element and row at fault.
+pub fn read_ply(path: &Path) -> Result<PlyModel, PlyError> {
+    let start = Instant::now();
+    let io_err = |e: std::io::Error| Problem::file(format!("cannot read: {e}")).in_file(path);
+    let file = std::fs::File::open(path).map_err(io_err)?;
+    let len = file.metadata().map_err(io_err)?.len();
+    if len == 0 {
+        return Err(Problem::file("the file is empty").in_file(path));
+    }
+    // SAFETY: the map is only read, and only for the duration of this call; a file that
+    // another process truncates meanwhile is outside what a reader can guard against.
+    let map = unsafe { memmap2::MmapOptions::new().populate().map(&file) }.map_err(io_err)?;
+    let (header, geometry, stats) = parse(&map).map_err(|p| p.in_file(path))?;
+    Ok(PlyModel {
+        header,
+        geometry,
+        stats,
+        file_bytes: len,
+        load_time: start.elapsed(),
+    })
+}
+
+/// Parses a whole PLY file held in memory.
+pub(crate) fn parse(bytes: &[u8]) -> Result<(Header, Geometry, GeometryStats), Problem> {
+    let header = header::parse_header(bytes)?;
+    let plan = Plan::new(&header)?;
+    let payload = &bytes[header.payload_offset..];
+    let (geometry, stats) = match header.encoding {
+        Encoding::Ascii => {
+            let first_line = bytes[..header.payload_offset].iter().filter(|&&b| b == b'\n').count() + 1;
+            let d = ascii::decode(payload, &header, &plan, first_line)?;
+            assemble(&d.vertices, &plan.vertex_fields, d.faces)
+        }
+        Encoding::BinaryLittleEndian | Encoding::BinaryBigEndian => {
+            let d = binary::decode(payload, &header, &plan)?;
+            assemble(d.vertices.as_ref(), &plan.vertex_fields, d.faces)
+        }
+    }
+    .map_err(Problem::file)?;
+    Ok((header, geometry, stats))
+}

@@ -1,0 +1,127 @@
+//! Leaf surfels: one disk per sample, ready for the tree builder (DESIGN.md §2).
+//!
+//! Every surfel leaving this module has a finite position, a unit normal and a finite
+//! radius > 0, on any input. All geometric work is done on positions multiplied by a
+//! power of two that brings the model's extent into [0.5, 1): the scaling is exact, so a
+//! model scaled by 10⁻⁷ or 10⁷ gets the same surfels up to that scale, and no threshold
+//! depends on the model's units.
+
+pub mod cloud;
+pub mod mesh;
+pub mod pca;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::io::Geometry;
+
+/// A disk: centre, unit normal, radius and colour. 32 bytes.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct Surfel {
+    /// Centre, relative to the model's `origin`.
+    pub position: Vec3,
+    pub radius: f32,
+    pub normal: Vec3,
+    /// RGBA8; mid grey when the model has no colours.
+    pub color: [u8; 4],
+}
+
+/// Colour of surfels of a model without colours.
+pub const DEFAULT_COLOR: [u8; 4] = [180, 180, 180, 255];
+
+/// How the leaf surfels were made.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+pub struct SurfelStats {
+    /// Triangles with (numerically) zero area: they add nothing to normals, and half
+    /// their longest edge to radii.
+    pub degenerate_triangles: u64,
+    /// Vertices of a mesh that no triangle uses: normal and radius from neighbours.
+    pub isolated_vertices: u64,
+    /// Vertices whose area-weighted face normals cancel (e.g. two faces back to back):
+    /// normal of their largest face.
+    pub cancelled_normals: u64,
+    /// Normals given by the file and used as they are.
+    pub given_normals: u64,
+    /// Surfels whose neighbours all coincide with them: radius from the other surfels.
+    pub fallback_radii: u64,
+}
+
+/// The leaf surfels of a model.
+#[derive(Debug, Clone)]
+pub struct LeafSurfels {
+    pub surfels: Vec<Surfel>,
+    /// Model origin in the file's coordinates: surfel positions are relative to it.
+    pub origin: DVec3,
+    pub has_colors: bool,
+    /// False for normals estimated from neighbours, whose sign is arbitrary: such
+    /// surfels must be drawn two-sided.
+    pub oriented_normals: bool,
+    pub stats: SurfelStats,
+}
+
+impl LeafSurfels {
+    /// (min, median, max) of the radii, in model units.
+    pub fn radius_range(&self) -> Option<(f32, f32, f32)> {
+        let mut r: Vec<f32> = self.surfels.par_iter().map(|s| s.radius).collect();
+        if r.is_empty() {
+            return None;
+        }
+        let mid = r.len() / 2;
+        let (lo, median, hi) = r.select_nth_unstable_by(mid, f32::total_cmp);
+        let min = lo.iter().copied().fold(*median, f32::min);
+        let max = hi.iter().copied().fold(*median, f32::max);
+        Some((min, *median, max))
+    }
+}
+
+/// The power of two `s` with `extent · s` in [0.5, 1) (1 for a model without extent).
+pub fn unit_scale(extent: f64) -> f32 {
+    if extent > 0.0 && extent.is_finite() {
+        let e = -extent.log2().floor() - 1.0;
+        (e.clamp(-120.0, 120.0) as f32).exp2()
+    } else {
+        1.0
+    }
+}
+
+/// Builds the leaf surfels of a model: per vertex from its faces for a mesh, from its
+/// nearest neighbours for a point cloud (or a mesh's isolated vertices).
+pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
+    let extent = g.bounds.extent().max_element();
+    let s = unit_scale(extent);
+    let scaled: Vec<Vec3> = g.positions.par_iter().map(|p| *p * s).collect();
+    let given = g.normals.as_deref();
+    let mut stats = SurfelStats {
+        given_normals: given.map_or(0, |n| n.par_iter().filter(|v| **v != Vec3::ZERO).count() as u64),
+        ..SurfelStats::default()
+    };
+    let (normals, radii, oriented) = if g.triangles.is_empty() {
+        let mut n = vec![Vec3::ZERO; scaled.len()];
+        let mut r = vec![0.0; scaled.len()];
+        let all: Vec<u32> = (0..scaled.len() as u32).collect();
+        cloud::neighbour_disks(&scaled, &all, given, &mut n, &mut r, &mut stats);
+        (n, r, given.is_some() && stats.given_normals == scaled.len() as u64)
+    } else {
+        let (n, r) = mesh::vertex_disks(&scaled, &g.triangles, given, &mut stats);
+        (n, r, true)
+    };
+    let surfels = (0..g.positions.len())
+        .into_par_iter()
+        .map(|i| Surfel {
+            position: g.positions[i],
+            radius: radii[i] / s,
+            normal: normals[i],
+            color: g.colors.as_ref().map_or(DEFAULT_COLOR, |c| c[i]),
+        })
+        .collect();
+    LeafSurfels {
+        surfels,
+        origin: g.origin,
+        has_colors: g.colors.is_some(),
+        oriented_normals: oriented,
+        stats,
+    }
+}
