@@ -89,18 +89,14 @@ fn channel(v: f64, s: Scalar) -> u8 {
 
 const CHUNK: usize = 1 << 15;
 
-fn position(rows: &dyn VertexRows, i: usize) -> [f64; 3] {
-    [rows.get(i, 0), rows.get(i, 1), rows.get(i, 2)]
-}
-
 fn is_finite(p: [f64; 3]) -> bool {
     p.iter().all(|c| c.is_finite())
 }
 
 /// Builds the geometry from decoded vertex rows and faces.
 /// Fails only when no vertex has finite coordinates.
-pub(crate) fn assemble(
-    rows: &dyn VertexRows,
+pub(crate) fn assemble<R: VertexRows>(
+    rows: &R,
     fields: &VertexFields,
     faces: Option<Faces>,
 ) -> Result<(Geometry, GeometryStats), String> {
@@ -112,7 +108,7 @@ pub(crate) fn assemble(
         .fold(
             || (Bounds::empty(), 0u64),
             |(b, bad), i| {
-                let p = position(rows, i);
+                let p = rows.position(i);
                 if is_finite(p) { (b.grow(p), bad) } else { (b, bad + 1) }
             },
         )
@@ -127,7 +123,7 @@ pub(crate) fn assemble(
     let origin = bounds.center();
     // Rows kept, in order (all of them in the common case).
     let kept: Option<Vec<u32>> = (nonfinite > 0).then(|| {
-        (0..n as u32).filter(|&i| is_finite(position(rows, i as usize))).collect()
+        (0..n as u32).filter(|&i| is_finite(rows.position(i as usize))).collect()
     });
     let kept_rows = kept.as_deref();
     let map_rows = |f: &(dyn Fn(usize) -> Vec3 + Sync)| -> Vec<Vec3> {
@@ -137,7 +133,7 @@ pub(crate) fn assemble(
         }
     };
     // Pass 2: positions relative to origin, in f64 then rounded once to f32.
-    let positions = map_rows(&|i| (DVec3::from(position(rows, i)) - origin).as_vec3());
+    let positions = map_rows(&|i| (DVec3::from(rows.position(i)) - origin).as_vec3());
     let mut stats = GeometryStats {
         vertices_in_file: n as u64,
         vertices_dropped_nonfinite: nonfinite,

@@ -14,7 +14,7 @@ use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
-use super::SurfelStats;
+use super::{Surfel, SurfelStats};
 use super::pca::plane_normal;
 
 /// Neighbourhood size, the point itself included.
@@ -23,39 +23,40 @@ pub const K: usize = 12;
 pub const RADIUS_RANK: usize = 6;
 
 /// Radius for surfels without a measured one: the median of the measured radii, or
-/// 1/1024 of the (unit-scaled) model when none was measured.
-pub fn fallback_radius(radii: &[f32]) -> f32 {
+/// 1/1024 of the model's extent (of one unit for a model without extent) when none was.
+pub fn fallback_radius(radii: &[f32], scale: f32) -> f32 {
     let mut measured: Vec<f32> = radii.iter().copied().filter(|r| *r > 0.0 && r.is_finite()).collect();
     if measured.is_empty() {
-        return 1.0 / 1024.0;
+        return 1.0 / 1024.0 / scale;
     }
     let mid = measured.len() / 2;
     *measured.select_nth_unstable_by(mid, f32::total_cmp).1
 }
 
 /// Normal and radius from the neighbours of each point listed in `which`, searching
-/// among all `points`, written into `normals` and `radii` (arrays over all points).
+/// among all `points` (unit-scaled by `scale` for the search), written into `surfels`.
 /// Non-zero `given` normals are kept; a radius already set (from faces) is only grown.
-/// Afterwards every listed point whose radius is still 0 gets [`fallback_radius`] of all.
+/// Afterwards every listed surfel whose radius is still 0 gets [`fallback_radius`].
 pub fn neighbour_disks(
     points: &[Vec3],
+    scale: f32,
     which: &[u32],
     given: Option<&[Vec3]>,
-    normals: &mut [Vec3],
-    radii: &mut [f32],
+    surfels: &mut [Surfel],
     stats: &mut SurfelStats,
 ) {
     if which.is_empty() {
         return;
     }
-    let coords: Vec<[f32; 3]> = points.iter().map(|p| p.to_array()).collect();
+    let coords: Vec<[f32; 3]> = points.par_iter().map(|p| (*p * scale).to_array()).collect();
+    let point = |i: u32| Vec3::from(coords[i as usize]);
     let k = NonZero::new(K.min(points.len())).unwrap_or(NonZero::<usize>::MIN);
     let disks: Vec<(Vec3, f32)> = match ImmutableKdTree::<f32, 3>::new_from_slice(&coords) {
         Ok(tree) => which
             .par_iter()
             .with_min_len(1024)
             .map(|&i| {
-                let p = points[i as usize];
+                let p = point(i);
                 let found = tree
                     .query(&coords[i as usize])
                     .nearest_n::<SquaredEuclidean<f32>>(k)
@@ -64,32 +65,34 @@ pub fn neighbour_disks(
                 let normal = if given_n != Vec3::ZERO {
                     given_n
                 } else {
-                    plane_normal(found.iter().map(|f| points[f.item as usize]))
+                    plane_normal(found.iter().map(|f| point(f.item)))
                 };
                 let distinct: Vec<f32> = found
                     .iter()
-                    .map(|f| points[f.item as usize].distance(p))
+                    .map(|f| point(f.item).distance(p))
                     .filter(|d| *d > 0.0)
                     .collect();
                 let radius = distinct
                     .get(RADIUS_RANK.min(distinct.len()).wrapping_sub(1))
                     .copied()
                     .unwrap_or(0.0);
-                (normal, radius)
+                (normal, radius / scale)
             })
             .collect(),
         // A tree that cannot be built leaves every disk to the fallbacks.
         Err(_) => vec![(Vec3::Z, 0.0); which.len()],
     };
     for (&i, (normal, radius)) in which.iter().zip(disks) {
-        normals[i as usize] = normal;
-        radii[i as usize] = radii[i as usize].max(radius);
+        let s = &mut surfels[i as usize];
+        s.normal = normal;
+        s.radius = s.radius.max(radius);
     }
-    let missing: Vec<u32> = which.iter().copied().filter(|&i| radii[i as usize] <= 0.0).collect();
+    let missing: Vec<u32> = which.iter().copied().filter(|&i| surfels[i as usize].radius <= 0.0).collect();
     if !missing.is_empty() {
-        let r = fallback_radius(radii);
+        let radii: Vec<f32> = surfels.par_iter().map(|s| s.radius).collect();
+        let r = fallback_radius(&radii, scale);
         for i in &missing {
-            radii[*i as usize] = r;
+            surfels[*i as usize].radius = r;
         }
         stats.fallback_radii += missing.len() as u64;
     }

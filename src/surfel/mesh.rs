@@ -8,15 +8,16 @@
 //!   from an endpoint. So each vertex takes the maximum over its triangles of
 //!   R = abc / (4·area) (acute) or L/2 (right or obtuse, and zero-area triangles).
 //!
-//! Per-triangle terms are computed in f64 from the unit-scaled f32 positions and the
+//! Per-triangle terms are computed in f64 from the unit-scaled positions and the
 //! radius is rounded up by [`RADIUS_MARGIN`] so that f32 storage never loses coverage.
 
 use std::collections::HashMap;
 
 use glam::{DVec3, Vec3};
 
-use super::SurfelStats;
+use super::{Surfel, SurfelStats};
 use super::cloud::neighbour_disks;
+use rayon::prelude::*;
 
 /// Relative growth of every radius, above f32 rounding (2⁻²⁴).
 pub const RADIUS_MARGIN: f64 = 1e-6;
@@ -26,92 +27,173 @@ pub const DEGENERATE: f64 = 1e-6;
 /// A vertex's face normals cancel when |Σ cross| ≤ CANCELLED · Σ |cross|.
 pub const CANCELLED: f32 = 1e-5;
 
-/// Cross product and covering radius of one triangle (f64).
+/// Cross product (b − a) × (c − a), covering radius and degeneracy of one triangle,
+/// in f64. With squared edge lengths l₀ l₁ l₂ and L² their maximum: acute iff
+/// l₀ + l₁ + l₂ > 2 L² (a² + b² > c² for the longest edge c), and then
+/// R² = l₀ l₁ l₂ / (4 |cross|²); otherwise R = L / 2.
 #[inline]
-fn triangle_terms(a: Vec3, b: Vec3, c: Vec3) -> (DVec3, f64, bool) {
-    let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
-    let cross = (b - a).cross(c - a);
-    let mut l2 = [(b - a).length_squared(), (c - b).length_squared(), (a - c).length_squared()];
-    l2.sort_by(f64::total_cmp);
-    let twice_area = cross.length();
-    let degenerate = twice_area <= DEGENERATE * l2[2];
-    let acute = !degenerate && l2[0] + l2[1] > l2[2];
+fn triangle_terms(a: DVec3, b: DVec3, c: DVec3) -> (DVec3, f64, bool) {
+    let (ab, bc, ca) = (b - a, c - b, a - c);
+    let cross = ab.cross(-ca);
+    let l = [ab.length_squared(), bc.length_squared(), ca.length_squared()];
+    let longest = l[0].max(l[1]).max(l[2]);
+    let cross2 = cross.length_squared();
+    let degenerate = cross2 <= (DEGENERATE * longest).powi(2);
+    let acute = !degenerate && l[0] + l[1] + l[2] > 2.0 * longest;
     let radius = if acute {
-        // R = abc / (4·area) = abc / (2·|cross|)
-        (l2[0] * l2[1] * l2[2]).sqrt() / (2.0 * twice_area)
+        (l[0] * l[1] * l[2] / (4.0 * cross2)).sqrt()
     } else {
-        0.5 * l2[2].sqrt()
+        0.5 * longest.sqrt()
     };
     (cross, radius, degenerate)
 }
 
-/// Normals and radii (unit-scaled) of the vertices of a mesh.
-pub fn vertex_disks(
-    points: &[Vec3],
-    triangles: &[[u32; 3]],
-    given: Option<&[Vec3]>,
-    stats: &mut SurfelStats,
-) -> (Vec<Vec3>, Vec<f32>) {
-    let n = points.len();
-    let mut normal_sum = vec![Vec3::ZERO; n];
-    let mut area_sum = vec![0.0f32; n];
-    let mut radius = vec![0.0f32; n];
-    for t in triangles {
-        let [a, b, c] = t.map(|i| points[i as usize]);
-        let (cross, r, degenerate) = triangle_terms(a, b, c);
-        let r = (r * (1.0 + RADIUS_MARGIN)) as f32;
-        let (cross, area) = (cross.as_vec3(), cross.length() as f32);
-        stats.degenerate_triangles += degenerate as u64;
-        for &v in t {
-            let v = v as usize;
-            radius[v] = radius[v].max(r);
-            if !degenerate {
-                normal_sum[v] += cross;
-                area_sum[v] += area;
+/// A vertex position in unit-scaled f64.
+#[inline]
+fn at(points: &[Vec3], scale: f64, i: u32) -> DVec3 {
+    points[i as usize].as_dvec3() * scale
+}
+
+/// Per-vertex sums over a run of triangles, for the vertices `lo..lo + radius.len()`
+/// that the run touches (runs of a mesh in file order touch narrow vertex ranges).
+struct Accumulator {
+    lo: usize,
+    normal_sum: Vec<Vec3>,
+    area_sum: Vec<f32>,
+    radius: Vec<f32>,
+    degenerate: u64,
+}
+
+impl Accumulator {
+    fn over(points: &[Vec3], scale: f64, triangles: &[[u32; 3]]) -> Self {
+        let (lo, hi) = triangles
+            .iter()
+            .flatten()
+            .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        let (lo, len) = if triangles.is_empty() { (0, 0) } else { (lo as usize, (hi - lo) as usize + 1) };
+        let mut acc = Accumulator {
+            lo,
+            normal_sum: vec![Vec3::ZERO; len],
+            area_sum: vec![0.0; len],
+            radius: vec![0.0; len],
+            degenerate: 0,
+        };
+        for t in triangles {
+            let [a, b, c] = t.map(|i| at(points, scale, i));
+            let (cross, r, degenerate) = triangle_terms(a, b, c);
+            let r = (r * (1.0 + RADIUS_MARGIN)) as f32;
+            let (cross, area) = (cross.as_vec3(), cross.length() as f32);
+            acc.degenerate += degenerate as u64;
+            for &v in t {
+                let v = v as usize - lo;
+                acc.radius[v] = acc.radius[v].max(r);
+                if !degenerate {
+                    acc.normal_sum[v] += cross;
+                    acc.area_sum[v] += area;
+                }
             }
         }
+        acc
     }
-    let mut normals = vec![Vec3::ZERO; n];
-    let mut cancelled = Vec::new();
-    let mut without_faces = Vec::new();
-    for v in 0..n {
-        let given_n = given.map_or(Vec3::ZERO, |g| g[v]);
-        if given_n != Vec3::ZERO {
-            normals[v] = given_n;
-        } else if area_sum[v] == 0.0 {
-            without_faces.push(v as u32);
-        } else if normal_sum[v].length() <= CANCELLED * area_sum[v] {
-            cancelled.push(v as u32);
-        } else {
-            normals[v] = normal_sum[v].normalize();
-        }
-        if radius[v] == 0.0 && area_sum[v] == 0.0 {
-            stats.isolated_vertices += 1;
+
+    /// (normal sum, area sum, radius) of vertex `v`, zero when outside the range.
+    #[inline]
+    fn get(&self, v: usize) -> (Vec3, f32, f32) {
+        match v.checked_sub(self.lo).filter(|&k| k < self.radius.len()) {
+            Some(k) => (self.normal_sum[k], self.area_sum[k], self.radius[k]),
+            None => (Vec3::ZERO, 0.0, 0.0),
         }
     }
+}
+
+/// Triangles are summed in this many runs, in parallel, then merged in run order: the
+/// result does not depend on the number of threads.
+const RUNS: usize = 4;
+
+/// How a vertex's normal was found.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Source {
+    Given,
+    Faces,
+    Cancelled,
+    NoFaces,
+}
+
+/// Normals and radii of the vertices of a mesh, written into `surfels` (one per
+/// vertex). `scale` is the model's unit scale ([`super::unit_scale`]).
+pub fn vertex_disks(
+    points: &[Vec3],
+    scale: f32,
+    triangles: &[[u32; 3]],
+    given: Option<&[Vec3]>,
+    surfels: &mut [Surfel],
+    stats: &mut SurfelStats,
+) {
+    let s = scale as f64;
+    let runs = if triangles.len() < 1 << 16 { 1 } else { RUNS };
+    let per_run = triangles.len().div_ceil(runs).max(1);
+    let accs: Vec<Accumulator> = triangles
+        .par_chunks(per_run)
+        .map(|run| Accumulator::over(points, s, run))
+        .collect();
+    stats.degenerate_triangles = accs.iter().map(|a| a.degenerate).sum();
+    let sources: Vec<Source> = surfels
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(1 << 14)
+        .map(|(v, surfel)| {
+            let (mut sum, mut area, mut radius) = (Vec3::ZERO, 0.0f32, 0.0f32);
+            for acc in &accs {
+                let (s, a, r) = acc.get(v);
+                sum += s;
+                area += a;
+                radius = radius.max(r);
+            }
+            surfel.radius = radius / scale;
+            let given_n = given.map_or(Vec3::ZERO, |g| g[v]);
+            let (normal, source) = if given_n != Vec3::ZERO {
+                (given_n, Source::Given)
+            } else if area == 0.0 {
+                (Vec3::ZERO, Source::NoFaces)
+            } else if sum.length() <= CANCELLED * area {
+                (Vec3::ZERO, Source::Cancelled)
+            } else {
+                (sum.normalize(), Source::Faces)
+            };
+            surfel.normal = normal;
+            source
+        })
+        .collect();
+    drop(accs);
+    let with = |source: Source| -> Vec<u32> {
+        (0..sources.len() as u32).into_par_iter().filter(|&v| sources[v as usize] == source).collect()
+    };
+    let cancelled = with(Source::Cancelled);
+    let without_faces = with(Source::NoFaces);
+    stats.isolated_vertices = without_faces.iter().filter(|&&v| surfels[v as usize].radius == 0.0).count() as u64;
     if !cancelled.is_empty() {
         // Normal of the largest incident face (the sign of a fold is arbitrary).
-        let mut best: HashMap<u32, (f32, Vec3)> = cancelled.iter().map(|&v| (v, (0.0, Vec3::Z))).collect();
+        let mut best: HashMap<u32, (f64, DVec3)> = cancelled.iter().map(|&v| (v, (0.0, DVec3::Z))).collect();
         for t in triangles {
-            let (cross, _, degenerate) = triangle_terms(points[t[0] as usize], points[t[1] as usize], points[t[2] as usize]);
+            let [a, b, c] = t.map(|i| at(points, s, i));
+            let (cross, _, degenerate) = triangle_terms(a, b, c);
             if degenerate {
                 continue;
             }
-            let area = cross.length() as f32;
+            let area = cross.length();
             for v in t {
                 if let Some(b) = best.get_mut(v)
                     && area > b.0
                 {
-                    *b = (area, cross.normalize().as_vec3());
+                    *b = (area, cross / area);
                 }
             }
         }
         for (v, (_, nrm)) in best {
-            normals[v as usize] = nrm;
+            surfels[v as usize].normal = nrm.as_vec3().normalize_or(Vec3::Z);
         }
         stats.cancelled_normals = cancelled.len() as u64;
     }
     // Vertices no (non-degenerate) triangle uses: from their neighbours, like a cloud.
-    neighbour_disks(points, &without_faces, given, &mut normals, &mut radius, stats);
-    (normals, radius)
+    neighbour_disks(points, scale, &without_faces, given, surfels, stats);
 }

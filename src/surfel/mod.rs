@@ -90,33 +90,31 @@ pub fn unit_scale(extent: f64) -> f32 {
 /// Builds the leaf surfels of a model: per vertex from its faces for a mesh, from its
 /// nearest neighbours for a point cloud (or a mesh's isolated vertices).
 pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
-    let extent = g.bounds.extent().max_element();
-    let s = unit_scale(extent);
-    let scaled: Vec<Vec3> = g.positions.par_iter().map(|p| *p * s).collect();
+    let scale = unit_scale(g.bounds.extent().max_element());
     let given = g.normals.as_deref();
     let mut stats = SurfelStats {
         given_normals: given.map_or(0, |n| n.par_iter().filter(|v| **v != Vec3::ZERO).count() as u64),
         ..SurfelStats::default()
     };
-    let (normals, radii, oriented) = if g.triangles.is_empty() {
-        let mut n = vec![Vec3::ZERO; scaled.len()];
-        let mut r = vec![0.0; scaled.len()];
-        let all: Vec<u32> = (0..scaled.len() as u32).collect();
-        cloud::neighbour_disks(&scaled, &all, given, &mut n, &mut r, &mut stats);
-        (n, r, given.is_some() && stats.given_normals == scaled.len() as u64)
-    } else {
-        let (n, r) = mesh::vertex_disks(&scaled, &g.triangles, given, &mut stats);
-        (n, r, true)
-    };
-    let surfels = (0..g.positions.len())
-        .into_par_iter()
-        .map(|i| Surfel {
-            position: g.positions[i],
-            radius: radii[i] / s,
-            normal: normals[i],
+    let mut surfels: Vec<Surfel> = g
+        .positions
+        .par_iter()
+        .enumerate()
+        .map(|(i, &position)| Surfel {
+            position,
+            radius: 0.0,
+            normal: Vec3::ZERO,
             color: g.colors.as_ref().map_or(DEFAULT_COLOR, |c| c[i]),
         })
         .collect();
+    let oriented = if g.triangles.is_empty() {
+        let all: Vec<u32> = (0..surfels.len() as u32).collect();
+        cloud::neighbour_disks(&g.positions, scale, &all, given, &mut surfels, &mut stats);
+        given.is_some() && stats.given_normals == surfels.len() as u64
+    } else {
+        mesh::vertex_disks(&g.positions, scale, &g.triangles, given, &mut surfels, &mut stats);
+        true
+    };
     LeafSurfels {
         surfels,
         origin: g.origin,

@@ -10,12 +10,19 @@ use rayon::prelude::*;
 
 use super::error::Problem;
 use super::faces::{Faces, check_index};
-use super::fields::{ColumnRows, FixedRows, Plan, VertexRows};
+use super::fields::{ColumnRows, FixedRows, Plan};
 use super::header::{Element, Header, PropertyKind};
+use super::scalar::Scalar;
+
+/// Vertex rows of a binary payload: in place when their size is fixed, else decoded.
+pub enum VertexSource<'a> {
+    Fixed(FixedRows<'a>),
+    Columns(ColumnRows),
+}
 
 /// The decoded parts of a binary payload.
 pub struct Decoded<'a> {
-    pub vertices: Box<dyn VertexRows + 'a>,
+    pub vertices: VertexSource<'a>,
     pub faces: Option<Faces>,
 }
 
@@ -131,12 +138,36 @@ fn faces_fixed_triangles(
         return Ok(None);
     }
     let body = &data[pos..end];
+    // The layout most tools write (uchar count, int or uint indices) gets its own loop.
+    let common = count == Scalar::U8 && matches!(item, Scalar::I32 | Scalar::U32);
     let mut triangles = vec![[0u32; 3]; rows];
     const CHUNK: usize = 1 << 16;
     let first_bad = triangles
         .par_chunks_mut(CHUNK)
         .enumerate()
         .map(|(c, out)| {
+            if common {
+                for (k, tri) in out.iter_mut().enumerate() {
+                    let row = c * CHUNK + k;
+                    let r: &[u8; 13] = body[row * stride + prefix..][..13].try_into().unwrap();
+                    if r[0] != 3 {
+                        return Some((row, None));
+                    }
+                    let get = |j: usize| {
+                        let b = [r[1 + 4 * j], r[2 + 4 * j], r[3 + 4 * j], r[4 + 4 * j]];
+                        let v = if big { u32::from_be_bytes(b) } else { u32::from_le_bytes(b) };
+                        // An int index ≥ 2³¹ is negative, hence out of range, as a uint one is.
+                        if item == Scalar::I32 && v > i32::MAX as u32 { -(1i64) } else { v as i64 }
+                    };
+                    *tri = [get(0), get(1), get(2)].map(|i| i as u32);
+                    if tri.iter().any(|&i| i as u64 >= vertex_count) {
+                        let bad = [get(0), get(1), get(2)].into_iter().find(|&i| i < 0 || i as u64 >= vertex_count);
+                        let p = check_index(bad.unwrap_or(-1), vertex_count, row as u64).err();
+                        return Some((row, p));
+                    }
+                }
+                return None;
+            }
             for (k, tri) in out.iter_mut().enumerate() {
                 let row = c * CHUNK + k;
                 let r = &body[row * stride + prefix..];
@@ -204,7 +235,7 @@ fn faces_by_row(
 pub fn decode<'a>(data: &'a [u8], header: &Header, plan: &Plan) -> Result<Decoded<'a>, Problem> {
     let big = matches!(header.encoding, super::header::Encoding::BinaryBigEndian);
     let vertex_count = header.elements[plan.vertex_element].count;
-    let mut vertices: Option<Box<dyn VertexRows + 'a>> = None;
+    let mut vertices = None;
     let mut faces = None;
     let mut pos = 0usize;
     let needed = plan.faces.map_or(plan.vertex_element, |(f, _)| f.max(plan.vertex_element));
@@ -217,11 +248,11 @@ pub fn decode<'a>(data: &'a [u8], header: &Header, plan: &Plan) -> Result<Decode
                 .ok_or_else(|| truncated(e, ((data.len() - pos) / stride.max(1)) as u64))?;
             if ei == plan.vertex_element {
                 let rows = &data[pos..pos + len];
-                vertices = Some(Box::new(FixedRows::new(rows, e, &plan.vertex_fields, big)));
+                vertices = Some(VertexSource::Fixed(FixedRows::new(rows, e, &plan.vertex_fields, big)));
             }
             pos += len;
         } else if ei == plan.vertex_element {
-            vertices = Some(Box::new(vertex_columns(data, &mut pos, e, plan, big)?));
+            vertices = Some(VertexSource::Columns(vertex_columns(data, &mut pos, e, plan, big)?));
         } else if let Some(list) = face_list {
             match faces_fixed_triangles(data, pos, e, list, vertex_count, big)? {
                 Some((f, end)) => {

@@ -148,6 +148,12 @@ pub trait VertexRows: Sync {
     fn len(&self) -> usize;
     /// Field `f` (an index into [`VertexFields::fields`]) of row `i`, as f64.
     fn get(&self, i: usize, f: usize) -> f64;
+
+    /// x y z of row `i`.
+    #[inline(always)]
+    fn position(&self, i: usize) -> [f64; 3] {
+        [self.get(i, 0), self.get(i, 1), self.get(i, 2)]
+    }
 }
 
 /// Vertex rows of a binary element whose rows all have the same size, read in place.
@@ -157,6 +163,9 @@ pub struct FixedRows<'a> {
     /// Byte offset within the row and type of each used field.
     pub fields: Vec<(usize, Scalar)>,
     pub big_endian: bool,
+    /// Offset of x when x y z are consecutive little-endian floats (the common layout,
+    /// read without per-value dispatch).
+    xyz_f32_le: Option<usize>,
 }
 
 impl<'a> FixedRows<'a> {
@@ -169,15 +178,22 @@ impl<'a> FixedRows<'a> {
                 at += s.size();
             }
         }
+        let fields: Vec<(usize, Scalar)> = used
+            .fields
+            .iter()
+            .map(|f| (offsets[f.property], f.scalar))
+            .collect();
+        let x = fields[0].0;
+        let packed = fields[..3]
+            .iter()
+            .enumerate()
+            .all(|(k, &(off, s))| s == Scalar::F32 && off == x + 4 * k);
         FixedRows {
             data,
             stride: at,
-            fields: used
-                .fields
-                .iter()
-                .map(|f| (offsets[f.property], f.scalar))
-                .collect(),
+            fields,
             big_endian,
+            xyz_f32_le: (packed && !big_endian).then_some(x),
         }
     }
 }
@@ -191,6 +207,18 @@ impl VertexRows for FixedRows<'_> {
     fn get(&self, i: usize, f: usize) -> f64 {
         let (off, s) = self.fields[f];
         s.read(&self.data[i * self.stride + off..], self.big_endian)
+    }
+
+    #[inline(always)]
+    fn position(&self, i: usize) -> [f64; 3] {
+        match self.xyz_f32_le {
+            Some(x) => {
+                let r: &[u8; 12] = self.data[i * self.stride + x..][..12].try_into().unwrap();
+                let f = |k: usize| f32::from_le_bytes([r[k], r[k + 1], r[k + 2], r[k + 3]]) as f64;
+                [f(0), f(4), f(8)]
+            }
+            None => [self.get(i, 0), self.get(i, 1), self.get(i, 2)],
+        }
     }
 }
 

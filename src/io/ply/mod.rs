@@ -72,7 +72,10 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<(Header, Geometry, GeometryStats), P
         }
         Encoding::BinaryLittleEndian | Encoding::BinaryBigEndian => {
             let d = binary::decode(payload, &header, &plan)?;
-            assemble(d.vertices.as_ref(), &plan.vertex_fields, d.faces)
+            match d.vertices {
+                binary::VertexSource::Fixed(rows) => assemble(&rows, &plan.vertex_fields, d.faces),
+                binary::VertexSource::Columns(rows) => assemble(&rows, &plan.vertex_fields, d.faces),
+            }
         }
     }
     .map_err(Problem::file)?;
