@@ -33,6 +33,18 @@ pub fn fallback_radius(radii: &[f32], scale: f32) -> f32 {
     *measured.select_nth_unstable_by(mid, f32::total_cmp).1
 }
 
+/// The distinct positions among `points`, unit-scaled. Searching among distinct
+/// positions keeps each query O(log n) however many samples coincide (10⁵ copies of
+/// one point would otherwise make the search quadratic), and coinciding samples add
+/// nothing to a neighbourhood's shape.
+fn distinct_positions(points: &[Vec3], scale: f32) -> Vec<[f32; 3]> {
+    let mut coords: Vec<[f32; 3]> = points.par_iter().map(|p| (*p * scale).to_array()).collect();
+    let key = |c: &[f32; 3]| c.map(|x| if x == 0.0 { 0 } else { x.to_bits() });
+    coords.par_sort_unstable_by_key(key);
+    coords.dedup_by_key(|c| key(c));
+    coords
+}
+
 /// Normal and radius from the neighbours of each point listed in `which`, searching
 /// among all `points` (unit-scaled by `scale` for the search), written into `surfels`.
 /// Non-zero `given` normals are kept; a radius already set (from faces) is only grown.
@@ -48,17 +60,17 @@ pub fn neighbour_disks(
     if which.is_empty() {
         return;
     }
-    let coords: Vec<[f32; 3]> = points.par_iter().map(|p| (*p * scale).to_array()).collect();
+    let coords = distinct_positions(points, scale);
     let point = |i: u32| Vec3::from(coords[i as usize]);
-    let k = NonZero::new(K.min(points.len())).unwrap_or(NonZero::<usize>::MIN);
+    let k = NonZero::new(K.min(coords.len())).unwrap_or(NonZero::<usize>::MIN);
     let disks: Vec<(Vec3, f32)> = match ImmutableKdTree::<f32, 3>::new_from_slice(&coords) {
         Ok(tree) => which
             .par_iter()
             .with_min_len(1024)
             .map(|&i| {
-                let p = point(i);
+                let p = points[i as usize] * scale;
                 let found = tree
-                    .query(&coords[i as usize])
+                    .query(&p.to_array())
                     .nearest_n::<SquaredEuclidean<f32>>(k)
                     .execute();
                 let given_n = given.map_or(Vec3::ZERO, |g| g[i as usize]);

@@ -156,8 +156,7 @@ fn faces_fixed_triangles(
                     let get = |j: usize| {
                         let b = [r[1 + 4 * j], r[2 + 4 * j], r[3 + 4 * j], r[4 + 4 * j]];
                         let v = if big { u32::from_be_bytes(b) } else { u32::from_le_bytes(b) };
-                        // An int index ≥ 2³¹ is negative, hence out of range, as a uint one is.
-                        if item == Scalar::I32 && v > i32::MAX as u32 { -(1i64) } else { v as i64 }
+                        if item == Scalar::I32 { v as i32 as i64 } else { v as i64 }
                     };
                     *tri = [get(0), get(1), get(2)].map(|i| i as u32);
                     if tri.iter().any(|&i| i as u64 >= vertex_count) {
