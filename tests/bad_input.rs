@@ -35,7 +35,12 @@ static ALLOC: Largest = Largest;
 
 fn square() -> PolyMesh {
     PolyMesh {
-        positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+        positions: vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ],
         normals: None,
         colors: None,
         faces: FaceList::triangles(&[[0, 1, 2], [0, 2, 3]]),
@@ -71,7 +76,9 @@ fn fixtures(dir: &Path) -> Vec<Fixture> {
     bad_index[n - 4..].copy_from_slice(&99i32.to_le_bytes());
     let mut negative_index = good.clone();
     negative_index[n - 4..].copy_from_slice(&(-5i32).to_le_bytes());
-    let noise: Vec<u8> = (0..4096u32).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect();
+    let noise: Vec<u8> = (0..4096u32)
+        .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
+        .collect();
 
     vec![
         Fixture { name: "truncated.ply", bytes: good[..good.len() - 7].to_vec(), expect: &["element 'face', row 1", "ends inside this row"] },
@@ -103,12 +110,24 @@ fn bad_files_are_refused_with_a_clear_error_and_no_large_allocation() {
         LARGEST.store(0, Ordering::Relaxed);
         let err = read_ply(&path).expect_err(f.name).to_string();
         let largest = LARGEST.load(Ordering::Relaxed);
-        assert!(err.contains(f.name), "{}: error does not name the file: {err}", f.name);
+        assert!(
+            err.contains(f.name),
+            "{}: error does not name the file: {err}",
+            f.name
+        );
         for word in f.expect {
-            assert!(err.contains(word), "{}: expected '{word}' in: {err}", f.name);
+            assert!(
+                err.contains(word),
+                "{}: expected '{word}' in: {err}",
+                f.name
+            );
         }
         // The test harness itself allocates a few KiB; a header count would take GBs.
-        assert!(largest < 1 << 20, "{}: an allocation of {largest} bytes", f.name);
+        assert!(
+            largest < 1 << 20,
+            "{}: an allocation of {largest} bytes",
+            f.name
+        );
     }
 }
 
@@ -118,15 +137,27 @@ fn spt_info_exits_1_with_the_message_and_never_panics() {
     for f in fixtures(dir.path()) {
         let path = dir.path().join(f.name);
         std::fs::write(&path, &f.bytes).unwrap();
-        let out = Command::new(env!("CARGO_BIN_EXE_spt")).arg("info").arg(&path).output().unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_spt"))
+            .arg("info")
+            .arg(&path)
+            .output()
+            .unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{}: {stderr}", f.name);
-        assert!(stderr.starts_with("error: ") && stderr.contains(f.name), "{}: {stderr}", f.name);
+        assert!(
+            stderr.starts_with("error: ") && stderr.contains(f.name),
+            "{}: {stderr}",
+            f.name
+        );
         assert!(!stderr.contains("panicked"), "{}: {stderr}", f.name);
         assert!(out.stdout.is_empty(), "{}: printed a report", f.name);
     }
     let missing = dir.path().join("missing.ply");
-    let out = Command::new(env!("CARGO_BIN_EXE_spt")).arg("info").arg(&missing).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_spt"))
+        .arg("info")
+        .arg(&missing)
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.ply: cannot read"));
 }
@@ -145,6 +176,9 @@ fn nonfinite_vertices_are_dropped_with_their_triangles_and_counted() {
     assert_eq!(read.stats.vertices_dropped_nonfinite, 1);
     assert_eq!(read.stats.triangles_dropped_nonfinite, 1);
     // Vertex 5 became 4 when vertex 4 was dropped.
-    assert_eq!(read.geometry.triangles, vec![[0, 1, 2], [0, 2, 3], [2, 4, 3]]);
+    assert_eq!(
+        read.geometry.triangles,
+        vec![[0, 1, 2], [0, 2, 3], [2, 4, 3]]
+    );
     assert_eq!(read.geometry.bounds.max, [1.0, 1.0, 1.0]);
 }

@@ -28,7 +28,13 @@ fn model() -> PolyMesh {
             match (i + j) % 3 {
                 // a pentagon over two cells
                 0 if i + 2 < nx => {
-                    faces.push(&[at(i, j), at(i + 1, j), at(i + 2, j), at(i + 2, j + 1), at(i, j + 1)]);
+                    faces.push(&[
+                        at(i, j),
+                        at(i + 1, j),
+                        at(i + 2, j),
+                        at(i + 2, j + 1),
+                        at(i, j + 1),
+                    ]);
                     faces.push(&[at(i + 1, j + 1), at(i, j + 1), at(i + 2, j + 1)]);
                     i += 2;
                 }
@@ -72,9 +78,17 @@ struct Variant {
 }
 
 fn variants(m: &PolyMesh) -> Vec<Variant> {
-    let props = |list: &[(&str, Scalar)]| list.iter().map(|(n, s)| (n.to_string(), *s)).collect::<Vec<_>>();
+    let props = |list: &[(&str, Scalar)]| {
+        list.iter()
+            .map(|(n, s)| (n.to_string(), *s))
+            .collect::<Vec<_>>()
+    };
     let mut out = Vec::new();
-    for encoding in [Encoding::Ascii, Encoding::BinaryLittleEndian, Encoding::BinaryBigEndian] {
+    for encoding in [
+        Encoding::Ascii,
+        Encoding::BinaryLittleEndian,
+        Encoding::BinaryBigEndian,
+    ] {
         out.push(Variant {
             name: "standard",
             layout: PlyLayout::standard(encoding, m),
@@ -140,8 +154,18 @@ fn every_encoding_and_layout_reads_back_identical_geometry() {
         let read = read_ply(&path).unwrap_or_else(|e| panic!("{what}: {e}"));
         let g = read.geometry;
         assert_eq!(g.triangles, want_triangles, "{what}: triangles");
-        assert_eq!(read.stats.faces_in_file, m.faces.sizes.len() as u64, "{what}");
-        let colors: Vec<[u8; 3]> = g.colors.as_ref().unwrap().iter().map(|c| [c[0], c[1], c[2]]).collect();
+        assert_eq!(
+            read.stats.faces_in_file,
+            m.faces.sizes.len() as u64,
+            "{what}"
+        );
+        let colors: Vec<[u8; 3]> = g
+            .colors
+            .as_ref()
+            .unwrap()
+            .iter()
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
         assert_eq!(Some(&colors), m.colors.as_ref(), "{what}: colours");
         // Positions back in file coordinates are the written ones (the offsets from the
         // origin are exact here: the model's coordinates are multiples of 1/8).
@@ -171,7 +195,9 @@ fn crlf_header_and_obj_info_are_accepted() {
     common::write_standard(&path, &m, Encoding::Ascii);
     let text = std::fs::read_to_string(&path).unwrap();
     let (head, body) = text.split_once("end_header\n").unwrap();
-    let head = head.replace("format", "obj_info scanned by hand\nformat").replace('\n', "\r\n");
+    let head = head
+        .replace("format", "obj_info scanned by hand\nformat")
+        .replace('\n', "\r\n");
     let crlf = dir.path().join("crlf.ply");
     std::fs::write(&crlf, format!("{head}end_header\r\n{body}")).unwrap();
     let a = read_ply(&path).unwrap();

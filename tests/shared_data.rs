@@ -10,7 +10,9 @@ use spt::surfel::leaf_surfels;
 
 fn other_reader(path: &std::path::Path) -> Vec<DefaultElement> {
     let mut f = std::fs::File::open(path).unwrap();
-    let ply = ply_rs_bw::parser::Parser::<DefaultElement>::new().read_ply(&mut f).unwrap();
+    let ply = ply_rs_bw::parser::Parser::<DefaultElement>::new()
+        .read_ply(&mut f)
+        .unwrap();
     ply.payload["vertex"].clone()
 }
 
@@ -25,14 +27,20 @@ fn number(e: &DefaultElement, name: &str) -> f64 {
 
 #[test]
 fn every_shared_file_loads_into_sane_surfels() {
-    let Some(dir) = common::shared_data() else { return };
+    let Some(dir) = common::shared_data() else {
+        return;
+    };
     let mut files: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "ply"))
         .collect();
     files.sort();
-    assert!(files.len() >= 4, "expected the shared scans in {}", dir.display());
+    assert!(
+        files.len() >= 4,
+        "expected the shared scans in {}",
+        dir.display()
+    );
     for path in files {
         let model = read_ply(&path).unwrap_or_else(|e| panic!("{e}"));
         let leaves = leaf_surfels(&model.geometry);
@@ -46,7 +54,9 @@ fn every_shared_file_loads_into_sane_surfels() {
 
 #[test]
 fn kinect_frame_drops_its_nan_rows_and_keeps_colours() {
-    let Some(dir) = common::shared_data() else { return };
+    let Some(dir) = common::shared_data() else {
+        return;
+    };
     let path = dir.join("kinect_rgb.ply");
     let model = read_ply(&path).unwrap();
     assert_eq!(model.stats.vertices_in_file, 307_200);
@@ -67,7 +77,9 @@ fn kinect_frame_drops_its_nan_rows_and_keeps_colours() {
 
 #[test]
 fn terrain_tile_bounding_box_is_exactly_the_files_doubles() {
-    let Some(dir) = common::shared_data() else { return };
+    let Some(dir) = common::shared_data() else {
+        return;
+    };
     let path = dir.join("terrain_utm.ply");
     let model = read_ply(&path).unwrap();
     let rows = other_reader(&path);
@@ -86,7 +98,12 @@ fn terrain_tile_bounding_box_is_exactly_the_files_doubles() {
     for (k, r) in rows.iter().enumerate().step_by(1009) {
         let p = g.positions[k].as_dvec3() + g.origin;
         for (a, c) in ["x", "y", "z"].iter().enumerate() {
-            assert!((p[a] - number(r, c)).abs() < 1e-3, "row {k} {c}: {} vs {}", p[a], number(r, c));
+            assert!(
+                (p[a] - number(r, c)).abs() < 1e-3,
+                "row {k} {c}: {} vs {}",
+                p[a],
+                number(r, c)
+            );
         }
     }
     // The report prints the same doubles (shortest round-trip decimal).
@@ -97,6 +114,11 @@ fn terrain_tile_bounding_box_is_exactly_the_files_doubles() {
         .unwrap();
     assert!(out.status.success());
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let got: Vec<f64> = json["bounds"]["min"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let got: Vec<f64> = json["bounds"]["min"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
     assert_eq!(got, min.to_vec());
 }

@@ -36,7 +36,11 @@ fn grid() -> PolyMesh {
             faces.push(&[at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
         }
     }
-    PolyMesh { positions, faces, ..PolyMesh::default() }
+    PolyMesh {
+        positions,
+        faces,
+        ..PolyMesh::default()
+    }
 }
 
 #[test]
@@ -52,7 +56,10 @@ fn default_model_disks_cover_every_triangle() {
     // outer side; here simply check that neighbouring normals agree (no flipped ones).
     for t in &g.triangles {
         let n = t.map(|i| leaves.surfels[i as usize].normal);
-        assert!(n[0].dot(n[1]) > 0.5 && n[1].dot(n[2]) > 0.5, "normals disagree on {t:?}");
+        assert!(
+            n[0].dot(n[1]) > 0.5 && n[1].dot(n[2]) > 0.5,
+            "normals disagree on {t:?}"
+        );
     }
 }
 
@@ -111,7 +118,11 @@ fn faces_back_to_back_do_not_cancel_to_nan() {
     let (g, leaves) = load(&m, "back_to_back.ply");
     assert_eq!(leaves.stats.cancelled_normals, 3);
     for s in &leaves.surfels {
-        assert!((s.normal.z.abs() - 1.0).abs() < 1e-6, "normal {:?}", s.normal);
+        assert!(
+            (s.normal.z.abs() - 1.0).abs() < 1e-6,
+            "normal {:?}",
+            s.normal
+        );
     }
     common::assert_covers(&g, &leaves, "back to back");
 }
@@ -131,10 +142,22 @@ fn same_surfels_after(offset: f64, scale: f64) {
     let extent = base.bounds.extent().max_element();
     for (i, (a, b)) in leaves.surfels.iter().zip(&reference.surfels).enumerate() {
         let pos_err = (a.position.as_dvec3() / scale - b.position.as_dvec3()).length() / extent;
-        assert!(pos_err < 1e-6, "{what}: surfel {i} position off by {pos_err:e} of the extent");
+        assert!(
+            pos_err < 1e-6,
+            "{what}: surfel {i} position off by {pos_err:e} of the extent"
+        );
         let r = a.radius as f64 / scale;
-        assert!((r / b.radius as f64 - 1.0).abs() < 1e-4, "{what}: surfel {i} radius {r} vs {}", b.radius);
-        assert!(a.normal.dot(b.normal) > 1.0 - 1e-5, "{what}: surfel {i} normal {} vs {}", a.normal, b.normal);
+        assert!(
+            (r / b.radius as f64 - 1.0).abs() < 1e-4,
+            "{what}: surfel {i} radius {r} vs {}",
+            b.radius
+        );
+        assert!(
+            a.normal.dot(b.normal) > 1.0 - 1e-5,
+            "{what}: surfel {i} normal {} vs {}",
+            a.normal,
+            b.normal
+        );
     }
     common::assert_covers(&g, &leaves, &what);
 }
@@ -185,23 +208,35 @@ fn single_point_and_two_points() {
 #[test]
 fn collinear_cloud_and_plane_cloud() {
     let line = PolyMesh {
-        positions: (0..1000).map(|i| [i as f64 * 0.01, i as f64 * 0.02, 5.0]).collect(),
+        positions: (0..1000)
+            .map(|i| [i as f64 * 0.01, i as f64 * 0.02, 5.0])
+            .collect(),
         ..PolyMesh::default()
     };
     let (_, leaves) = load(&line, "line.ply");
     let dir = Vec3::new(1.0, 2.0, 0.0).normalize();
     for s in &leaves.surfels {
-        assert!(s.normal.dot(dir).abs() < 1e-3, "normal {:?} not across the line", s.normal);
+        assert!(
+            s.normal.dot(dir).abs() < 1e-3,
+            "normal {:?} not across the line",
+            s.normal
+        );
     }
     let plane = PolyMesh {
-        positions: (0..400).map(|i| [(i % 20) as f64, (i / 20) as f64, 1.0]).collect(),
+        positions: (0..400)
+            .map(|i| [(i % 20) as f64, (i / 20) as f64, 1.0])
+            .collect(),
         ..PolyMesh::default()
     };
     let (_, leaves) = load(&plane, "plane.ply");
     for s in &leaves.surfels {
         assert!(s.normal.z.abs() > 0.999, "normal {:?}", s.normal);
         // 6th distinct neighbour on a unit grid: √2 inside, up to √5 in a corner.
-        assert!(s.radius >= 1.0 && s.radius <= 5f32.sqrt() + 1e-5, "radius {}", s.radius);
+        assert!(
+            s.radius >= 1.0 && s.radius <= 5f32.sqrt() + 1e-5,
+            "radius {}",
+            s.radius
+        );
     }
 }
 
@@ -219,5 +254,9 @@ fn given_normals_are_honoured_and_zero_ones_recomputed() {
     common::assert_sane(&leaves, "given normals");
     assert_eq!(leaves.stats.given_normals, m.positions.len() as u64 - 1);
     assert_eq!(leaves.surfels[0].normal, Vec3::Z);
-    assert_ne!(leaves.surfels[5].normal, Vec3::Z, "the zero normal is recomputed from faces");
+    assert_ne!(
+        leaves.surfels[5].normal,
+        Vec3::Z,
+        "the zero normal is recomputed from faces"
+    );
 }

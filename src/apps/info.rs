@@ -184,7 +184,11 @@ impl PlyInfo {
                 s.radius_min,
                 s.radius_median,
                 s.radius_max,
-                if s.oriented_normals { "oriented" } else { "unoriented (two-sided)" }
+                if s.oriented_normals {
+                    "oriented"
+                } else {
+                    "unoriented (two-sided)"
+                }
             ),
         );
         let st = &s.stats;
@@ -200,10 +204,21 @@ impl PlyInfo {
             ),
         );
         let t = &self.timing;
-        line("load", format!("{:.1} ms, {:.0} MB/s", t.load_seconds * 1e3, t.load_mb_per_s));
+        line(
+            "load",
+            format!(
+                "{:.1} ms, {:.0} MB/s",
+                t.load_seconds * 1e3,
+                t.load_mb_per_s
+            ),
+        );
         line(
             "surfels time",
-            format!("{:.1} ms, {:.2} M surfels/s", t.surfels_seconds * 1e3, t.surfels_per_second / 1e6),
+            format!(
+                "{:.1} ms, {:.2} M surfels/s",
+                t.surfels_seconds * 1e3,
+                t.surfels_per_second / 1e6
+            ),
         );
         if let Some(m) = self.peak_memory_bytes {
             line("peak memory", bytes(m));

@@ -9,8 +9,8 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::io::ply::fields::{VertexFields, VertexRows};
 use crate::io::ply::faces::Faces;
+use crate::io::ply::fields::{VertexFields, VertexRows};
 use crate::io::ply::scalar::Scalar;
 
 /// Axis-aligned box in the file's own coordinates, at full f64 precision.
@@ -37,10 +37,8 @@ impl Bounds {
     }
 
     fn grow(mut self, p: [f64; 3]) -> Self {
-        for a in 0..3 {
-            self.min[a] = self.min[a].min(p[a]);
-            self.max[a] = self.max[a].max(p[a]);
-        }
+        self.min = std::array::from_fn(|a| self.min[a].min(p[a]));
+        self.max = std::array::from_fn(|a| self.max[a].max(p[a]));
         self
     }
 
@@ -84,7 +82,11 @@ fn channel(v: f64, s: Scalar) -> u8 {
         Scalar::U16 => v / 257.0,
         _ => v,
     };
-    if v.is_nan() { 0 } else { v.round().clamp(0.0, 255.0) as u8 }
+    if v.is_nan() {
+        0
+    } else {
+        v.round().clamp(0.0, 255.0) as u8
+    }
 }
 
 const CHUNK: usize = 1 << 15;
@@ -109,7 +111,11 @@ pub(crate) fn assemble<R: VertexRows>(
             || (Bounds::empty(), 0u64),
             |(b, bad), i| {
                 let p = rows.position(i);
-                if is_finite(p) { (b.grow(p), bad) } else { (b, bad + 1) }
+                if is_finite(p) {
+                    (b.grow(p), bad)
+                } else {
+                    (b, bad + 1)
+                }
             },
         )
         .reduce(|| (Bounds::empty(), 0), |a, b| (a.0.union(b.0), a.1 + b.1));
@@ -123,13 +129,19 @@ pub(crate) fn assemble<R: VertexRows>(
     let origin = bounds.center();
     // Rows kept, in order (all of them in the common case).
     let kept: Option<Vec<u32>> = (nonfinite > 0).then(|| {
-        (0..n as u32).filter(|&i| is_finite(rows.position(i as usize))).collect()
+        (0..n as u32)
+            .filter(|&i| is_finite(rows.position(i as usize)))
+            .collect()
     });
     let kept_rows = kept.as_deref();
     let map_rows = |f: &(dyn Fn(usize) -> Vec3 + Sync)| -> Vec<Vec3> {
         match kept_rows {
             None => (0..n).into_par_iter().with_min_len(CHUNK).map(f).collect(),
-            Some(k) => k.par_iter().with_min_len(CHUNK).map(|&i| f(i as usize)).collect(),
+            Some(k) => k
+                .par_iter()
+                .with_min_len(CHUNK)
+                .map(|&i| f(i as usize))
+                .collect(),
         }
     };
     // Pass 2: positions relative to origin, in f64 then rounded once to f32.
@@ -142,7 +154,11 @@ pub(crate) fn assemble<R: VertexRows>(
     let normals = fields.has_normals.then(|| {
         let k = VertexFields::NORMAL;
         map_rows(&|i| {
-            let v = Vec3::new(rows.get(i, k) as f32, rows.get(i, k + 1) as f32, rows.get(i, k + 2) as f32);
+            let v = Vec3::new(
+                rows.get(i, k) as f32,
+                rows.get(i, k + 1) as f32,
+                rows.get(i, k + 2) as f32,
+            );
             v.try_normalize().unwrap_or(Vec3::ZERO)
         })
     });
@@ -160,8 +176,16 @@ pub(crate) fn assemble<R: VertexRows>(
             c
         };
         match kept_rows {
-            None => (0..n).into_par_iter().with_min_len(CHUNK).map(color).collect(),
-            Some(k) => k.par_iter().with_min_len(CHUNK).map(|&i| color(i as usize)).collect(),
+            None => (0..n)
+                .into_par_iter()
+                .with_min_len(CHUNK)
+                .map(color)
+                .collect(),
+            Some(k) => k
+                .par_iter()
+                .with_min_len(CHUNK)
+                .map(|&i| color(i as usize))
+                .collect(),
         }
     });
     let mut triangles = Vec::new();

@@ -14,8 +14,8 @@ use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
-use super::{Surfel, SurfelStats};
 use super::pca::plane_normal;
+use super::{Surfel, SurfelStats};
 
 /// Neighbourhood size, the point itself included.
 pub const K: usize = 12;
@@ -25,7 +25,11 @@ pub const RADIUS_RANK: usize = 6;
 /// Radius for surfels without a measured one: the median of the measured radii, or
 /// 1/1024 of the model's extent (of one unit for a model without extent) when none was.
 pub fn fallback_radius(radii: &[f32], scale: f32) -> f32 {
-    let mut measured: Vec<f32> = radii.iter().copied().filter(|r| *r > 0.0 && r.is_finite()).collect();
+    let mut measured: Vec<f32> = radii
+        .iter()
+        .copied()
+        .filter(|r| *r > 0.0 && r.is_finite())
+        .collect();
     if measured.is_empty() {
         return 1.0 / 1024.0 / scale;
     }
@@ -99,7 +103,11 @@ pub fn neighbour_disks(
         s.normal = normal;
         s.radius = s.radius.max(radius);
     }
-    let missing: Vec<u32> = which.iter().copied().filter(|&i| surfels[i as usize].radius <= 0.0).collect();
+    let missing: Vec<u32> = which
+        .iter()
+        .copied()
+        .filter(|&i| surfels[i as usize].radius <= 0.0)
+        .collect();
     if !missing.is_empty() {
         let radii: Vec<f32> = surfels.par_iter().map(|s| s.radius).collect();
         let r = fallback_radius(&radii, scale);

@@ -15,8 +15,8 @@ use std::collections::HashMap;
 
 use glam::{DVec3, Vec3};
 
-use super::{Surfel, SurfelStats};
 use super::cloud::neighbour_disks;
+use super::{Surfel, SurfelStats};
 use rayon::prelude::*;
 
 /// Relative growth of every radius, above f32 rounding (2⁻²⁴).
@@ -35,7 +35,11 @@ pub const CANCELLED: f32 = 1e-5;
 fn triangle_terms(a: DVec3, b: DVec3, c: DVec3) -> (DVec3, f64, bool) {
     let (ab, bc, ca) = (b - a, c - b, a - c);
     let cross = ab.cross(-ca);
-    let l = [ab.length_squared(), bc.length_squared(), ca.length_squared()];
+    let l = [
+        ab.length_squared(),
+        bc.length_squared(),
+        ca.length_squared(),
+    ];
     let longest = l[0].max(l[1]).max(l[2]);
     let cross2 = cross.length_squared();
     let degenerate = cross2 <= (DEGENERATE * longest).powi(2);
@@ -70,7 +74,11 @@ impl Accumulator {
             .iter()
             .flatten()
             .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-        let (lo, len) = if triangles.is_empty() { (0, 0) } else { (lo as usize, (hi - lo) as usize + 1) };
+        let (lo, len) = if triangles.is_empty() {
+            (0, 0)
+        } else {
+            (lo as usize, (hi - lo) as usize + 1)
+        };
         let mut acc = Accumulator {
             lo,
             normal_sum: vec![Vec3::ZERO; len],
@@ -166,14 +174,21 @@ pub fn vertex_disks(
         .collect();
     drop(accs);
     let with = |source: Source| -> Vec<u32> {
-        (0..sources.len() as u32).into_par_iter().filter(|&v| sources[v as usize] == source).collect()
+        (0..sources.len() as u32)
+            .into_par_iter()
+            .filter(|&v| sources[v as usize] == source)
+            .collect()
     };
     let cancelled = with(Source::Cancelled);
     let without_faces = with(Source::NoFaces);
-    stats.isolated_vertices = without_faces.iter().filter(|&&v| surfels[v as usize].radius == 0.0).count() as u64;
+    stats.isolated_vertices = without_faces
+        .iter()
+        .filter(|&&v| surfels[v as usize].radius == 0.0)
+        .count() as u64;
     if !cancelled.is_empty() {
         // Normal of the largest incident face (the sign of a fold is arbitrary).
-        let mut best: HashMap<u32, (f64, DVec3)> = cancelled.iter().map(|&v| (v, (0.0, DVec3::Z))).collect();
+        let mut best: HashMap<u32, (f64, DVec3)> =
+            cancelled.iter().map(|&v| (v, (0.0, DVec3::Z))).collect();
         for t in triangles {
             let [a, b, c] = t.map(|i| at(points, s, i));
             let (cross, _, degenerate) = triangle_terms(a, b, c);

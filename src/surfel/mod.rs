@@ -93,7 +93,9 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
     let scale = unit_scale(g.bounds.extent().max_element());
     let given = g.normals.as_deref();
     let mut stats = SurfelStats {
-        given_normals: given.map_or(0, |n| n.par_iter().filter(|v| **v != Vec3::ZERO).count() as u64),
+        given_normals: given.map_or(0, |n| {
+            n.par_iter().filter(|v| **v != Vec3::ZERO).count() as u64
+        }),
         ..SurfelStats::default()
     };
     let mut surfels: Vec<Surfel> = g
@@ -112,7 +114,14 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
         cloud::neighbour_disks(&g.positions, scale, &all, given, &mut surfels, &mut stats);
         given.is_some() && stats.given_normals == surfels.len() as u64
     } else {
-        mesh::vertex_disks(&g.positions, scale, &g.triangles, given, &mut surfels, &mut stats);
+        mesh::vertex_disks(
+            &g.positions,
+            scale,
+            &g.triangles,
+            given,
+            &mut surfels,
+            &mut stats,
+        );
         true
     };
     LeafSurfels {

@@ -24,16 +24,14 @@ pub fn symmetric_eigen(m: DMat3) -> (DVec3, DMat3) {
             let t = if theta == 0.0 { 1.0 } else { t };
             let c = 1.0 / (t * t + 1.0).sqrt();
             let s = t * c;
-            for k in 0..3 {
-                let (akp, akq) = (a[k][p], a[k][q]);
-                a[k][p] = c * akp - s * akq;
-                a[k][q] = s * akp + c * akq;
+            for row in &mut a {
+                let (akp, akq) = (row[p], row[q]);
+                row[p] = c * akp - s * akq;
+                row[q] = s * akp + c * akq;
             }
-            for k in 0..3 {
-                let (apk, aqk) = (a[p][k], a[q][k]);
-                a[p][k] = c * apk - s * aqk;
-                a[q][k] = s * apk + c * aqk;
-            }
+            let (rp, rq) = (a[p], a[q]);
+            a[p] = std::array::from_fn(|k| c * rp[k] - s * rq[k]);
+            a[q] = std::array::from_fn(|k| s * rp[k] + c * rq[k]);
             for row in &mut v {
                 let (vp, vq) = (row[p], row[q]);
                 row[p] = c * vp - s * vq;
@@ -81,7 +79,12 @@ mod tests {
         for (a, b) in back.to_cols_array().iter().zip(m.to_cols_array()) {
             assert!((a - b).abs() < 1e-9, "{back:?} != {m:?}");
         }
-        assert!((v.transpose() * v - DMat3::IDENTITY).to_cols_array().iter().all(|x| x.abs() < 1e-12));
+        assert!(
+            (v.transpose() * v - DMat3::IDENTITY)
+                .to_cols_array()
+                .iter()
+                .all(|x| x.abs() < 1e-12)
+        );
     }
 
     #[test]
@@ -98,7 +101,11 @@ mod tests {
 
     #[test]
     fn plane_normal_degenerate_inputs_are_unit() {
-        for pts in [vec![], vec![Vec3::ONE; 10], vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0]] {
+        for pts in [
+            vec![],
+            vec![Vec3::ONE; 10],
+            vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0],
+        ] {
             let n = plane_normal(pts.iter().copied());
             assert!((n.length() - 1.0).abs() < 1e-6 && n.is_finite());
         }

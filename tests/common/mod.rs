@@ -52,9 +52,16 @@ pub fn write_double(path: &Path, mesh: &PolyMesh) {
 /// The geometry back as a mesh in file coordinates (f64 positions, triangles).
 pub fn to_mesh(g: &Geometry) -> PolyMesh {
     PolyMesh {
-        positions: g.positions.iter().map(|p| (p.as_dvec3() + g.origin).to_array()).collect(),
+        positions: g
+            .positions
+            .iter()
+            .map(|p| (p.as_dvec3() + g.origin).to_array())
+            .collect(),
         normals: None,
-        colors: g.colors.as_ref().map(|c| c.iter().map(|c| [c[0], c[1], c[2]]).collect()),
+        colors: g
+            .colors
+            .as_ref()
+            .map(|c| c.iter().map(|c| [c[0], c[1], c[2]]).collect()),
         faces: FaceList::triangles(&g.triangles),
     }
 }
@@ -62,8 +69,16 @@ pub fn to_mesh(g: &Geometry) -> PolyMesh {
 /// Every surfel finite, with a unit normal and a finite radius > 0.
 pub fn assert_sane(leaves: &LeafSurfels, what: &str) {
     for (i, s) in leaves.surfels.iter().enumerate() {
-        assert!(s.position.is_finite(), "{what}: surfel {i} position {:?}", s.position);
-        assert!(s.radius.is_finite() && s.radius > 0.0, "{what}: surfel {i} radius {}", s.radius);
+        assert!(
+            s.position.is_finite(),
+            "{what}: surfel {i} position {:?}",
+            s.position
+        );
+        assert!(
+            s.radius.is_finite() && s.radius > 0.0,
+            "{what}: surfel {i} radius {}",
+            s.radius
+        );
         assert!(
             s.normal.is_finite() && (s.normal.length() - 1.0).abs() < 1e-5,
             "{what}: surfel {i} normal {:?}",
@@ -87,8 +102,9 @@ pub fn triangle_samples(a: DVec3, b: DVec3, c: DVec3) -> Vec<DVec3> {
     let (ab, ac) = (b - a, c - a);
     let n = ab.cross(ac);
     if n.length_squared() > 0.0 {
-        let cc = a + (n.cross(ab) * ac.length_squared() + ac.cross(n) * ab.length_squared())
-            / (2.0 * n.length_squared());
+        let cc = a
+            + (n.cross(ab) * ac.length_squared() + ac.cross(n) * ab.length_squared())
+                / (2.0 * n.length_squared());
         // Inside iff all barycentric coordinates are ≥ 0.
         let inside = [(a, b), (b, c), (c, a)]
             .iter()
@@ -109,7 +125,10 @@ pub fn assert_covers(g: &Geometry, leaves: &LeafSurfels, what: &str) -> usize {
         let p = s.map(|s| s.position.as_dvec3());
         for q in triangle_samples(p[0], p[1], p[2]) {
             let covered = (0..3).any(|k| q.distance(p[k]) <= s[k].radius as f64);
-            assert!(covered, "{what}: point {q} of triangle {t} {tri:?} is in no vertex disk: {s:?}");
+            assert!(
+                covered,
+                "{what}: point {q} of triangle {t} {tri:?} is in no vertex disk: {s:?}"
+            );
             checked += 1;
         }
     }

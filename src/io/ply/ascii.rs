@@ -38,7 +38,10 @@ impl<'a> Tokens<'a> {
             return Err(Problem::row(
                 &e.name,
                 row,
-                format!("the file ends inside this row (the header declares {} rows)", e.count),
+                format!(
+                    "the file ends inside this row (the header declares {} rows)",
+                    e.count
+                ),
             )
             .at_line(self.line));
         };
@@ -102,7 +105,12 @@ pub struct Decoded {
 }
 
 /// Decodes the vertex and face elements of an ASCII payload; skips the others.
-pub fn decode(data: &[u8], header: &Header, plan: &Plan, first_line: usize) -> Result<Decoded, Problem> {
+pub fn decode(
+    data: &[u8],
+    header: &Header,
+    plan: &Plan,
+    first_line: usize,
+) -> Result<Decoded, Problem> {
     let mut tokens = Tokens {
         data,
         pos: 0,
@@ -115,7 +123,9 @@ pub fn decode(data: &[u8], header: &Header, plan: &Plan, first_line: usize) -> R
     let mut columns = vec![Vec::with_capacity(bound(vertex_count)); fields.len()];
     let mut faces = None;
     let mut values = Vec::new();
-    let needed = plan.faces.map_or(plan.vertex_element, |(f, _)| f.max(plan.vertex_element));
+    let needed = plan
+        .faces
+        .map_or(plan.vertex_element, |(f, _)| f.max(plan.vertex_element));
     for (ei, e) in header.elements.iter().enumerate().take(needed + 1) {
         let face_list = plan.faces.filter(|(f, _)| *f == ei).map(|(_, l)| l);
         let mut element_faces = face_list.map(|_| Faces::with_capacity(bound(e.count)));
@@ -132,7 +142,11 @@ pub fn decode(data: &[u8], header: &Header, plan: &Plan, first_line: usize) -> R
                     indices.clear();
                     for &x in v {
                         if x.fract() != 0.0 {
-                            return Err(Problem::row("face", row, format!("vertex index {x} is not an integer")));
+                            return Err(Problem::row(
+                                "face",
+                                row,
+                                format!("vertex index {x} is not an integer"),
+                            ));
                         }
                         indices.push(x as i64);
                     }

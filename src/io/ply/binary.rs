@@ -155,12 +155,22 @@ fn faces_fixed_triangles(
                     }
                     let get = |j: usize| {
                         let b = [r[1 + 4 * j], r[2 + 4 * j], r[3 + 4 * j], r[4 + 4 * j]];
-                        let v = if big { u32::from_be_bytes(b) } else { u32::from_le_bytes(b) };
-                        if item == Scalar::I32 { v as i32 as i64 } else { v as i64 }
+                        let v = if big {
+                            u32::from_be_bytes(b)
+                        } else {
+                            u32::from_le_bytes(b)
+                        };
+                        if item == Scalar::I32 {
+                            v as i32 as i64
+                        } else {
+                            v as i64
+                        }
                     };
                     *tri = [get(0), get(1), get(2)].map(|i| i as u32);
                     if tri.iter().any(|&i| i as u64 >= vertex_count) {
-                        let bad = [get(0), get(1), get(2)].into_iter().find(|&i| i < 0 || i as u64 >= vertex_count);
+                        let bad = [get(0), get(1), get(2)]
+                            .into_iter()
+                            .find(|&i| i < 0 || i as u64 >= vertex_count);
                         let p = check_index(bad.unwrap_or(-1), vertex_count, row as u64).err();
                         return Some((row, p));
                     }
@@ -220,7 +230,8 @@ fn faces_by_row(
             if pi == list {
                 indices.clear();
                 indices.extend(
-                    (0..n.unwrap_or(0)).map(|k| item.read_int(&b[k * item.size()..], big).unwrap_or(-1)),
+                    (0..n.unwrap_or(0))
+                        .map(|k| item.read_int(&b[k * item.size()..], big).unwrap_or(-1)),
                 );
             }
             Ok(())
@@ -237,7 +248,9 @@ pub fn decode<'a>(data: &'a [u8], header: &Header, plan: &Plan) -> Result<Decode
     let mut vertices = None;
     let mut faces = None;
     let mut pos = 0usize;
-    let needed = plan.faces.map_or(plan.vertex_element, |(f, _)| f.max(plan.vertex_element));
+    let needed = plan
+        .faces
+        .map_or(plan.vertex_element, |(f, _)| f.max(plan.vertex_element));
     for (ei, e) in header.elements.iter().enumerate().take(needed + 1) {
         let face_list = plan.faces.filter(|(f, _)| *f == ei).map(|(_, l)| l);
         if let Some(stride) = e.fixed_row_size() {
@@ -247,11 +260,18 @@ pub fn decode<'a>(data: &'a [u8], header: &Header, plan: &Plan) -> Result<Decode
                 .ok_or_else(|| truncated(e, ((data.len() - pos) / stride.max(1)) as u64))?;
             if ei == plan.vertex_element {
                 let rows = &data[pos..pos + len];
-                vertices = Some(VertexSource::Fixed(FixedRows::new(rows, e, &plan.vertex_fields, big)));
+                vertices = Some(VertexSource::Fixed(FixedRows::new(
+                    rows,
+                    e,
+                    &plan.vertex_fields,
+                    big,
+                )));
             }
             pos += len;
         } else if ei == plan.vertex_element {
-            vertices = Some(VertexSource::Columns(vertex_columns(data, &mut pos, e, plan, big)?));
+            vertices = Some(VertexSource::Columns(vertex_columns(
+                data, &mut pos, e, plan, big,
+            )?));
         } else if let Some(list) = face_list {
             match faces_fixed_triangles(data, pos, e, list, vertex_count, big)? {
                 Some((f, end)) => {

@@ -66,7 +66,11 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<(Header, Geometry, GeometryStats), P
     let payload = &bytes[header.payload_offset..];
     let (geometry, stats) = match header.encoding {
         Encoding::Ascii => {
-            let first_line = bytes[..header.payload_offset].iter().filter(|&&b| b == b'\n').count() + 1;
+            let first_line = bytes[..header.payload_offset]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count()
+                + 1;
             let d = ascii::decode(payload, &header, &plan, first_line)?;
             assemble(&d.vertices, &plan.vertex_fields, d.faces)
         }
@@ -74,7 +78,9 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<(Header, Geometry, GeometryStats), P
             let d = binary::decode(payload, &header, &plan)?;
             match d.vertices {
                 binary::VertexSource::Fixed(rows) => assemble(&rows, &plan.vertex_fields, d.faces),
-                binary::VertexSource::Columns(rows) => assemble(&rows, &plan.vertex_fields, d.faces),
+                binary::VertexSource::Columns(rows) => {
+                    assemble(&rows, &plan.vertex_fields, d.faces)
+                }
             }
         }
     }

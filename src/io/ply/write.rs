@@ -62,13 +62,23 @@ impl PlyLayout {
     /// The usual layout: float x y z, [float nx ny nz], [uchar red green blue], and
     /// `list uchar int vertex_indices`.
     pub fn standard(encoding: Encoding, mesh: &PolyMesh) -> Self {
-        let mut vertex_properties: Vec<(String, Scalar)> =
-            ["x", "y", "z"].iter().map(|n| (n.to_string(), Scalar::F32)).collect();
+        let mut vertex_properties: Vec<(String, Scalar)> = ["x", "y", "z"]
+            .iter()
+            .map(|n| (n.to_string(), Scalar::F32))
+            .collect();
         if mesh.normals.is_some() {
-            vertex_properties.extend(["nx", "ny", "nz"].iter().map(|n| (n.to_string(), Scalar::F32)));
+            vertex_properties.extend(
+                ["nx", "ny", "nz"]
+                    .iter()
+                    .map(|n| (n.to_string(), Scalar::F32)),
+            );
         }
         if mesh.colors.is_some() {
-            vertex_properties.extend(["red", "green", "blue"].iter().map(|n| (n.to_string(), Scalar::U8)));
+            vertex_properties.extend(
+                ["red", "green", "blue"]
+                    .iter()
+                    .map(|n| (n.to_string(), Scalar::U8)),
+            );
         }
         PlyLayout {
             encoding,
@@ -135,7 +145,9 @@ pub fn write_ply(path: &Path, mesh: &PolyMesh, layout: &PlyLayout) -> std::io::R
         header += &format!("comment {c}\n");
     }
     if let Some((name, rows)) = &layout.extra_element {
-        header += &format!("element {name} {rows}\nproperty uchar id\nproperty list uchar float values\n");
+        header += &format!(
+            "element {name} {rows}\nproperty uchar id\nproperty list uchar float values\n"
+        );
     }
     header += &format!("element vertex {}\n", mesh.positions.len());
     for (name, ty) in &layout.vertex_properties {
