@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests: models, temporary files, surfel checks.
 #![allow(dead_code)]
 
+pub mod bad_files;
+
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
