@@ -6,3 +6,4 @@
 pub mod apps;
 pub mod io;
 pub mod surfel;
+pub mod tree;

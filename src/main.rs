@@ -11,8 +11,9 @@ use clap::{Parser, Subcommand};
     version,
     about = "Point-based rendering engine: sequential point trees and EWA splatting",
     long_about = "spt turns scanned meshes and point clouds (PLY) into disks (surfels) for \
-                  point-based rendering.\n\nStart with `spt info MODEL.ply` to see what a file \
-                  holds and how it loads."
+                  point-based rendering, and builds their sequential point trees.\n\nStart with \
+                  `spt info MODEL.ply` to see what a file holds and how it loads, then \
+                  `spt convert MODEL.ply MODEL.spt`."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -21,14 +22,25 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// What a PLY file holds: format, elements, counts, bounding box (exact f64), what was
-    /// dropped and why, leaf surfels (count, radii), load time and throughput.
+    /// What a model file holds. PLY: format, elements, counts, bounding box (exact f64),
+    /// what was dropped and why, leaf surfels (count, radii), load time and throughput.
+    /// .spt: nodes, depth, bounds, errors, and whether its checksum holds.
     Info {
-        /// The model: a PLY file (ASCII or binary, mesh or point cloud).
+        /// A PLY file (ASCII or binary, mesh or point cloud) or an .spt file.
         file: PathBuf,
         /// Print the report as JSON instead of text.
         #[arg(long)]
         json: bool,
+    },
+    /// Builds the sequential point tree of a PLY model and writes it as an .spt file,
+    /// which opens instantly (memory-mapped). Shows each stage (load, surfels, tree,
+    /// errors, sort, write) with its time, then a summary. The output is written to a
+    /// temporary file and renamed: a failed convert never leaves a partial file.
+    Convert {
+        /// The model: a PLY file.
+        input: PathBuf,
+        /// The .spt file to write (replaced if it exists).
+        output: PathBuf,
     },
 }
 
@@ -36,6 +48,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Info { file, json } => spt::apps::info::run(&file, json),
+        Command::Convert { input, output } => spt::apps::convert::run(&input, &output),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -35,7 +35,7 @@ fn model() -> impl Strategy<Value = PolyMesh> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(96))]
+    #![proptest_config(ProptestConfig { cases: 96, failure_persistence: None, ..ProptestConfig::default() })]
 
     #[test]
     fn surfels_are_sane_and_cover_every_triangle(m in model()) {

@@ -1,5 +1,5 @@
-//! `spt info FILE.ply [--json]`: what a model file holds, how it loads, and the leaf
-//! surfels it gives.
+//! `spt info FILE [--json]`: what a PLY file holds, how it loads and the leaf surfels
+//! it gives; or what an `.spt` file holds and whether its checksum holds.
 
 use std::path::Path;
 use std::time::Instant;
@@ -7,8 +7,10 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::io::ply::{PlyModel, read_ply};
+use crate::io::spt_file::{MAGIC, SptFile};
 use crate::io::{Bounds, GeometryStats};
 use crate::surfel::{LeafSurfels, SurfelStats, leaf_surfels};
+use crate::tree::{NodeRecord, TreeMeta};
 
 #[derive(Debug, Serialize)]
 pub struct ElementInfo {
@@ -254,8 +256,138 @@ fn bytes(n: u64) -> String {
     }
 }
 
-/// Runs `spt info`: prints the report as text or JSON.
+/// What `spt info` reports on an `.spt` file.
+#[derive(Debug, Serialize)]
+pub struct SptInfo {
+    pub file: String,
+    pub bytes: u64,
+    pub format_version: u32,
+    /// Whether the stored checksum matches the header and sections.
+    pub checksum_ok: bool,
+    pub checksum: String,
+    #[serde(flatten)]
+    pub meta: TreeMeta,
+    pub record_bytes: usize,
+    /// The root's error, model units.
+    pub root_error: f64,
+    pub open_seconds: f64,
+    pub verify_seconds: f64,
+}
+
+impl SptInfo {
+    pub fn gather(path: &Path) -> anyhow::Result<SptInfo> {
+        let start = Instant::now();
+        let file = SptFile::open_unverified(path)?;
+        let open_seconds = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let checksum_ok = file.verify().is_ok();
+        let verify_seconds = start.elapsed().as_secs_f64();
+        let scale = file.meta.error_scale;
+        let root_error = file
+            .nodes()
+            .iter()
+            .map(|r| r.error(scale))
+            .fold(0.0, f64::max);
+        Ok(SptInfo {
+            file: path.display().to_string(),
+            bytes: file.file_bytes(),
+            format_version: file.version,
+            checksum_ok,
+            checksum: format!("{:016x}", file.checksum),
+            meta: file.meta.clone(),
+            record_bytes: std::mem::size_of::<NodeRecord>(),
+            root_error,
+            open_seconds,
+            verify_seconds,
+        })
+    }
+
+    pub fn to_text(&self) -> String {
+        let m = &self.meta;
+        let mut out = String::new();
+        let mut line = |k: &str, v: String| out.push_str(&format!("{k:<14}{v}\n"));
+        line("file", format!("{} ({})", self.file, bytes(self.bytes)));
+        line("format", format!("spt version {}", self.format_version));
+        line(
+            "checksum",
+            format!(
+                "{} ({})",
+                self.checksum,
+                if self.checksum_ok {
+                    "holds"
+                } else {
+                    "MISMATCH: the file is corrupt"
+                }
+            ),
+        );
+        line(
+            "nodes",
+            format!(
+                "{} ({} leaves, {} internal), depth {}, {} bytes per record",
+                count(m.node_count),
+                count(m.leaf_count),
+                count(m.node_count - m.leaf_count),
+                m.depth,
+                self.record_bytes
+            ),
+        );
+        line("bbox min", xyz(m.bounds.min));
+        line("bbox max", xyz(m.bounds.max));
+        line("origin", xyz(m.origin));
+        line(
+            "errors",
+            format!(
+                "root {:.6e}, stored relative to {:.6e} (model units)",
+                self.root_error, m.error_scale
+            ),
+        );
+        line(
+            "present",
+            format!(
+                "colours {}, normals {}",
+                if m.has_colors { "yes" } else { "no" },
+                if m.oriented_normals {
+                    "oriented"
+                } else {
+                    "unoriented (two-sided)"
+                }
+            ),
+        );
+        line(
+            "open",
+            format!(
+                "{:.1} ms (memory map), checksum {:.1} ms",
+                self.open_seconds * 1e3,
+                self.verify_seconds * 1e3
+            ),
+        );
+        out
+    }
+}
+
+/// Whether `path` starts with the `.spt` magic.
+fn is_spt(path: &Path) -> bool {
+    let mut magic = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
+        .is_ok_and(|_| &magic == MAGIC)
+}
+
+/// Runs `spt info` on a PLY or `.spt` file: prints the report as text or JSON. A
+/// corrupt `.spt` is reported, then the command fails.
 pub fn run(path: &Path, json: bool) -> anyhow::Result<()> {
+    if is_spt(path) {
+        let info = SptInfo::gather(path)?;
+        if json {
+            println!("{}", serde_json::to_string_pretty(&info)?);
+        } else {
+            print!("{}", info.to_text());
+        }
+        if !info.checksum_ok {
+            anyhow::bail!("{}: checksum mismatch: the file is corrupt", path.display());
+        }
+        return Ok(());
+    }
     let info = PlyInfo::gather(path)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&info)?);

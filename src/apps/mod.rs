@@ -1,3 +1,5 @@
 //! The command-line applications built on the library.
 
+pub mod convert;
 pub mod info;
+pub mod progress;

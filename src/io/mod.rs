@@ -1,6 +1,9 @@
-//! Model files in: PLY reading and writing, and the rebased [`Geometry`] they produce.
+//! Model files: PLY reading and writing, the rebased [`Geometry`] they produce, and
+//! `.spt` files (sequential point trees).
 
+pub mod atomic;
 pub mod geometry;
 pub mod ply;
+pub mod spt_file;
 
 pub use geometry::{Bounds, Geometry, GeometryStats};

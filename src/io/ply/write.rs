@@ -1,6 +1,6 @@
 //! PLY out: any encoding, property types and property order, so that the generator in
 //! `tools/` and the round-trip tests can write what real tools write. The file is
-//! written to a temporary name beside the target and renamed into place.
+//! written atomically ([`crate::io::atomic`]).
 
 use std::io::Write;
 use std::path::Path;
@@ -168,12 +168,16 @@ pub fn write_ply(path: &Path, mesh: &PolyMesh, layout: &PlyLayout) -> std::io::R
     }
     header += "end_header\n";
 
-    let tmp = path.with_extension("ply.tmp");
-    let file = std::fs::File::create(&tmp)?;
-    let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
-    w.write_all(header.as_bytes())?;
+    crate::io::atomic::write_atomically(path, |w| {
+        w.write_all(header.as_bytes())?;
+        write_rows(w, mesh, layout)
+    })
+}
+
+fn write_rows(w: &mut dyn Write, mesh: &PolyMesh, layout: &PlyLayout) -> std::io::Result<()> {
+    let enc = layout.encoding;
     let mut row = Vec::with_capacity(256);
-    let flush = |row: &mut Vec<u8>, w: &mut std::io::BufWriter<std::fs::File>| {
+    let flush = |row: &mut Vec<u8>, w: &mut dyn Write| {
         end_row(row, enc);
         let r = w.write_all(row);
         row.clear();
@@ -185,14 +189,14 @@ pub fn write_ply(path: &Path, mesh: &PolyMesh, layout: &PlyLayout) -> std::io::R
             put(&mut row, enc, Scalar::U8, 2.0);
             put(&mut row, enc, Scalar::F32, 0.5);
             put(&mut row, enc, Scalar::F32, -1.25);
-            flush(&mut row, &mut w)?;
+            flush(&mut row, w)?;
         }
     }
     for i in 0..mesh.positions.len() {
         for (name, ty) in &layout.vertex_properties {
             put(&mut row, enc, *ty, vertex_value(mesh, name, *ty, i));
         }
-        flush(&mut row, &mut w)?;
+        flush(&mut row, w)?;
     }
     let mut at = 0;
     for (f, &n) in mesh.faces.sizes.iter().enumerate() {
@@ -204,10 +208,7 @@ pub fn write_ply(path: &Path, mesh: &PolyMesh, layout: &PlyLayout) -> std::io::R
             put(&mut row, enc, layout.face_index, i as f64);
         }
         at += n as usize;
-        flush(&mut row, &mut w)?;
+        flush(&mut row, w)?;
     }
-    let file = w.into_inner().map_err(|e| e.into_error())?;
-    file.sync_all()?;
-    drop(file);
-    std::fs::rename(&tmp, path)
+    Ok(())
 }

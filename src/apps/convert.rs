@@ -1,0 +1,131 @@
+//! `spt convert IN.ply OUT.spt`: load, leaf surfels, tree, errors, sort, write, each
+//! with its progress and timing, then a summary.
+
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+use crate::apps::info::count;
+use crate::apps::progress::Stage;
+use crate::io::atomic::write_atomically;
+use crate::io::ply::read_ply;
+use crate::io::spt_file::{HEADER_BYTES, write_to};
+use crate::surfel::leaf_surfels;
+use crate::tree::{NodeRecord, build_hierarchy, build_records, sort_list};
+
+/// A writer that reports the bytes it passes on to a stage.
+struct Counted<'a> {
+    inner: &'a mut dyn Write,
+    stage: &'a Stage,
+}
+
+impl Write for Counted<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.stage.advance(n as u64);
+        Ok(n)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+fn rate(n: f64, seconds: f64) -> f64 {
+    n / seconds.max(1e-9)
+}
+
+pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let stage = Stage::start("load", 0, "");
+    let model = read_ply(input)?;
+    let points = model.geometry.positions.len() as u64;
+    let dropped = match model.stats.vertices_dropped_nonfinite {
+        0 => String::new(),
+        n => format!(", {} non-finite vertices dropped", count(n)),
+    };
+    stage.finish(&format!(
+        "{} vertices, {} triangles, {:.0} MB/s{dropped}",
+        count(points),
+        count(model.geometry.triangles.len() as u64),
+        rate(model.file_bytes as f64 / 1e6, stage.seconds()),
+    ));
+
+    let stage = Stage::start("surfels", 0, "");
+    let mut leaves = leaf_surfels(&model.geometry);
+    drop(model);
+    stage.finish(&format!(
+        "{:.2} M surfels/s",
+        rate(points as f64 / 1e6, stage.seconds())
+    ));
+
+    let stage = Stage::start("tree", points, "leaves");
+    let hierarchy = build_hierarchy(&mut leaves, &|n| stage.advance(n));
+    let internal = hierarchy.internal.len() as u64;
+    stage.finish(&format!(
+        "{} internal nodes, {:.2} M leaves/s",
+        count(internal),
+        rate(points as f64 / 1e6, stage.seconds())
+    ));
+
+    let stage = Stage::start("errors", internal, "nodes");
+    let set = build_records(leaves, hierarchy, &|n| stage.advance(n));
+    let scale = set.meta.error_scale;
+    stage.finish(&format!(
+        "depth {}, {:.2} M nodes/s",
+        set.meta.depth,
+        rate(set.meta.node_count as f64 / 1e6, stage.seconds())
+    ));
+
+    let stage = Stage::start("sort", 0, "");
+    let list = sort_list(set);
+    stage.finish(&format!("{} nodes", count(list.nodes.len() as u64)));
+
+    let bytes = (HEADER_BYTES + list.nodes.len() * (std::mem::size_of::<NodeRecord>() + 4)) as u64;
+    let stage = Stage::start("write", bytes, "bytes");
+    write_atomically(output, |w| {
+        write_to(
+            &mut Counted {
+                inner: w,
+                stage: &stage,
+            },
+            &list,
+        )
+    })
+    .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", output.display()))?;
+    stage.finish(&format!(
+        "{} ({:.1} MB, {:.0} MB/s)",
+        output.display(),
+        bytes as f64 / 1e6,
+        rate(bytes as f64 / 1e6, stage.seconds())
+    ));
+
+    let errors: Vec<f64> = list
+        .nodes
+        .iter()
+        .map(|r| r.error(scale))
+        .filter(|e| *e > 0.0)
+        .collect();
+    let (emin, emax) = errors
+        .iter()
+        .fold((f64::MAX, 0.0f64), |(a, b), &e| (a.min(e), b.max(e)));
+    let total = start.elapsed().as_secs_f64();
+    println!(
+        "{} nodes ({} leaves, {} internal), depth {}, {} bytes per node ({} record + 4 parent index)",
+        count(list.meta.node_count),
+        count(list.meta.leaf_count),
+        count(list.meta.node_count - list.meta.leaf_count),
+        list.meta.depth,
+        std::mem::size_of::<NodeRecord>() + 4,
+        std::mem::size_of::<NodeRecord>()
+    );
+    if errors.is_empty() {
+        println!("errors: all zero (a single leaf)");
+    } else {
+        println!("errors: {emin:.3e} to {emax:.3e} model units (error scale {scale:.6e})");
+    }
+    println!(
+        "total {total:.2} s, {:.2} M points/s",
+        rate(points as f64 / 1e6, total)
+    );
+    Ok(())
+}

@@ -1,0 +1,70 @@
+//! Stage progress for long commands: a bar on a terminal (stderr), and one plain line
+//! per finished stage on stdout either way, so logs and pipes get the same summary.
+
+use std::io::IsTerminal;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+/// One stage of a command.
+pub struct Stage {
+    name: &'static str,
+    bar: ProgressBar,
+    done: AtomicU64,
+    start: Instant,
+}
+
+impl Stage {
+    /// A stage whose amount of work is known (`total` in `unit`), or a spinner when 0.
+    pub fn start(name: &'static str, total: u64, unit: &'static str) -> Stage {
+        let target = if std::io::stderr().is_terminal() {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        };
+        let bar = if total > 0 {
+            let bar = ProgressBar::with_draw_target(Some(total), target);
+            let template = format!(
+                "{{prefix:>8}} [{{bar:40}}] {{human_pos}}/{{human_len}} {unit} {{elapsed}} ETA {{eta}}"
+            );
+            bar.set_style(
+                ProgressStyle::with_template(&template)
+                    .unwrap()
+                    .progress_chars("=> "),
+            );
+            bar
+        } else {
+            let bar = ProgressBar::with_draw_target(None, target);
+            bar.set_style(ProgressStyle::with_template("{prefix:>8} {spinner} {elapsed}").unwrap());
+            bar.enable_steady_tick(Duration::from_millis(100));
+            bar
+        };
+        bar.set_prefix(name);
+        Stage {
+            name,
+            bar,
+            done: AtomicU64::new(0),
+            start: Instant::now(),
+        }
+    }
+
+    /// Adds `n` units of work done (callable from any thread).
+    pub fn advance(&self, n: u64) {
+        let done = self.done.fetch_add(n, Ordering::Relaxed) + n;
+        self.bar.set_position(done);
+    }
+
+    /// Seconds since the stage started.
+    pub fn seconds(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+
+    /// Ends the stage and prints `name  seconds  summary`; returns the time it took.
+    pub fn finish(&self, summary: &str) -> Duration {
+        let took = self.start.elapsed();
+        self.bar.finish_and_clear();
+        println!("{:>8}  {:>7.2} s  {summary}", self.name, took.as_secs_f64());
+        took
+    }
+}

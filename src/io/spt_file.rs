@@ -1,0 +1,299 @@
+//! `.spt` files: a sequential point tree, ready to memory-map and upload (DESIGN.md §8).
+//!
+//! ```text
+//! offset  size  field (little-endian)
+//!      0     8  magic "spt-tree"
+//!      8     4  format version (1)
+//!     12     4  header size (256)
+//!     16     4  flags: 1 = has colours, 2 = oriented normals
+//!     20     4  depth (largest level)
+//!     24     8  leaf count
+//!     32     8  node count
+//!     40    24  origin, 3 × f64 (file coordinates)
+//!     64    48  leaf-centre bounds min, max, 3 × f64 each (file coordinates)
+//!    112    24  node-centre bounds min, max, 3 × f32 each (relative to origin)
+//!    136     4  error scale, f32
+//!    140     4  node record size (32)
+//!    144     8  offset of the node records (256: page- and cache-aligned)
+//!    152     8  offset of the parent indices (u32 per node, u32::MAX for the root)
+//!    160     8  file size
+//!    168     8  checksum: XXH3-64 of the header (this field zeroed) and all sections
+//!    176    80  zero
+//! ```
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use memmap2::Mmap;
+use thiserror::Error;
+use xxhash_rust::xxh3::Xxh3;
+
+use crate::io::Bounds;
+use crate::io::atomic::write_atomically;
+use crate::tree::select::TreeView;
+use crate::tree::{NodeRecord, SequentialList, TreeMeta};
+
+pub const MAGIC: &[u8; 8] = b"spt-tree";
+pub const VERSION: u32 = 1;
+pub const HEADER_BYTES: usize = 256;
+const RECORD_BYTES: usize = std::mem::size_of::<NodeRecord>();
+const CHECKSUM_AT: usize = 168;
+
+#[derive(Debug, Error)]
+pub enum SptError {
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: not an .spt file (no 'spt-tree' magic)")]
+    NotSpt { path: PathBuf },
+    #[error(
+        "{path}: made by a newer spt (format version {version}; this build reads version {VERSION})"
+    )]
+    NewerVersion { path: PathBuf, version: u32 },
+    #[error("{path}: truncated: {actual} bytes, the header says {expected}")]
+    Truncated {
+        path: PathBuf,
+        actual: u64,
+        expected: u64,
+    },
+    #[error("{path}: corrupt header: {what}")]
+    BadHeader { path: PathBuf, what: String },
+    #[error("{path}: corrupt: checksum mismatch (stored {stored:016x}, computed {computed:016x})")]
+    Checksum {
+        path: PathBuf,
+        stored: u64,
+        computed: u64,
+    },
+}
+
+fn header_bytes(list: &SequentialList, checksum: u64) -> Vec<u8> {
+    let m = &list.meta;
+    let mut h = Vec::with_capacity(HEADER_BYTES);
+    h.extend_from_slice(MAGIC);
+    h.extend_from_slice(&VERSION.to_le_bytes());
+    h.extend_from_slice(&(HEADER_BYTES as u32).to_le_bytes());
+    let flags = m.has_colors as u32 | (m.oriented_normals as u32) << 1;
+    h.extend_from_slice(&flags.to_le_bytes());
+    h.extend_from_slice(&m.depth.to_le_bytes());
+    h.extend_from_slice(&m.leaf_count.to_le_bytes());
+    h.extend_from_slice(&m.node_count.to_le_bytes());
+    for v in m.origin.iter().chain(&m.bounds.min).chain(&m.bounds.max) {
+        h.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in m.centre_min.iter().chain(&m.centre_max) {
+        h.extend_from_slice(&v.to_le_bytes());
+    }
+    h.extend_from_slice(&m.error_scale.to_le_bytes());
+    h.extend_from_slice(&(RECORD_BYTES as u32).to_le_bytes());
+    let nodes_at = HEADER_BYTES as u64;
+    let parents_at = nodes_at + (list.nodes.len() * RECORD_BYTES) as u64;
+    let size = parents_at + 4 * list.parents.len() as u64;
+    for v in [nodes_at, parents_at, size, checksum] {
+        h.extend_from_slice(&v.to_le_bytes());
+    }
+    h.resize(HEADER_BYTES, 0);
+    h
+}
+
+fn payload_checksum(header: &[u8], nodes: &[u8], parents: &[u8]) -> u64 {
+    let mut zeroed = header.to_vec();
+    zeroed[CHECKSUM_AT..CHECKSUM_AT + 8].fill(0);
+    let mut hasher = Xxh3::new();
+    hasher.update(&zeroed);
+    hasher.update(nodes);
+    hasher.update(parents);
+    hasher.digest()
+}
+
+/// Writes the list in `.spt` form to `w` (little-endian hosts write their memory as is).
+pub fn write_to(w: &mut dyn Write, list: &SequentialList) -> std::io::Result<()> {
+    let nodes: &[u8] = bytemuck::cast_slice(&list.nodes);
+    let parents: &[u8] = bytemuck::cast_slice(&list.parents);
+    let checksum = payload_checksum(&header_bytes(list, 0), nodes, parents);
+    w.write_all(&header_bytes(list, checksum))?;
+    // Large sections in chunks, so that a progress bar could follow and writes stay short.
+    for chunk in nodes.chunks(64 << 20).chain(parents.chunks(64 << 20)) {
+        w.write_all(chunk)?;
+    }
+    Ok(())
+}
+
+/// Writes `list` to `path` atomically (temporary file, then rename).
+pub fn write_spt(path: &Path, list: &SequentialList) -> std::io::Result<()> {
+    write_atomically(path, |w| write_to(w, list))
+}
+
+/// An `.spt` file, memory-mapped: the node records are read in place.
+pub struct SptFile {
+    pub path: PathBuf,
+    pub meta: TreeMeta,
+    pub version: u32,
+    pub checksum: u64,
+    map: Mmap,
+    nodes_at: usize,
+    parents_at: usize,
+}
+
+fn u32_at(b: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes(b[at..at + 4].try_into().unwrap())
+}
+fn u64_at(b: &[u8], at: usize) -> u64 {
+    u64::from_le_bytes(b[at..at + 8].try_into().unwrap())
+}
+fn f64_at(b: &[u8], at: usize) -> f64 {
+    f64::from_le_bytes(b[at..at + 8].try_into().unwrap())
+}
+fn f32_at(b: &[u8], at: usize) -> f32 {
+    f32::from_le_bytes(b[at..at + 4].try_into().unwrap())
+}
+
+impl SptFile {
+    /// Opens and checks the file, checksum included.
+    pub fn open(path: &Path) -> Result<SptFile, SptError> {
+        let file = Self::open_unverified(path)?;
+        file.verify()?;
+        Ok(file)
+    }
+
+    /// Opens the file and checks its header and size, not its checksum.
+    pub fn open_unverified(path: &Path) -> Result<SptFile, SptError> {
+        let p = || path.to_owned();
+        let io = |source| SptError::Io { path: p(), source };
+        let f = std::fs::File::open(path).map_err(io)?;
+        // SAFETY: read-only map; a file truncated by another process while mapped is
+        // outside what a reader can guard against.
+        let map = unsafe { Mmap::map(&f) }.map_err(io)?;
+        let b = &map[..];
+        if b.len() < 12 || &b[..8] != MAGIC {
+            return Err(SptError::NotSpt { path: p() });
+        }
+        let version = u32_at(b, 8);
+        if version > VERSION {
+            return Err(SptError::NewerVersion { path: p(), version });
+        }
+        if b.len() < HEADER_BYTES {
+            return Err(SptError::Truncated {
+                path: p(),
+                actual: b.len() as u64,
+                expected: HEADER_BYTES as u64,
+            });
+        }
+        let bad = |what: String| SptError::BadHeader { path: p(), what };
+        if version == 0
+            || u32_at(b, 12) as usize != HEADER_BYTES
+            || u32_at(b, 140) as usize != RECORD_BYTES
+        {
+            return Err(bad(format!(
+                "version {version}, header size {}, record size {}",
+                u32_at(b, 12),
+                u32_at(b, 140)
+            )));
+        }
+        let (leaf_count, node_count) = (u64_at(b, 24), u64_at(b, 32));
+        let (nodes_at, parents_at, size) = (u64_at(b, 144), u64_at(b, 152), u64_at(b, 160));
+        let expected_parents = node_count
+            .checked_mul(RECORD_BYTES as u64)
+            .and_then(|n| n.checked_add(nodes_at));
+        let expected_size = node_count
+            .checked_mul(4)
+            .and_then(|n| n.checked_add(parents_at));
+        if nodes_at != HEADER_BYTES as u64
+            || Some(parents_at) != expected_parents
+            || Some(size) != expected_size
+            || leaf_count > node_count
+            || node_count == 0
+        {
+            return Err(bad(format!(
+                "{node_count} nodes, {leaf_count} leaves, sections at {nodes_at} and {parents_at}, size {size}"
+            )));
+        }
+        if (b.len() as u64) < size {
+            return Err(SptError::Truncated {
+                path: p(),
+                actual: b.len() as u64,
+                expected: size,
+            });
+        }
+        if b.len() as u64 > size {
+            return Err(bad(format!(
+                "{} bytes past the end of the last section",
+                b.len() as u64 - size
+            )));
+        }
+        let flags = u32_at(b, 16);
+        let v3 = |at: usize| [f64_at(b, at), f64_at(b, at + 8), f64_at(b, at + 16)];
+        let f3 = |at: usize| [f32_at(b, at), f32_at(b, at + 4), f32_at(b, at + 8)];
+        let meta = TreeMeta {
+            origin: v3(40),
+            bounds: Bounds {
+                min: v3(64),
+                max: v3(88),
+            },
+            centre_min: f3(112),
+            centre_max: f3(124),
+            error_scale: f32_at(b, 136),
+            leaf_count,
+            node_count,
+            depth: u32_at(b, 20),
+            has_colors: flags & 1 != 0,
+            oriented_normals: flags & 2 != 0,
+        };
+        let checksum = u64_at(b, CHECKSUM_AT);
+        Ok(SptFile {
+            path: p(),
+            meta,
+            version,
+            checksum,
+            nodes_at: nodes_at as usize,
+            parents_at: parents_at as usize,
+            map,
+        })
+    }
+
+    /// Recomputes the checksum over the header and every section.
+    pub fn verify(&self) -> Result<(), SptError> {
+        let b = &self.map[..];
+        let computed = payload_checksum(
+            &b[..HEADER_BYTES],
+            &b[self.nodes_at..self.parents_at],
+            &b[self.parents_at..],
+        );
+        if computed != self.checksum {
+            return Err(SptError::Checksum {
+                path: self.path.clone(),
+                stored: self.checksum,
+                computed,
+            });
+        }
+        Ok(())
+    }
+
+    /// The node records in list order, in place in the map.
+    pub fn nodes(&self) -> &[NodeRecord] {
+        bytemuck::cast_slice(&self.map[self.nodes_at..self.parents_at])
+    }
+
+    /// Each node's parent as a list index (u32::MAX for the root).
+    pub fn parents(&self) -> &[u32] {
+        bytemuck::cast_slice(&self.map[self.parents_at..])
+    }
+
+    pub fn file_bytes(&self) -> u64 {
+        self.map.len() as u64
+    }
+
+    pub fn view(&self) -> TreeView<'_> {
+        TreeView::new(&self.meta, self.nodes())
+    }
+
+    /// A copy in memory, as `spt convert` built it.
+    pub fn to_list(&self) -> SequentialList {
+        SequentialList {
+            meta: self.meta.clone(),
+            nodes: self.nodes().to_vec(),
+            parents: self.parents().to_vec(),
+        }
+    }
+}

@@ -1,0 +1,224 @@
+//! Node disks and errors (DESIGN.md §3–4; Dachsbacher, Vogelgsang, Stamminger 2003).
+//!
+//! For a node with children (pᵢ, nᵢ, rᵢ), area weights aᵢ = rᵢ²:
+//!
+//! * disk: p = Σ aᵢ pᵢ / Σ aᵢ; n = normalize(Σ aᵢ nᵢ) (if that vanishes, the normal of
+//!   the children centres' best-fit plane); colour = Σ aᵢ cᵢ / Σ aᵢ;
+//!   r = maxᵢ(|pᵢ − p| + rᵢ), so the disk reaches every child disk.
+//! * perpendicular error: the thickness along n of the slab holding all child disks,
+//!   e_p = maxᵢ[(pᵢ − p)·n + dᵢ] − minᵢ[(pᵢ − p)·n − dᵢ], dᵢ = rᵢ √(1 − (nᵢ·n)²)
+//!   (dᵢ is how far a tilted child disk reaches out of its own plane along n).
+//! * tangential error: how far the parent disk overhangs its children in its own plane,
+//!   e_t = max(0, max_t [r − maxᵢ((pᵢ − p)·t + rᵢ √(1 − (nᵢ·t)²))]) over [`DIRECTIONS`]
+//!   unit directions t of the tangent plane (the bracket is the support of child disk i
+//!   in direction t).
+//! * e = √(e_p² + e_t²), then e = max(e, maxᵢ eᵢ): errors never shrink toward the root.
+//!   Leaves have e = 0.
+//!
+//! Unoriented normals (point clouds) are first flipped to agree with the first child's,
+//! so that opposite signs of one surface do not cancel.
+
+use glam::{DVec3, Vec3};
+
+use crate::surfel::pca::plane_normal;
+
+/// Tangent directions sampled for e_t: every 360°/16, which includes ±u, ±v and the
+/// diagonals of the tangent basis (u = `n.any_orthonormal_vector()`, v = n × u).
+pub const DIRECTIONS: usize = 16;
+
+/// A disk as the error terms see it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Disk {
+    pub p: DVec3,
+    pub n: DVec3,
+    pub r: f64,
+}
+
+/// The parent disk of `children` (area-weighted) and its averaged colour.
+pub fn parent_disk(children: &[Disk], colors: &[[u8; 4]], oriented: bool) -> (Disk, [u8; 4]) {
+    let n0 = children[0].n;
+    let (mut wsum, mut psum, mut nsum, mut csum) = (0.0, DVec3::ZERO, DVec3::ZERO, [0.0f64; 4]);
+    for (c, col) in children.iter().zip(colors) {
+        let a = c.r * c.r;
+        wsum += a;
+        psum += c.p * a;
+        let n = if !oriented && c.n.dot(n0) < 0.0 {
+            -c.n
+        } else {
+            c.n
+        };
+        nsum += n * a;
+        for k in 0..4 {
+            csum[k] += col[k] as f64 * a;
+        }
+    }
+    // Radii are > 0, so wsum > 0; guard anyway against a degenerate input.
+    let w = if wsum > 0.0 { wsum } else { 1.0 };
+    let p = if wsum > 0.0 {
+        psum / w
+    } else {
+        children.iter().map(|c| c.p).sum::<DVec3>() / children.len() as f64
+    };
+    let n = nsum
+        .try_normalize()
+        .unwrap_or_else(|| plane_normal(children.iter().map(|c| c.p.as_vec3())).as_dvec3());
+    let r = children
+        .iter()
+        .map(|c| (c.p - p).length() + c.r)
+        .fold(0.0, f64::max);
+    let color = csum.map(|s| (s / w).round().clamp(0.0, 255.0) as u8);
+    (Disk { p, n, r }, color)
+}
+
+/// rᵢ √(1 − (nᵢ·d)²): the extent of a disk of normal nᵢ along a unit direction d.
+#[inline]
+fn disk_extent(r: f64, n: DVec3, d: DVec3) -> f64 {
+    r * (1.0 - n.dot(d).powi(2)).max(0.0).sqrt()
+}
+
+/// Perpendicular error e_p of `parent` over `children`.
+pub fn perpendicular_error(parent: &Disk, children: &[Disk]) -> f64 {
+    let (mut top, mut bottom) = (f64::NEG_INFINITY, f64::INFINITY);
+    for c in children {
+        let h = (c.p - parent.p).dot(parent.n);
+        let d = disk_extent(c.r, c.n, parent.n);
+        top = top.max(h + d);
+        bottom = bottom.min(h - d);
+    }
+    (top - bottom).max(0.0)
+}
+
+/// Tangential error e_t of `parent` over `children`.
+pub fn tangential_error(parent: &Disk, children: &[Disk]) -> f64 {
+    let u = parent.n.any_orthonormal_vector();
+    let v = parent.n.cross(u);
+    let mut worst = 0.0f64;
+    for k in 0..DIRECTIONS {
+        let angle = k as f64 * std::f64::consts::TAU / DIRECTIONS as f64;
+        let t = u * angle.cos() + v * angle.sin();
+        let reach = children
+            .iter()
+            .map(|c| (c.p - parent.p).dot(t) + disk_extent(c.r, c.n, t))
+            .fold(f64::NEG_INFINITY, f64::max);
+        worst = worst.max(parent.r - reach);
+    }
+    worst
+}
+
+/// The node error before the max over children: √(e_p² + e_t²).
+pub fn node_error(parent: &Disk, children: &[Disk]) -> f64 {
+    perpendicular_error(parent, children).hypot(tangential_error(parent, children))
+}
+
+impl Disk {
+    pub fn new(p: Vec3, n: Vec3, r: f32) -> Self {
+        Disk {
+            p: p.as_dvec3(),
+            n: n.as_dvec3(),
+            r: r as f64,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const Z: DVec3 = DVec3::Z;
+
+    fn disk(p: [f64; 3], n: DVec3, r: f64) -> Disk {
+        Disk {
+            p: DVec3::from(p),
+            n,
+            r,
+        }
+    }
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-12 * (1.0 + a.abs().max(b.abs()))
+    }
+
+    #[test]
+    fn coplanar_children_error_comes_from_tilt_only() {
+        let parent = disk([0.0; 3], Z, 2.0);
+        // Flat children in the parent plane: no thickness at all.
+        let flat = [
+            disk([-1.0, 0.0, 0.0], Z, 1.0),
+            disk([1.0, 0.0, 0.0], Z, 1.0),
+        ];
+        assert_eq!(perpendicular_error(&parent, &flat), 0.0);
+        // One child tilted by 30°: it reaches r sin 30° above and below the plane.
+        let tilt = 30f64.to_radians();
+        let tilted = DVec3::new(tilt.sin(), 0.0, tilt.cos());
+        let children = [
+            disk([-1.0, 0.0, 0.0], Z, 1.0),
+            disk([1.0, 0.0, 0.0], tilted, 0.8),
+        ];
+        let want = 2.0 * 0.8 * tilt.sin();
+        assert!(close(perpendicular_error(&parent, &children), want));
+    }
+
+    #[test]
+    fn children_at_plus_minus_h_give_2h_plus_their_disk_terms() {
+        let h = 0.25;
+        let parent = disk([0.0; 3], Z, 2.0);
+        let flat = [disk([0.0, -1.0, h], Z, 1.0), disk([0.0, 1.0, -h], Z, 1.0)];
+        assert!(close(perpendicular_error(&parent, &flat), 2.0 * h));
+        // Tilted children add d = r √(1 − (n·Z)²) above the upper and below the lower one.
+        let a = 0.4f64;
+        let n1 = DVec3::new(0.0, a.sin(), a.cos());
+        let n2 = DVec3::new(a.sin(), 0.0, a.cos());
+        let children = [disk([0.0, -1.0, h], n1, 1.0), disk([0.0, 1.0, -h], n2, 0.5)];
+        let want = 2.0 * h + 1.0 * a.sin() + 0.5 * a.sin();
+        assert!(close(perpendicular_error(&parent, &children), want));
+    }
+
+    #[test]
+    fn parent_reaching_past_its_children_on_one_side_gives_that_overhang() {
+        // Children span x ∈ [−2, 2] (and y ∈ [−1, 1]); a parent disk of radius 3 centred
+        // at x = 0.5 reaches x = 3.5 on the +x side: 1.5 past the children. Along −x it
+        // reaches −2.5, 0.5 past; along ±y it reaches 3 against 1. The worst is y: 2.
+        let children = [
+            disk([-1.0, 0.0, 0.0], Z, 1.0),
+            disk([1.0, 0.0, 0.0], Z, 1.0),
+        ];
+        let parent = disk([0.5, 0.0, 0.0], Z, 3.0);
+        assert!(close(tangential_error(&parent, &children), 2.0));
+        // A parent that is exactly the children's hull along x and y: a long child and
+        // a parent of its size, shifted by s along x: overhang s on one side only.
+        let s = 0.3;
+        let one = [disk([0.0, 0.0, 0.0], Z, 1.0)];
+        let shifted = disk([s, 0.0, 0.0], Z, 1.0);
+        // Sampled directions include ±x: the overhang along +x is exactly s.
+        assert!(close(tangential_error(&shifted, &one), s));
+        // And the same disk overhangs nothing.
+        assert_eq!(tangential_error(&one[0], &one), 0.0);
+    }
+
+    #[test]
+    fn parent_disk_reaches_every_child_and_errors_are_finite() {
+        let children = [
+            disk([0.0, 0.0, 0.0], Z, 1.0),
+            disk([3.0, 0.0, 0.1], DVec3::new(0.0, 0.6, 0.8), 0.5),
+            disk([0.0, 2.0, -0.2], -Z, 0.25),
+        ];
+        let colors = [[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255]];
+        for oriented in [true, false] {
+            let (p, _) = parent_disk(&children, &colors, oriented);
+            for c in &children {
+                assert!((c.p - p.p).length() + c.r <= p.r + 1e-12);
+            }
+            let e = node_error(&p, &children);
+            assert!(e.is_finite() && e >= 0.0);
+        }
+        // Oriented normals that cancel fall back to the centres' plane.
+        let opposite = [
+            disk([0.0, 0.0, 0.0], Z, 1.0),
+            disk([1.0, 0.0, 0.0], -Z, 1.0),
+        ];
+        let (p, _) = parent_disk(&opposite, &colors[..2], true);
+        assert!((p.n.length() - 1.0).abs() < 1e-9);
+        let (p, _) = parent_disk(&opposite, &colors[..2], false);
+        assert!(close(p.n.z.abs(), 1.0), "unoriented: flipped to agree");
+    }
+}

@@ -1,0 +1,229 @@
+//! The hierarchy over the leaf surfels (DESIGN.md §3).
+//!
+//! A range of surfels is split in two at the midpoint of the longest axis of its
+//! centres' bounding box (an in-place partition), and each half once more: two binary
+//! levels make one node, so an internal node has 2–4 children and a range of at most 4
+//! surfels has them as its children (leaves). When the midpoint split leaves fewer
+//! than 1/[`UNBALANCED`] of the range on one side (duplicates, collinear or clustered
+//! points), the range is split at its median instead (by index when all centres
+//! coincide), so the depth stays O(log n) and the build O(n log n) on any input.
+//!
+//! Node ids: leaves are `0..n` (the surfels' order after partitioning), internal nodes
+//! `n..n + m` in post-order (children before their parent; the root is last).
+
+use rayon::prelude::*;
+
+use super::Progress;
+
+use crate::surfel::Surfel;
+
+/// A split keeps at least 1/UNBALANCED of the range on each side, or is redone at the median.
+pub const UNBALANCED: usize = 16;
+/// Ranges smaller than this are built on one thread.
+const PARALLEL_RANGE: usize = 1 << 15;
+
+/// An internal node: its children's ids (leaf or internal).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Internal {
+    pub children: [u32; 4],
+    pub child_count: u8,
+}
+
+impl Internal {
+    pub fn children(&self) -> &[u32] {
+        &self.children[..self.child_count as usize]
+    }
+}
+
+/// The hierarchy: internal nodes in post-order, ids as in the module doc.
+#[derive(Debug, Clone)]
+pub struct Hierarchy {
+    pub leaf_count: u32,
+    pub internal: Vec<Internal>,
+}
+
+impl Hierarchy {
+    pub fn node_count(&self) -> usize {
+        self.leaf_count as usize + self.internal.len()
+    }
+
+    /// The root: the last internal node, or the single leaf of a one-surfel model.
+    pub fn root(&self) -> u32 {
+        (self.node_count() - 1) as u32
+    }
+
+    pub fn is_leaf(&self, id: u32) -> bool {
+        id < self.leaf_count
+    }
+
+    /// Parent id of every node (the root's is u32::MAX).
+    pub fn parents(&self) -> Vec<u32> {
+        let mut parent = vec![u32::MAX; self.node_count()];
+        for (k, node) in self.internal.iter().enumerate() {
+            for &c in node.children() {
+                parent[c as usize] = self.leaf_count + k as u32;
+            }
+        }
+        parent
+    }
+
+    /// Depth of every node (root 0), computed parents first (reverse post-order).
+    pub fn levels(&self) -> Vec<u16> {
+        let mut level = vec![0u16; self.node_count()];
+        for (k, node) in self.internal.iter().enumerate().rev() {
+            let l = level[self.leaf_count as usize + k].saturating_add(1);
+            for &c in node.children() {
+                level[c as usize] = l;
+            }
+        }
+        level
+    }
+}
+
+/// Splits `s` in two non-empty parts; returns the size of the first.
+fn split(s: &mut [Surfel]) -> usize {
+    let n = s.len();
+    let (mut lo, mut hi) = (s[0].position, s[0].position);
+    for x in s.iter() {
+        lo = lo.min(x.position);
+        hi = hi.max(x.position);
+    }
+    let extent = hi - lo;
+    let axis = if extent.x >= extent.y && extent.x >= extent.z {
+        0
+    } else if extent.y >= extent.z {
+        1
+    } else {
+        2
+    };
+    let mid = 0.5 * (lo[axis] + hi[axis]);
+    // In-place partition: centres below the midpoint first.
+    let mut left = 0;
+    for i in 0..n {
+        if s[i].position[axis] < mid {
+            s.swap(i, left);
+            left += 1;
+        }
+    }
+    if left.min(n - left) * UNBALANCED >= n {
+        return left;
+    }
+    // Median along the axis: O(n), and both halves non-empty even if all coincide.
+    let half = n / 2;
+    s.select_nth_unstable_by(half, |a, b| a.position[axis].total_cmp(&b.position[axis]));
+    half
+}
+
+/// Splits a range into its up to four child ranges (two binary levels).
+fn child_ranges(s: &mut [Surfel]) -> Vec<(usize, usize)> {
+    if s.len() <= 4 {
+        return (0..s.len()).map(|i| (i, 1)).collect();
+    }
+    let a = split(s);
+    let mut out = Vec::with_capacity(4);
+    for (start, len) in [(0, a), (a, s.len() - a)] {
+        if len >= 2 {
+            let b = split(&mut s[start..start + len]);
+            out.push((start, b));
+            out.push((start + b, len - b));
+        } else {
+            out.push((start, len));
+        }
+    }
+    out
+}
+
+/// A child reference local to a subtree: leaves are absolute ids, internal nodes are
+/// `leaf_count + index` into the subtree's own post-order vector.
+fn build_seq(s: &mut [Surfel], offset: usize, leaf_count: u32, out: &mut Vec<Internal>) -> u32 {
+    if s.len() == 1 {
+        return offset as u32;
+    }
+    let mut node = Internal {
+        children: [0; 4],
+        child_count: 0,
+    };
+    for (start, len) in child_ranges(s) {
+        let child = build_seq(&mut s[start..start + len], offset + start, leaf_count, out);
+        node.children[node.child_count as usize] = child;
+        node.child_count += 1;
+    }
+    out.push(node);
+    leaf_count + out.len() as u32 - 1
+}
+
+/// Like [`build_seq`], on several threads: the child subtrees are built in parallel
+/// and their vectors joined in child order, so the result does not depend on the
+/// number of threads.
+fn build_par(
+    s: &mut [Surfel],
+    offset: usize,
+    leaf_count: u32,
+    progress: Progress,
+) -> (Vec<Internal>, u32) {
+    if s.len() <= PARALLEL_RANGE {
+        let mut out = Vec::new();
+        let root = build_seq(s, offset, leaf_count, &mut out);
+        progress(s.len() as u64);
+        return (out, root);
+    }
+    let ranges = child_ranges(s);
+    let mut pieces = Vec::with_capacity(4);
+    let mut rest = s;
+    let mut at = 0;
+    for &(start, len) in &ranges {
+        let (_, tail) = rest.split_at_mut(start - at);
+        let (piece, tail) = tail.split_at_mut(len);
+        pieces.push((piece, offset + start));
+        rest = tail;
+        at = start + len;
+    }
+    let built: Vec<(Vec<Internal>, u32)> = pieces
+        .into_par_iter()
+        .map(|(piece, off)| build_par(piece, off, leaf_count, progress))
+        .collect();
+    let total = built.iter().map(|b| b.0.len()).sum::<usize>() + 1;
+    let mut out = Vec::with_capacity(total);
+    let mut node = Internal {
+        children: [0; 4],
+        child_count: 0,
+    };
+    let shift = |id: u32, base: usize| {
+        if id >= leaf_count {
+            id + base as u32
+        } else {
+            id
+        }
+    };
+    for (sub, root) in built {
+        let base = out.len();
+        out.extend(sub.into_iter().map(|mut n| {
+            for c in &mut n.children[..n.child_count as usize] {
+                *c = shift(*c, base);
+            }
+            n
+        }));
+        node.children[node.child_count as usize] = shift(root, base);
+        node.child_count += 1;
+    }
+    out.push(node);
+    let root = leaf_count + out.len() as u32 - 1;
+    (out, root)
+}
+
+/// Builds the hierarchy, reordering `surfels` so that every node covers a contiguous
+/// range of them. `progress` is told how many leaves each finished subtree holds.
+pub fn build(surfels: &mut [Surfel], progress: Progress) -> Hierarchy {
+    let leaf_count = surfels.len() as u32;
+    if surfels.is_empty() {
+        return Hierarchy {
+            leaf_count,
+            internal: Vec::new(),
+        };
+    }
+    let (internal, _) = build_par(surfels, 0, leaf_count, progress);
+    Hierarchy {
+        leaf_count,
+        internal,
+    }
+}

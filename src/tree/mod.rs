@@ -1,0 +1,256 @@
+//! Sequential point trees (DESIGN.md §3–5): the hierarchy over the leaf surfels, node
+//! disks and errors, and the flattened list sorted by parent error that each frame
+//! draws a prefix of.
+//!
+//! ```text
+//! LeafSurfels ─► hierarchy::build ─► build_records (disks, errors) ─► sort_list ─► SequentialList
+//! ```
+
+pub mod errors;
+pub mod hierarchy;
+pub mod record;
+pub mod select;
+
+use glam::{DVec3, Vec3};
+use half::f16;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::io::Bounds;
+use crate::surfel::{LeafSurfels, Surfel};
+use errors::{Disk, node_error, parent_disk};
+use hierarchy::Hierarchy;
+pub use record::NodeRecord;
+use record::encode_up;
+
+/// What a tree holds besides its nodes (the `.spt` header).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TreeMeta {
+    /// Model origin in the file's coordinates: node positions are relative to it.
+    pub origin: [f64; 3],
+    /// Bounding box of the leaf centres, in the file's coordinates.
+    pub bounds: Bounds,
+    /// Bounding box of all node centres, relative to `origin` (for the prefix search).
+    pub centre_min: [f32; 3],
+    pub centre_max: [f32; 3],
+    /// Errors and δ are stored divided by this (the size of the model's disks' box).
+    pub error_scale: f32,
+    pub leaf_count: u64,
+    pub node_count: u64,
+    /// Largest level (root 0).
+    pub depth: u32,
+    pub has_colors: bool,
+    pub oriented_normals: bool,
+}
+
+/// A tree as built in memory: the nodes in list order (sorted by parent error,
+/// descending) and each node's parent as a list index (u32::MAX for the root).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SequentialList {
+    pub meta: TreeMeta,
+    pub nodes: Vec<NodeRecord>,
+    pub parents: Vec<u32>,
+}
+
+/// The hierarchy and its nodes in id order (leaves first, internal in post-order).
+pub struct NodeSet {
+    pub hierarchy: Hierarchy,
+    pub records: Vec<NodeRecord>,
+    pub meta: TreeMeta,
+}
+
+/// Told how much work is done, in the stage's own unit (leaves, nodes), as it goes.
+pub type Progress<'a> = &'a (dyn Fn(u64) + Sync);
+
+/// A [`Progress`] that ignores everything.
+pub fn no_progress(_: u64) {}
+
+/// Stage 1: the hierarchy. Reorders the surfels; progress in leaves.
+pub fn build_hierarchy(leaves: &mut LeafSurfels, progress: Progress) -> Hierarchy {
+    hierarchy::build(&mut leaves.surfels, progress)
+}
+
+/// The size errors are stored relative to: the largest extent of the box holding every
+/// leaf disk (> 0 since radii are > 0).
+fn error_scale(surfels: &[Surfel]) -> f32 {
+    let (lo, hi) = surfels
+        .par_iter()
+        .map(|s| {
+            (
+                s.position - Vec3::splat(s.radius),
+                s.position + Vec3::splat(s.radius),
+            )
+        })
+        .reduce(
+            || (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        );
+    let e = (hi - lo).max_element();
+    if e > 0.0 && e.is_finite() { e } else { 1.0 }
+}
+
+/// Stage 2: node disks and errors bottom-up, one level at a time (nodes of a level are
+/// independent), then each node's parent error, δ and level top-down. Progress in
+/// internal nodes.
+pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, progress: Progress) -> NodeSet {
+    let n = leaves.surfels.len();
+    let scale = error_scale(&leaves.surfels);
+    let oriented = leaves.oriented_normals;
+    let mut records: Vec<NodeRecord> = Vec::with_capacity(hierarchy.node_count());
+    records.par_extend(
+        leaves
+            .surfels
+            .par_iter()
+            .map(|s| NodeRecord::new(s.position, s.radius, s.normal, s.color)),
+    );
+    records.resize(
+        hierarchy.node_count(),
+        NodeRecord::new(Vec3::ZERO, 0.0, Vec3::Z, [0; 4]),
+    );
+    let bounds = leaf_bounds(&leaves);
+    drop(leaves);
+
+    let levels = hierarchy.levels();
+    let depth = levels.iter().copied().max().unwrap_or(0);
+    // Internal nodes grouped by level, deepest first.
+    let mut by_level: Vec<Vec<u32>> = vec![Vec::new(); depth as usize + 1];
+    for k in 0..hierarchy.internal.len() {
+        let id = (n + k) as u32;
+        by_level[levels[id as usize] as usize].push(id);
+    }
+    for ids in by_level.iter().rev() {
+        let done: Vec<(u32, NodeRecord)> = ids
+            .par_iter()
+            .with_min_len(256)
+            .map(|&id| {
+                let node = &hierarchy.internal[id as usize - n];
+                let k = node.child_count as usize;
+                let mut disks = [Disk::new(Vec3::ZERO, Vec3::Z, 0.0); 4];
+                let mut colors = [[0u8; 4]; 4];
+                let mut children_max = 0;
+                for (j, &c) in node.children().iter().enumerate() {
+                    let r = &records[c as usize];
+                    disks[j] = Disk::new(r.position(), r.normal(), r.radius());
+                    colors[j] = r.color;
+                    children_max = children_max.max(r.error);
+                }
+                let (disks, colors) = (&disks[..k], &colors[..k]);
+                let (disk, color) = parent_disk(disks, colors, oriented);
+                let mut rec =
+                    NodeRecord::new(disk.p.as_vec3(), disk.r as f32, disk.n.as_vec3(), color);
+                // Stored radius rounded up from f64: the disk still reaches every child.
+                if (rec.radius() as f64) < disk.r {
+                    rec.radius = f32::from_bits(rec.radius).next_up().to_bits();
+                }
+                let e = node_error(&disk, disks);
+                rec.error = encode_up(e, scale).max(children_max);
+                (id, rec)
+            })
+            .collect();
+        for (id, rec) in done {
+            records[id as usize] = rec;
+        }
+        progress(ids.len() as u64);
+    }
+    // Top-down: parent error (bit copy), δ rounded up, level.
+    if let Some(root) = records.len().checked_sub(1) {
+        records[root].parent_error = f16::INFINITY.to_bits();
+        records[root].delta = 0;
+        records[root].level = 0;
+    }
+    for (k, node) in hierarchy.internal.iter().enumerate().rev() {
+        let parent = records[n + k];
+        for &c in node.children() {
+            let child = &mut records[c as usize];
+            child.parent_error = parent.error;
+            let delta = (child.position().as_dvec3() - parent.position().as_dvec3()).length();
+            child.delta = encode_up(delta, scale);
+            child.level = levels[c as usize];
+        }
+    }
+    let (centre_min, centre_max) = records
+        .par_iter()
+        .map(|r| (r.position(), r.position()))
+        .reduce(
+            || (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        );
+    let meta = TreeMeta {
+        origin: bounds.1.to_array(),
+        bounds: bounds.0,
+        centre_min: centre_min.to_array(),
+        centre_max: centre_max.to_array(),
+        error_scale: scale,
+        leaf_count: n as u64,
+        node_count: records.len() as u64,
+        depth: depth as u32,
+        has_colors: bounds.2,
+        oriented_normals: oriented,
+    };
+    NodeSet {
+        hierarchy,
+        records,
+        meta,
+    }
+}
+
+/// Bounding box of the leaf centres in file coordinates, the origin, and has_colors.
+fn leaf_bounds(leaves: &LeafSurfels) -> (Bounds, DVec3, bool) {
+    let (lo, hi) = leaves
+        .surfels
+        .par_iter()
+        .map(|s| (s.position, s.position))
+        .reduce(
+            || (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        );
+    let o = leaves.origin;
+    let bounds = Bounds {
+        min: (lo.as_dvec3() + o).to_array(),
+        max: (hi.as_dvec3() + o).to_array(),
+    };
+    (bounds, o, leaves.has_colors)
+}
+
+/// Stage 3: the sequential list, sorted by parent error descending (ties by node id,
+/// so the order is the same on every machine), with parents as list indices.
+pub fn sort_list(set: NodeSet) -> SequentialList {
+    let NodeSet {
+        hierarchy,
+        records,
+        meta,
+    } = set;
+    let mut keys: Vec<u64> = records
+        .par_iter()
+        .enumerate()
+        .map(|(id, r)| ((0xffff - r.parent_error as u64) << 32) | id as u64)
+        .collect();
+    keys.par_sort_unstable();
+    let order: Vec<u32> = keys.par_iter().map(|k| *k as u32).collect();
+    drop(keys);
+    let nodes: Vec<NodeRecord> = order.par_iter().map(|&id| records[id as usize]).collect();
+    drop(records);
+    let mut position = vec![0u32; order.len()];
+    for (i, &id) in order.iter().enumerate() {
+        position[id as usize] = i as u32;
+    }
+    let parent_ids = hierarchy.parents();
+    let parents = order
+        .par_iter()
+        .map(|&id| match parent_ids[id as usize] {
+            u32::MAX => u32::MAX,
+            p => position[p as usize],
+        })
+        .collect();
+    SequentialList {
+        meta,
+        nodes,
+        parents,
+    }
+}
+
+/// All three stages.
+pub fn build_sequential_list(mut leaves: LeafSurfels) -> SequentialList {
+    let hierarchy = build_hierarchy(&mut leaves, &no_progress);
+    sort_list(build_records(leaves, hierarchy, &no_progress))
+}

@@ -1,0 +1,216 @@
+//! `.spt` files: they reopen with the same nodes; truncated, bit-flipped, newer-version
+//! and foreign files get a clear error; a write that fails midway leaves no file under
+//! the final name and an existing file there untouched.
+
+mod common;
+
+use std::io::Write;
+use std::process::Command;
+
+use spt::io::atomic::{temporary_path, write_atomically};
+use spt::io::ply::read_ply;
+use spt::io::spt_file::{SptError, SptFile, write_spt, write_to};
+use spt::surfel::leaf_surfels;
+use spt::tree::{NodeRecord, SequentialList, build_sequential_list};
+
+fn default_list() -> SequentialList {
+    build_sequential_list(leaf_surfels(
+        &read_ply(&common::default_model()).unwrap().geometry,
+    ))
+}
+
+#[test]
+fn node_records_are_32_bytes() {
+    assert_eq!(std::mem::size_of::<NodeRecord>(), 32);
+}
+
+#[test]
+fn reopens_with_the_same_nodes() {
+    let list = default_list();
+    let dir = common::temp_dir();
+    let path = dir.path().join("knot.spt");
+    write_spt(&path, &list).unwrap();
+    let file = SptFile::open(&path).unwrap();
+    assert_eq!(file.meta, list.meta);
+    assert_eq!(file.nodes(), &list.nodes[..]);
+    assert_eq!(file.parents(), &list.parents[..]);
+    assert_eq!(file.to_list(), list);
+    assert!(!temporary_path(&path).exists());
+}
+
+fn expect(bytes: &[u8], name: &str, check: impl Fn(&SptError) -> bool, words: &str) {
+    let dir = common::temp_dir();
+    let path = dir.path().join(name);
+    std::fs::write(&path, bytes).unwrap();
+    let err = SptFile::open(&path)
+        .err()
+        .unwrap_or_else(|| panic!("{name} opened"));
+    assert!(check(&err), "{name}: {err:?}");
+    let text = err.to_string();
+    assert!(
+        text.contains(name) && text.contains(words),
+        "{name}: {text}"
+    );
+    // The command line says the same and exits 1.
+    let out = Command::new(env!("CARGO_BIN_EXE_spt"))
+        .arg("info")
+        .arg(&path)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
+    assert!(
+        stderr.contains(words) && !stderr.contains("panicked"),
+        "{name}: {stderr}"
+    );
+}
+
+#[test]
+fn damaged_files_get_clear_errors() {
+    let list = default_list();
+    let mut good = Vec::new();
+    write_to(&mut good, &list).unwrap();
+    expect(
+        &good[..good.len() - 100],
+        "truncated.spt",
+        |e| matches!(e, SptError::Truncated { .. }),
+        "truncated",
+    );
+    expect(
+        &good[..100],
+        "header_only.spt",
+        |e| matches!(e, SptError::Truncated { .. }),
+        "truncated",
+    );
+    let mut flipped = good.clone();
+    flipped[good.len() / 2] ^= 0x10;
+    expect(
+        &flipped,
+        "bit_flip.spt",
+        |e| matches!(e, SptError::Checksum { .. }),
+        "checksum mismatch",
+    );
+    let mut origin = good.clone();
+    origin[45] ^= 1; // a bit of the origin: only the checksum can tell
+    expect(
+        &origin,
+        "origin_flip.spt",
+        |e| matches!(e, SptError::Checksum { .. }),
+        "checksum mismatch",
+    );
+    let mut newer = good.clone();
+    newer[8..12].copy_from_slice(&2u32.to_le_bytes());
+    expect(
+        &newer,
+        "newer.spt",
+        |e| matches!(e, SptError::NewerVersion { version: 2, .. }),
+        "newer spt",
+    );
+    let mut counts = good.clone();
+    counts[32] ^= 0x40; // node count
+    expect(
+        &counts,
+        "counts.spt",
+        |e| matches!(e, SptError::BadHeader { .. }),
+        "corrupt header",
+    );
+}
+
+/// A writer that fails after `left` bytes, like a full disk.
+struct FailAfter<'a> {
+    inner: &'a mut dyn Write,
+    left: usize,
+}
+
+impl Write for FailAfter<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.left == 0 {
+            return Err(std::io::Error::other("injected failure: disk full"));
+        }
+        let n = buf.len().min(self.left);
+        self.left -= n;
+        self.inner.write(&buf[..n])
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+#[test]
+fn a_failed_write_leaves_no_file_and_keeps_the_old_one() {
+    let list = default_list();
+    let dir = common::temp_dir();
+    let path = dir.path().join("out.spt");
+    let fail = |path: &std::path::Path| {
+        write_atomically(path, |w| {
+            write_to(
+                &mut FailAfter {
+                    inner: w,
+                    left: 1_000_000,
+                },
+                &list,
+            )
+        })
+        .expect_err("the injected failure")
+    };
+    // No file before: none after, and no temporary left behind.
+    let err = fail(&path);
+    assert!(err.to_string().contains("injected"));
+    assert!(!path.exists() && !temporary_path(&path).exists());
+    // An existing file: untouched.
+    std::fs::write(&path, b"the previous version").unwrap();
+    fail(&path);
+    assert_eq!(std::fs::read(&path).unwrap(), b"the previous version");
+    assert!(!temporary_path(&path).exists());
+}
+
+#[test]
+fn spt_convert_then_info() {
+    let dir = common::temp_dir();
+    let out = dir.path().join("knot.spt");
+    let run = Command::new(env!("CARGO_BIN_EXE_spt"))
+        .arg("convert")
+        .arg(common::default_model())
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for stage in [
+        "load",
+        "surfels",
+        "tree",
+        "errors",
+        "sort",
+        "write",
+        "nodes (",
+        "bytes per node",
+    ] {
+        assert!(stdout.contains(stage), "no '{stage}' in:\n{stdout}");
+    }
+    let info = Command::new(env!("CARGO_BIN_EXE_spt"))
+        .args(["info", "--json"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(info.status.success());
+    let json: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    assert_eq!(json["checksum_ok"], true);
+    assert_eq!(json["leaf_count"], 50_000);
+    // A bad input fails cleanly and writes nothing.
+    let bad = dir.path().join("bad.ply");
+    std::fs::write(&bad, b"not a ply").unwrap();
+    let out2 = dir.path().join("bad.spt");
+    let run = Command::new(env!("CARGO_BIN_EXE_spt"))
+        .arg("convert")
+        .arg(&bad)
+        .arg(&out2)
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(1));
+    assert!(!out2.exists());
+}

@@ -1,0 +1,89 @@
+//! Sequential point trees on random point sets and real models: errors monotone toward
+//! the root, parent errors bit-identical, the list sorted, and for random views and
+//! ε_px from 0 to 100 every leaf has a drawn ancestor-or-self and no drawn node lies
+//! past the CPU prefix.
+
+mod common;
+
+use glam::Vec3;
+use proptest::prelude::*;
+use spt::io::Geometry;
+use spt::io::ply::read_ply;
+use spt::surfel::leaf_surfels;
+use spt::tree::build_sequential_list;
+use spt::tree::select::{TreeView, check_views, random_views};
+
+fn cloud(points: &[[f64; 3]]) -> Geometry {
+    let mut g = common::geometry_of(points);
+    g.triangles.clear();
+    g
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_point_sets(
+        pool in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 1..300),
+        repeats in prop::collection::vec(0usize..400, 0..100),
+        exponent in -7i32..=7,
+        seed in 1u64..u64::MAX,
+    ) {
+        let scale = 10f64.powi(exponent);
+        let distinct: Vec<[f64; 3]> = pool.iter().map(|p| p.map(|c| c * scale)).collect();
+        let mut points = distinct.clone();
+        points.extend(repeats.iter().map(|&k| distinct[k % distinct.len()]));
+        let list = build_sequential_list(leaf_surfels(&cloud(&points)));
+        prop_assert_eq!(list.meta.leaf_count as usize, points.len());
+        common::assert_tree_invariants(&list, "random cloud");
+        let view = TreeView::new(&list.meta, &list.nodes);
+        let stats = check_views(&view, &list.parents, &random_views(&list.meta, 40, 1.0, 100.0, seed));
+        prop_assert_eq!(stats.holes, 0);
+        prop_assert_eq!(stats.past_prefix, 0);
+    }
+}
+
+fn check_model(g: &Geometry, what: &str, views: usize) {
+    let list = build_sequential_list(leaf_surfels(g));
+    common::assert_tree_invariants(&list, what);
+    let view = TreeView::new(&list.meta, &list.nodes);
+    let stats = check_views(
+        &view,
+        &list.parents,
+        &random_views(&list.meta, views, 1.0, 100.0, 7),
+    );
+    assert_eq!(stats.holes, 0, "{what}: {stats:?}");
+    assert_eq!(stats.past_prefix, 0, "{what}: {stats:?}");
+    assert!(stats.drawn_per_leaf_path >= 1.0, "{what}: {stats:?}");
+    eprintln!("{what}: {stats:?}");
+}
+
+#[test]
+fn default_model_selection_is_hole_free() {
+    let g = read_ply(&common::default_model()).unwrap().geometry;
+    check_model(&g, "torus knot", 200);
+}
+
+#[test]
+fn bunny_selection_over_1000_views() {
+    let Some(dir) = common::shared_data() else {
+        return;
+    };
+    let g = read_ply(&dir.join("bunny.ply")).unwrap().geometry;
+    check_model(&g, "bunny", 1000);
+}
+
+#[test]
+fn leaves_only_and_root_only() {
+    let g = read_ply(&common::default_model()).unwrap().geometry;
+    let list = build_sequential_list(leaf_surfels(&g));
+    let view = TreeView::new(&list.meta, &list.nodes);
+    let eye = Vec3::new(0.0, 0.0, 40.0).as_dvec3();
+    // ε = 0: exactly the leaves are drawn.
+    let sel = view.select(eye, 0.0);
+    assert_eq!(sel.drawn.len() as u64, list.meta.leaf_count);
+    // A huge ε: only the root.
+    let sel = view.select(eye, 1e9);
+    assert_eq!(sel.drawn, vec![0]);
+    assert_eq!(sel.prefix_len, 1);
+}
