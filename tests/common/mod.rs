@@ -205,7 +205,7 @@ pub fn assert_tree_invariants(list: &SequentialList, what: &str) {
             );
             let d = (r.position().as_dvec3() - parent.position().as_dvec3()).length();
             assert!(
-                r.delta(s) as f64 >= d,
+                r.delta(s) >= d,
                 "{what}: node {i} delta {} < distance {d}",
                 r.delta(s)
             );
