@@ -122,3 +122,26 @@ fn terrain_tile_bounding_box_is_exactly_the_files_doubles() {
         .collect();
     assert_eq!(got, min.to_vec());
 }
+
+#[test]
+fn every_shared_file_converts_and_reopens_with_the_same_nodes() {
+    let Some(dir) = common::shared_data() else {
+        return;
+    };
+    let tmp = common::temp_dir();
+    for name in [
+        "bunny.ply",
+        "dragon40k.ply",
+        "kinect_rgb.ply",
+        "terrain_utm.ply",
+    ] {
+        let model = read_ply(&dir.join(name)).unwrap();
+        let list = spt::tree::build_sequential_list(leaf_surfels(&model.geometry));
+        common::assert_tree_invariants(&list, name);
+        let out = tmp.path().join(name).with_extension("spt");
+        spt::io::spt_file::write_spt(&out, &list).unwrap();
+        let file = spt::io::spt_file::SptFile::open(&out).unwrap();
+        assert_eq!(file.to_list(), list, "{name}");
+        assert_eq!(file.meta.origin, model.geometry.origin.to_array(), "{name}");
+    }
+}

@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
 
-use crate::apps::info::count;
+use crate::apps::info::{count, peak_memory_bytes};
 use crate::apps::progress::Stage;
 use crate::io::atomic::write_atomically;
 use crate::io::ply::read_ply;
@@ -124,8 +124,12 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
         println!("errors: {emin:.3e} to {emax:.3e} model units (error scale {scale:.6e})");
     }
     println!(
-        "total {total:.2} s, {:.2} M points/s",
-        rate(points as f64 / 1e6, total)
+        "total {total:.2} s, {:.2} M points/s{}",
+        rate(points as f64 / 1e6, total),
+        peak_memory_bytes().map_or(String::new(), |b| format!(
+            ", peak memory {:.2} GiB",
+            b as f64 / (1u64 << 30) as f64
+        ))
     );
     Ok(())
 }
