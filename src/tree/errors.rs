@@ -92,18 +92,62 @@ pub fn perpendicular_error(parent: &Disk, children: &[Disk]) -> f64 {
 pub fn tangential_error(parent: &Disk, children: &[Disk]) -> f64 {
     let u = parent.n.any_orthonormal_vector();
     let v = parent.n.cross(u);
+    // Per child: its centre and normal in the (u, v) basis, so that for t = u cos θ + v sin θ
+    // (pᵢ − p)·t = aᵢ cos θ + bᵢ sin θ and nᵢ·t = xᵢ cos θ + yᵢ sin θ.
+    let project = |c: &Disk| {
+        let d = c.p - parent.p;
+        (d.dot(u), d.dot(v), c.n.dot(u), c.n.dot(v), c.r)
+    };
+    // The hierarchy gives 2–4 children: on the stack. Any other count: on the heap.
+    let mut small = [(0.0, 0.0, 0.0, 0.0, 0.0); 4];
+    let large: Vec<_>;
+    let proj: &[(f64, f64, f64, f64, f64)] = if children.len() <= 4 {
+        for (slot, c) in small.iter_mut().zip(children) {
+            *slot = project(c);
+        }
+        &small[..children.len()]
+    } else {
+        large = children.iter().map(project).collect();
+        &large
+    };
     let mut worst = 0.0f64;
-    for k in 0..DIRECTIONS {
-        let angle = k as f64 * std::f64::consts::TAU / DIRECTIONS as f64;
-        let t = u * angle.cos() + v * angle.sin();
-        let reach = children
-            .iter()
-            .map(|c| (c.p - parent.p).dot(t) + disk_extent(c.r, c.n, t))
-            .fold(f64::NEG_INFINITY, f64::max);
+    for &(cos, sin) in DIRECTION_TABLE.iter() {
+        let mut reach = f64::NEG_INFINITY;
+        for &(a, b, x, y, r) in proj {
+            let along = a * cos + b * sin;
+            let tilt = x * cos + y * sin;
+            reach = reach.max(along + r * (1.0 - tilt * tilt).max(0.0).sqrt());
+        }
         worst = worst.max(parent.r - reach);
     }
     worst
 }
+
+/// (cos θ, sin θ) of the sampled directions θ = k · 360° / [`DIRECTIONS`], exact at the
+/// axes and diagonals.
+const DIRECTION_TABLE: [(f64, f64); DIRECTIONS] = {
+    const H: f64 = std::f64::consts::FRAC_1_SQRT_2;
+    const C1: f64 = 0.923_879_532_511_286_7; // cos 22.5°
+    const S1: f64 = 0.382_683_432_365_089_8; // sin 22.5°
+    [
+        (1.0, 0.0),
+        (C1, S1),
+        (H, H),
+        (S1, C1),
+        (0.0, 1.0),
+        (-S1, C1),
+        (-H, H),
+        (-C1, S1),
+        (-1.0, 0.0),
+        (-C1, -S1),
+        (-H, -H),
+        (-S1, -C1),
+        (0.0, -1.0),
+        (S1, -C1),
+        (H, -H),
+        (C1, -S1),
+    ]
+};
 
 /// The node error before the max over children: √(e_p² + e_t²).
 pub fn node_error(parent: &Disk, children: &[Disk]) -> f64 {
@@ -191,6 +235,15 @@ mod tests {
         let shifted = disk([s, 0.0, 0.0], Z, 1.0);
         // Sampled directions include ±x: the overhang along +x is exactly s.
         assert!(close(tangential_error(&shifted, &one), s));
+        // Five children (more than the hierarchy makes) take the general path.
+        let five: Vec<Disk> = (0..5)
+            .map(|i| disk([i as f64 - 2.0, 0.0, 0.0], Z, 0.5))
+            .collect();
+        let hull = disk([0.0, 0.0, 0.0], Z, 2.5);
+        assert!(
+            close(tangential_error(&hull, &five), 2.0),
+            "along ±y: 2.5 − 0.5"
+        );
         // And the same disk overhangs nothing.
         assert_eq!(tangential_error(&one[0], &one), 0.0);
     }

@@ -56,6 +56,8 @@ pub struct SequentialList {
 pub struct NodeSet {
     pub hierarchy: Hierarchy,
     pub records: Vec<NodeRecord>,
+    /// Parent id of every node (u32::MAX for the root).
+    pub parent_ids: Vec<u32>,
     pub meta: TreeMeta,
 }
 
@@ -96,19 +98,17 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, progress: Progre
     let n = leaves.surfels.len();
     let scale = error_scale(&leaves.surfels);
     let oriented = leaves.oriented_normals;
-    let mut records: Vec<NodeRecord> = Vec::with_capacity(hierarchy.node_count());
-    records.par_extend(
-        leaves
-            .surfels
-            .par_iter()
-            .map(|s| NodeRecord::new(s.position, s.radius, s.normal, s.color)),
-    );
+    let bounds = leaf_bounds(&leaves);
+    // Leaf records take the surfels' memory (both 32 bytes): no second array of leaves.
+    let mut records: Vec<NodeRecord> = bytemuck::allocation::cast_vec(leaves.surfels);
+    records.par_iter_mut().for_each(|r| {
+        let s: Surfel = bytemuck::cast(*r);
+        *r = NodeRecord::new(s.position, s.radius, s.normal, s.color);
+    });
     records.resize(
         hierarchy.node_count(),
         NodeRecord::new(Vec3::ZERO, 0.0, Vec3::Z, [0; 4]),
     );
-    let bounds = leaf_bounds(&leaves);
-    drop(leaves);
 
     let levels = hierarchy.levels();
     let depth = levels.iter().copied().max().unwrap_or(0);
@@ -152,22 +152,31 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, progress: Progre
         }
         progress(ids.len() as u64);
     }
-    // Top-down: parent error (bit copy), δ rounded up, level.
-    if let Some(root) = records.len().checked_sub(1) {
-        records[root].parent_error = f16::INFINITY.to_bits();
-        records[root].delta = 0;
-        records[root].level = 0;
-    }
-    for (k, node) in hierarchy.internal.iter().enumerate().rev() {
-        let parent = records[n + k];
-        for &c in node.children() {
-            let child = &mut records[c as usize];
-            child.parent_error = parent.error;
-            let delta = (child.position().as_dvec3() - parent.position().as_dvec3()).length();
-            child.delta = encode_up(delta, scale);
-            child.level = levels[c as usize];
+    // Top-down: parent error (bit copy), δ rounded up, level; parents read from a
+    // snapshot of the internal nodes so that every node is written in parallel.
+    let parent_ids = hierarchy.parents();
+    let internal: Vec<(u16, Vec3)> = records[n..]
+        .par_iter()
+        .map(|r| (r.error, r.position()))
+        .collect();
+    records.par_iter_mut().enumerate().for_each(|(id, r)| {
+        r.level = levels[id];
+        match parent_ids[id] {
+            u32::MAX => {
+                r.parent_error = f16::INFINITY.to_bits();
+                r.delta = 0;
+            }
+            p => {
+                let (error, position) = internal[p as usize - n];
+                r.parent_error = error;
+                r.delta = encode_up(
+                    (r.position().as_dvec3() - position.as_dvec3()).length(),
+                    scale,
+                );
+            }
         }
-    }
+    });
+    drop(internal);
     let (centre_min, centre_max) = records
         .par_iter()
         .map(|r| (r.position(), r.position()))
@@ -190,6 +199,7 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, progress: Progre
     NodeSet {
         hierarchy,
         records,
+        parent_ids,
         meta,
     }
 }
@@ -218,8 +228,10 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
     let NodeSet {
         hierarchy,
         records,
+        parent_ids,
         meta,
     } = set;
+    drop(hierarchy);
     let mut keys: Vec<u64> = records
         .par_iter()
         .enumerate()
@@ -228,13 +240,12 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
     keys.par_sort_unstable();
     let order: Vec<u32> = keys.par_iter().map(|k| *k as u32).collect();
     drop(keys);
-    let nodes: Vec<NodeRecord> = order.par_iter().map(|&id| records[id as usize]).collect();
-    drop(records);
     let mut position = vec![0u32; order.len()];
     for (i, &id) in order.iter().enumerate() {
         position[id as usize] = i as u32;
     }
-    let parent_ids = hierarchy.parents();
+    let nodes: Vec<NodeRecord> = order.par_iter().map(|&id| records[id as usize]).collect();
+    drop(records);
     let parents = order
         .par_iter()
         .map(|&id| match parent_ids[id as usize] {
