@@ -3,8 +3,6 @@
 
 mod common;
 
-use std::process::Command;
-
 use common::bad_files::{fixtures, square};
 use spt::io::ply::{Encoding, read_ply};
 
@@ -14,29 +12,20 @@ fn spt_info_exits_1_with_the_message_and_never_panics() {
     for f in fixtures(dir.path()) {
         let path = dir.path().join(f.name);
         std::fs::write(&path, &f.bytes).unwrap();
-        let out = Command::new(env!("CARGO_BIN_EXE_spt"))
-            .arg("info")
-            .arg(&path)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{}: {stderr}", f.name);
+        let (code, stdout, stderr) = common::run_spt(&["info".as_ref(), path.as_os_str()]);
+        assert_eq!(code, Some(1), "{}: {stderr}", f.name);
         assert!(
             stderr.starts_with("error: ") && stderr.contains(f.name),
             "{}: {stderr}",
             f.name
         );
         assert!(!stderr.contains("panicked"), "{}: {stderr}", f.name);
-        assert!(out.stdout.is_empty(), "{}: printed a report", f.name);
+        assert!(stdout.is_empty(), "{}: printed a report", f.name);
     }
     let missing = dir.path().join("missing.ply");
-    let out = Command::new(env!("CARGO_BIN_EXE_spt"))
-        .arg("info")
-        .arg(&missing)
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.ply: cannot read"));
+    let (code, _, stderr) = common::run_spt(&["info".as_ref(), missing.as_os_str()]);
+    assert_eq!(code, Some(1));
+    assert!(stderr.contains("missing.ply: cannot read"));
 }
 
 #[test]

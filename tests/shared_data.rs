@@ -107,13 +107,10 @@ fn terrain_tile_bounding_box_is_exactly_the_files_doubles() {
         }
     }
     // The report prints the same doubles (shortest round-trip decimal).
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_spt"))
-        .args(["info", "--json"])
-        .arg(&path)
-        .output()
-        .unwrap();
-    assert!(out.status.success());
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (code, stdout, _) =
+        common::run_spt(&["info".as_ref(), "--json".as_ref(), path.as_os_str()]);
+    assert_eq!(code, Some(0));
+    let json: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     let got: Vec<f64> = json["bounds"]["min"]
         .as_array()
         .unwrap()

@@ -5,7 +5,6 @@
 mod common;
 
 use std::io::Write;
-use std::process::Command;
 
 use spt::io::atomic::{temporary_path, write_atomically};
 use spt::io::ply::read_ply;
@@ -52,13 +51,8 @@ fn expect(bytes: &[u8], name: &str, check: impl Fn(&SptError) -> bool, words: &s
         "{name}: {text}"
     );
     // The command line says the same and exits 1.
-    let out = Command::new(env!("CARGO_BIN_EXE_spt"))
-        .arg("info")
-        .arg(&path)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
+    let (code, _, stderr) = common::run_spt(&["info".as_ref(), path.as_os_str()]);
+    assert_eq!(code, Some(1), "{name}: {stderr}");
     assert!(
         stderr.contains(words) && !stderr.contains("panicked"),
         "{name}: {stderr}"
@@ -168,18 +162,10 @@ fn a_failed_write_leaves_no_file_and_keeps_the_old_one() {
 fn spt_convert_then_info() {
     let dir = common::temp_dir();
     let out = dir.path().join("knot.spt");
-    let run = Command::new(env!("CARGO_BIN_EXE_spt"))
-        .arg("convert")
-        .arg(common::default_model())
-        .arg(&out)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&run.stdout);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let model = common::default_model();
+    let (code, stdout, stderr) =
+        common::run_spt(&["convert".as_ref(), model.as_os_str(), out.as_os_str()]);
+    assert_eq!(code, Some(0), "{stderr}");
     for stage in [
         "load",
         "surfels",
@@ -192,25 +178,16 @@ fn spt_convert_then_info() {
     ] {
         assert!(stdout.contains(stage), "no '{stage}' in:\n{stdout}");
     }
-    let info = Command::new(env!("CARGO_BIN_EXE_spt"))
-        .args(["info", "--json"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(info.status.success());
-    let json: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    let (code, stdout, _) = common::run_spt(&["info".as_ref(), "--json".as_ref(), out.as_os_str()]);
+    assert_eq!(code, Some(0));
+    let json: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(json["checksum_ok"], true);
     assert_eq!(json["leaf_count"], 50_000);
     // A bad input fails cleanly and writes nothing.
     let bad = dir.path().join("bad.ply");
     std::fs::write(&bad, b"not a ply").unwrap();
     let out2 = dir.path().join("bad.spt");
-    let run = Command::new(env!("CARGO_BIN_EXE_spt"))
-        .arg("convert")
-        .arg(&bad)
-        .arg(&out2)
-        .output()
-        .unwrap();
-    assert_eq!(run.status.code(), Some(1));
+    let (code, _, _) = common::run_spt(&["convert".as_ref(), bad.as_os_str(), out2.as_os_str()]);
+    assert_eq!(code, Some(1));
     assert!(!out2.exists());
 }

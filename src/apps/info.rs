@@ -131,7 +131,7 @@ impl PlyInfo {
         let s = &self.surfels;
         let yes = |b: bool| if b { "yes" } else { "no" };
         let mut out = String::new();
-        let mut line = |k: &str, v: String| out.push_str(&format!("{k:<14}{v}\n"));
+        let mut line = |k: &str, v: String| field(&mut out, k, v);
         line("file", format!("{} ({})", self.file, bytes(self.bytes)));
         line("format", self.format.clone());
         for c in &self.comments {
@@ -166,9 +166,8 @@ impl PlyInfo {
                 ),
             );
         }
-        line("bbox min", xyz(self.bounds.min));
-        line("bbox max", xyz(self.bounds.max));
-        line("origin", xyz(self.origin));
+        place_fields(&mut out, &self.bounds, self.origin);
+        let mut line = |k: &str, v: String| field(&mut out, k, v);
         line(
             "present",
             format!(
@@ -227,6 +226,18 @@ impl PlyInfo {
         }
         out
     }
+}
+
+/// Appends one `key  value` line of a report.
+fn field(out: &mut String, key: &str, value: String) {
+    out.push_str(&format!("{key:<14}{value}\n"));
+}
+
+/// The bounding box and origin lines, shared by both reports.
+fn place_fields(out: &mut String, bounds: &Bounds, origin: [f64; 3]) {
+    field(out, "bbox min", xyz(bounds.min));
+    field(out, "bbox max", xyz(bounds.max));
+    field(out, "origin", xyz(origin));
 }
 
 fn xyz(p: [f64; 3]) -> String {
@@ -305,7 +316,7 @@ impl SptInfo {
     pub fn to_text(&self) -> String {
         let m = &self.meta;
         let mut out = String::new();
-        let mut line = |k: &str, v: String| out.push_str(&format!("{k:<14}{v}\n"));
+        let mut line = |k: &str, v: String| field(&mut out, k, v);
         line("file", format!("{} ({})", self.file, bytes(self.bytes)));
         line("format", format!("spt version {}", self.format_version));
         line(
@@ -331,9 +342,8 @@ impl SptInfo {
                 self.record_bytes
             ),
         );
-        line("bbox min", xyz(m.bounds.min));
-        line("bbox max", xyz(m.bounds.max));
-        line("origin", xyz(m.origin));
+        place_fields(&mut out, &m.bounds, m.origin);
+        let mut line = |k: &str, v: String| field(&mut out, k, v);
         line(
             "errors",
             format!(
