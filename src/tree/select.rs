@@ -34,13 +34,74 @@ pub fn error_per_distance(eps_px: f64, fov_y: f64, height_px: u32) -> f64 {
     eps_px * 2.0 * (fov_y / 2.0).tan() / height_px.max(1) as f64
 }
 
-/// A tree's nodes in list order with what the selection needs, borrowed from an
-/// in-memory list or a memory-mapped file.
+/// What the prefix search needs besides the nodes: the box of all node centres and
+/// the largest δ (model units) from the start of each block of [`BLOCK`] nodes to the
+/// end of the list. Built once per tree (one pass over the nodes).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PrefixIndex {
+    centre_min: DVec3,
+    centre_max: DVec3,
+    error_scale: f32,
+    delta_suffix: Vec<f64>,
+}
+
+impl PrefixIndex {
+    pub fn new(meta: &TreeMeta, nodes: &[NodeRecord]) -> Self {
+        let scale = meta.error_scale;
+        let blocks = nodes.len().div_ceil(BLOCK);
+        let block_max: Vec<f64> = (0..blocks)
+            .into_par_iter()
+            .map(|b| {
+                let block = &nodes[b * BLOCK..((b + 1) * BLOCK).min(nodes.len())];
+                block.iter().map(|r| r.delta(scale)).fold(0.0, f64::max)
+            })
+            .collect();
+        let mut delta_suffix = block_max;
+        for b in (0..blocks.saturating_sub(1)).rev() {
+            delta_suffix[b] = delta_suffix[b].max(delta_suffix[b + 1]);
+        }
+        PrefixIndex {
+            centre_min: Vec3::from(meta.centre_min).as_dvec3(),
+            centre_max: Vec3::from(meta.centre_max).as_dvec3(),
+            error_scale: scale,
+            delta_suffix,
+        }
+    }
+
+    /// Distance from `eye` (relative to the origin) to the box of all node centres.
+    pub fn min_distance(&self, eye: DVec3) -> f64 {
+        (eye.clamp(self.centre_min, self.centre_max) - eye).length()
+    }
+
+    /// Length of the prefix of `nodes` that holds every node the exact test can draw.
+    pub fn prefix_len(&self, nodes: &[NodeRecord], eye: DVec3, eps: f64) -> usize {
+        let d_min = self.min_distance(eye);
+        // First i where e_parent[i] ≤ ε (d_min − Δ(i)); false before, true after.
+        let beyond = |i: usize| {
+            nodes[i].parent_error(self.error_scale) <= eps * (d_min - self.delta_suffix[i / BLOCK])
+        };
+        let (mut lo, mut hi) = (0, nodes.len());
+        while lo < hi {
+            let mid = lo + (hi - lo) / 2;
+            if beyond(mid) { hi = mid } else { lo = mid + 1 }
+        }
+        lo
+    }
+}
+
+/// The exact test for one node, with the eye relative to the origin.
+pub fn is_drawn(r: &NodeRecord, error_scale: f32, eye: DVec3, eps: f64) -> bool {
+    let d = (r.position().as_dvec3() - eye).length();
+    r.error(error_scale) <= eps * d
+        && eps * (d - r.delta(error_scale)) < r.parent_error(error_scale)
+}
+
+/// A tree's nodes in list order with its prefix index, borrowed from an in-memory list
+/// or a memory-mapped file.
 pub struct TreeView<'a> {
     pub meta: &'a TreeMeta,
     pub nodes: &'a [NodeRecord],
-    /// Largest δ (model units) from the start of each block to the end of the list.
-    delta_suffix: Vec<f64>,
+    pub index: PrefixIndex,
 }
 
 /// What one view draws.
@@ -54,56 +115,24 @@ pub struct Selection {
 
 impl<'a> TreeView<'a> {
     pub fn new(meta: &'a TreeMeta, nodes: &'a [NodeRecord]) -> Self {
-        let scale = meta.error_scale;
-        let blocks = nodes.len().div_ceil(BLOCK);
-        let mut delta_suffix = vec![0.0f64; blocks];
-        let mut running = 0.0f64;
-        for b in (0..blocks).rev() {
-            let block = &nodes[b * BLOCK..((b + 1) * BLOCK).min(nodes.len())];
-            let m = block.iter().map(|r| r.delta(scale)).fold(0.0, f64::max);
-            running = running.max(m);
-            delta_suffix[b] = running;
-        }
         TreeView {
             meta,
             nodes,
-            delta_suffix,
+            index: PrefixIndex::new(meta, nodes),
         }
     }
 
-    /// Distance from `eye` (relative to the origin) to the box of all node centres.
     pub fn min_distance(&self, eye: DVec3) -> f64 {
-        let lo = Vec3::from(self.meta.centre_min).as_dvec3();
-        let hi = Vec3::from(self.meta.centre_max).as_dvec3();
-        (eye.clamp(lo, hi) - eye).length()
+        self.index.min_distance(eye)
     }
 
     /// The exact test for node `i` (list index).
     pub fn is_drawn(&self, i: usize, eye: DVec3, eps: f64) -> bool {
-        let r = &self.nodes[i];
-        let s = self.meta.error_scale;
-        let d = (r.position().as_dvec3() - eye).length();
-        let e = r.error(s);
-        let e_parent = r.parent_error(s);
-        let delta = r.delta(s);
-        e <= eps * d && eps * (d - delta) < e_parent
+        is_drawn(&self.nodes[i], self.meta.error_scale, eye, eps)
     }
 
-    /// Length of the prefix that holds every node the exact test can draw.
     pub fn prefix_len(&self, eye: DVec3, eps: f64) -> usize {
-        let d_min = self.min_distance(eye);
-        let s = self.meta.error_scale;
-        // First i where e_parent[i] ≤ ε (d_min − Δ(i)); false before, true after.
-        let beyond = |i: usize| {
-            let e_parent = self.nodes[i].parent_error(s);
-            e_parent <= eps * (d_min - self.delta_suffix[i / BLOCK])
-        };
-        let (mut lo, mut hi) = (0, self.nodes.len());
-        while lo < hi {
-            let mid = lo + (hi - lo) / 2;
-            if beyond(mid) { hi = mid } else { lo = mid + 1 }
-        }
-        lo
+        self.index.prefix_len(self.nodes, eye, eps)
     }
 
     /// The prefix and, by the exact test over the whole list, the drawn nodes.
