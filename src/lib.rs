@@ -5,5 +5,6 @@
 
 pub mod apps;
 pub mod io;
+pub mod render;
 pub mod surfel;
 pub mod tree;

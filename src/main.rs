@@ -36,6 +36,18 @@ enum Command {
     /// which opens instantly (memory-mapped). Shows each stage (load, surfels, tree,
     /// errors, sort, write) with its time, then a summary. The output is written to a
     /// temporary file and renamed: a failed convert never leaves a partial file.
+    /// Renders one frame of a model (PLY or .spt) to PNG, headless, by three-pass EWA
+    /// splatting of its sequential point tree; prints splats drawn, prefix length and GPU
+    /// time. `--mode mesh` draws the mesh itself as the reference.
+    Render {
+        /// The model: a PLY file or an .spt file.
+        model: PathBuf,
+        /// The PNG to write.
+        #[arg(short, long)]
+        output: PathBuf,
+        #[command(flatten)]
+        args: spt::apps::render::RenderArgs,
+    },
     Convert {
         /// The model: a PLY file.
         input: PathBuf,
@@ -49,6 +61,11 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Info { file, json } => spt::apps::info::run(&file, json),
         Command::Convert { input, output } => spt::apps::convert::run(&input, &output),
+        Command::Render {
+            model,
+            output,
+            args,
+        } => spt::apps::render::run(&model, &output, &args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,101 @@
+// Shared by every pass: the per-frame uniforms, node record decoding, the selection
+// test (DESIGN.md §5) and view rays. Each pass's source is appended to this file.
+
+struct Frame {
+    // World-aligned camera-relative → view space (a rotation).
+    view: mat4x4<f32>,
+    // Reversed-Z, infinite far plane: depth = near / view distance.
+    proj: mat4x4<f32>,
+    // xyz: model origin − eye, computed in f64 on the CPU.
+    model_offset: vec4<f32>,
+    // width, height, 1/width, 1/height (pixels).
+    viewport: vec4<f32>,
+    // x: ε (world error per unit of distance), y: error scale, z: near, w: depth push-back (× radius).
+    lod: vec4<f32>,
+    // x, y: tan of the half field of view; z: prefilter radius (px); w: 1 with the EWA prefilter.
+    lens: vec4<f32>,
+    // xyz: direction toward the light, view space; w: specular strength.
+    light: vec4<f32>,
+    background: vec4<f32>,
+    // x: display mode, y: cull back faces, z: level of detail on, w: unused.
+    flags: vec4<u32>,
+    // x: splat radius scale (rendered radius / stored radius); y: the accumulated
+    // weight Σw at which a pixel is fully covered (silhouettes fade below it; 0: off).
+    blend: vec4<f32>,
+}
+
+const MODE_SHADED: u32 = 0u;
+const MODE_LEVELS: u32 = 1u;
+const MODE_NORMALS: u32 = 2u;
+const MODE_RADIUS: u32 = 3u;
+const MODE_POINTS: u32 = 4u;
+const MODE_MESH: u32 = 5u;
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+
+// One node of the sequential list: 32 bytes, as src/tree/record.rs writes it.
+struct Node {
+    position: vec3<f32>,   // relative to the model origin
+    radius: f32,
+    normal: vec3<f32>,
+    color: vec4<f32>,
+    error: f32,            // model units
+    parent_error: f32,
+    delta: f32,
+    level: u32,
+}
+
+fn oct_decode(e: vec2<f32>) -> vec3<f32> {
+    let z = 1.0 - abs(e.x) - abs(e.y);
+    let t = max(-z, 0.0);
+    let x = e.x + select(t, -t, e.x >= 0.0);
+    let y = e.y + select(t, -t, e.y >= 0.0);
+    return normalize(vec3<f32>(x, y, z));
+}
+
+fn decode_node(a: vec4<u32>, b: vec4<u32>) -> Node {
+    var n: Node;
+    n.position = bitcast<vec3<f32>>(a.xyz);
+    n.radius = bitcast<f32>(a.w);
+    n.normal = oct_decode(unpack2x16snorm(b.x));
+    n.color = unpack4x8unorm(b.y);
+    let errors = unpack2x16float(b.z) * frame.lod.y;
+    n.error = errors.x;
+    n.parent_error = errors.y;
+    n.delta = unpack2x16float(b.w).x * frame.lod.y;
+    n.level = b.w >> 16u;
+    return n;
+}
+
+// Drawn iff fine enough (e ≤ ε·d) and its parent is not, seen conservatively
+// (ε·(d − δ) < e_parent). Without level of detail: the leaves (and zero-error nodes).
+fn selected(n: Node, d: f32) -> bool {
+    let eps = select(0.0, frame.lod.x, frame.flags.z != 0u);
+    return n.error <= eps * d && eps * (d - n.delta) < n.parent_error;
+}
+
+// View-space direction of the ray through a framebuffer position (pixel centre).
+fn view_ray(frag: vec2<f32>) -> vec3<f32> {
+    let ndc = vec2<f32>(frag.x * frame.viewport.z * 2.0 - 1.0, 1.0 - frag.y * frame.viewport.w * 2.0);
+    return vec3<f32>(ndc.x * frame.lens.x, ndc.y * frame.lens.y, -1.0);
+}
+
+// Reversed-Z depth of a point at view distance `z` (> 0) in front of the eye.
+fn depth_of(z: f32) -> f32 {
+    return frame.lod.z / z;
+}
+
+// A colour for a tree level (cycles through 8).
+fn level_color(level: u32) -> vec3<f32> {
+    var palette = array<vec3<f32>, 8>(
+        vec3<f32>(0.90, 0.30, 0.25), vec3<f32>(0.95, 0.65, 0.20), vec3<f32>(0.85, 0.85, 0.25),
+        vec3<f32>(0.40, 0.80, 0.30), vec3<f32>(0.25, 0.75, 0.75), vec3<f32>(0.30, 0.50, 0.90),
+        vec3<f32>(0.60, 0.35, 0.85), vec3<f32>(0.85, 0.40, 0.70));
+    return palette[level % 8u];
+}
+
+// Blue (small) to red (large) over log2 of the radius relative to the model size.
+fn radius_color(radius: f32) -> vec3<f32> {
+    let t = clamp((log2(radius / frame.lod.y) + 14.0) / 12.0, 0.0, 1.0);
+    return mix(vec3<f32>(0.15, 0.3, 0.95), vec3<f32>(0.95, 0.25, 0.15), t);
+}

@@ -1,0 +1,36 @@
+// Pass 3: normalize the blended attributes and shade each pixel (Blinn-Phong with a
+// movable light); background where no splat contributed. Writes an sRGB target.
+
+@group(1) @binding(0) var color_sum: texture_2d<f32>;
+@group(1) @binding(1) var normal_sum: texture_2d<f32>;
+
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+
+@fragment
+fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
+    let texel = vec2<i32>(frag.xy);
+    let c = textureLoad(color_sum, texel, 0);
+    let nz = textureLoad(normal_sum, texel, 0);
+    if c.w <= 0.0 {
+        return vec4<f32>(frame.background.rgb, 1.0);
+    }
+    let color = c.rgb / c.w;
+    let n = normalize(nz.xyz);
+    if frame.flags.x == MODE_NORMALS {
+        return vec4<f32>(n * 0.5 + 0.5, 1.0);
+    }
+    let q = view_ray(frag.xy) * (nz.w / c.w);
+    let l = normalize(frame.light.xyz);
+    let v = normalize(-q);
+    let h = normalize(l + v);
+    let diffuse = max(dot(n, l), 0.0);
+    let specular = frame.light.w * pow(max(dot(n, h), 0.0), 32.0) * select(0.0, 1.0, diffuse > 0.0);
+    let shaded = color * (0.25 + 0.75 * diffuse) + vec3<f32>(specular);
+    // Pixels reached only by the fading rims of splats blend into the background.
+    let alpha = select(1.0, clamp(c.w / frame.blend.y, 0.0, 1.0), frame.blend.y > 0.0);
+    return vec4<f32>(mix(frame.background.rgb, shaded, alpha), 1.0);
+}

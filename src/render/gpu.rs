@@ -1,0 +1,93 @@
+//! The GPU: an adapter of any backend (a real GPU when there is one, software Vulkan
+//! (lavapipe) or OpenGL (llvmpipe) otherwise), with the adapter's own limits rather
+//! than wgpu's defaults.
+
+use anyhow::{Context, bail};
+
+/// Where the backend choice comes from when none is given.
+pub const BACKEND_ENV: &str = "SPT_BACKEND";
+
+/// A device and queue with what the renderer needs to know of them.
+pub struct Gpu {
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    /// Timestamp queries are available (GPU times are measured).
+    pub timestamps: bool,
+}
+
+/// Parses a backend name: vulkan, gl, metal, dx12, or `all` (any).
+pub fn parse_backends(name: &str) -> anyhow::Result<wgpu::Backends> {
+    Ok(match name.to_ascii_lowercase().as_str() {
+        "vulkan" | "vk" => wgpu::Backends::VULKAN,
+        "gl" | "gles" | "opengl" => wgpu::Backends::GL,
+        "metal" | "mtl" => wgpu::Backends::METAL,
+        "dx12" | "d3d12" => wgpu::Backends::DX12,
+        "all" | "any" => wgpu::Backends::all(),
+        other => bail!("unknown backend '{other}': use vulkan, gl, metal, dx12 or all"),
+    })
+}
+
+impl Gpu {
+    /// Opens an adapter: from `backend`, else from `SPT_BACKEND`, else any (a hardware
+    /// adapter preferred). Fails with a clear message when none exists.
+    pub fn new(backend: Option<&str>) -> anyhow::Result<Gpu> {
+        let chosen = match backend
+            .map(str::to_owned)
+            .or_else(|| std::env::var(BACKEND_ENV).ok())
+        {
+            Some(name) => parse_backends(&name)?,
+            None => wgpu::Backends::all(),
+        };
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = chosen;
+        let instance = wgpu::Instance::new(desc);
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            apply_limit_buckets: false,
+        }))
+        .with_context(|| {
+            format!(
+                "no GPU adapter for backends {chosen:?}: install a driver (software Vulkan: \
+                 apt-get install mesa-vulkan-drivers) or choose another with --backend / {BACKEND_ENV}"
+            )
+        })?;
+        let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("spt"),
+            required_features: features,
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .context("cannot open the GPU device")?;
+        let info = adapter.get_info();
+        Ok(Gpu {
+            adapter,
+            device,
+            queue,
+            info,
+            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+        })
+    }
+
+    /// "name (backend, driver)".
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {} {})",
+            self.info.name, self.info.backend, self.info.driver, self.info.driver_info
+        )
+    }
+
+    /// Largest storage-buffer binding, a multiple of the record size.
+    pub fn max_binding_bytes(&self) -> u64 {
+        let limits = self.device.limits();
+        limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+            / 256
+            * 256
+    }
+}

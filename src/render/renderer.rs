@@ -1,0 +1,795 @@
+//! The three-pass deferred EWA splatting renderer (DESIGN.md §6–7; Botsch, Hornung,
+//! Zwicker, Kobbelt 2005), and the mesh reference pass into the same G-buffer.
+//!
+//! ```text
+//! CPU: prefix (binary search) ─► per slice of the list: instanced quads, 4 vertices each
+//! pass 1 visibility:  depth only, pushed back by a fraction of the radius
+//! pass 2 attributes:  depth test against pass 1, additive (colour·w, w), (normal·w, z·w)
+//! pass 3 shading:     full-screen, normalize and Blinn-Phong, sRGB out
+//! ```
+//!
+//! The list is uploaded once, in slices no larger than one storage binding (128 MiB on
+//! lavapipe), each drawn with its own bind group.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+use wgpu::util::DeviceExt;
+
+use super::camera::{Camera, bounding_sphere};
+use super::gpu::Gpu;
+use super::scene::Scene;
+use crate::tree::NodeRecord;
+use crate::tree::select::{error_per_distance, is_drawn};
+
+/// Display modes (DESIGN.md §7b).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Mode {
+    /// Real colours (grey when the model has none), lit.
+    Shaded,
+    /// Colour by tree level.
+    Levels,
+    /// View-space normals as colours.
+    Normals,
+    /// Colour by splat radius (blue small, red large).
+    Radius,
+    /// Plain points: no blending, nearest splat wins.
+    Points,
+    /// The mesh the model came from (reference; needs a PLY with faces).
+    Mesh,
+}
+
+/// How a frame is drawn.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// The largest screen-space error, pixels (0: leaves only).
+    pub error_px: f64,
+    pub mode: Mode,
+    pub ewa: bool,
+    pub lod: bool,
+    pub cull_back_faces: bool,
+    /// Direction toward the light in view space (x right, y up, z toward the viewer).
+    pub light: Vec3,
+    /// Background colour, sRGB 0–1.
+    pub background: [f32; 3],
+    /// Rendered radius / stored radius: more overlap blends more smoothly.
+    pub radius_scale: f32,
+    /// Accumulated weight at which a pixel counts as fully covered; below it the pixel
+    /// fades into the background (0: off). Also the coverage threshold of read-back masks.
+    pub coverage_weight: f32,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            error_px: 1.0,
+            mode: Mode::Shaded,
+            ewa: true,
+            lod: true,
+            cull_back_faces: false,
+            light: Vec3::new(0.4, 0.6, 1.0),
+            background: [1.0, 1.0, 1.0],
+            radius_scale: 1.0,
+            coverage_weight: 0.0,
+        }
+    }
+}
+
+/// Prefilter radius in pixels.
+pub const PREFILTER_PX: f32 = 1.0;
+/// Pass 1 pushes each splat back by this many radii.
+pub const DEPTH_PUSH: f32 = 1.0;
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct FrameUniform {
+    view: [[f32; 4]; 4],
+    proj: [[f32; 4]; 4],
+    model_offset: [f32; 4],
+    viewport: [f32; 4],
+    lod: [f32; 4],
+    lens: [f32; 4],
+    light: [f32; 4],
+    background: [f32; 4],
+    flags: [u32; 4],
+    blend: [f32; 4],
+}
+
+/// A frame read back: sRGB pixels and which pixels something covered.
+#[derive(Debug, Clone)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    /// RGBA8, sRGB, row-major, top row first.
+    pub rgba: Vec<u8>,
+    pub covered: Vec<bool>,
+}
+
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct FrameStats {
+    /// Nodes handed to the GPU (the CPU prefix).
+    pub prefix_len: usize,
+    /// Nodes that pass the exact selection test (CPU reference of the GPU test).
+    pub selected: usize,
+    /// GPU time of the three passes (timestamp queries), when the adapter has them.
+    pub gpu_ms: Option<f64>,
+}
+
+/// The list and mesh of a scene on the GPU.
+pub struct GpuScene {
+    slices: Vec<(wgpu::BindGroup, u32)>,
+    mesh: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
+}
+
+pub struct Renderer {
+    pub gpu: Gpu,
+    frame_layout: wgpu::BindGroupLayout,
+    nodes_layout: wgpu::BindGroupLayout,
+    gbuffer_layout: wgpu::BindGroupLayout,
+    visibility: wgpu::RenderPipeline,
+    attributes: wgpu::RenderPipeline,
+    points: wgpu::RenderPipeline,
+    mesh: wgpu::RenderPipeline,
+    shade: wgpu::RenderPipeline,
+}
+
+const COMMON: &str = include_str!("../../shaders/common.wgsl");
+const GBUFFER: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+const OUTPUT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+fn module(device: &wgpu::Device, name: &str, source: &str) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(name),
+        source: wgpu::ShaderSource::Wgsl(format!("{COMMON}\n{source}").into()),
+    })
+}
+
+fn depth_state(compare: wgpu::CompareFunction, write: bool) -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState {
+        format: DEPTH,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(compare),
+        stencil: Default::default(),
+        bias: Default::default(),
+    })
+}
+
+fn gbuffer_targets(blend: Option<wgpu::BlendState>) -> [Option<wgpu::ColorTargetState>; 2] {
+    let t = wgpu::ColorTargetState {
+        format: GBUFFER,
+        blend,
+        write_mask: wgpu::ColorWrites::ALL,
+    };
+    [Some(t.clone()), Some(t)]
+}
+
+const ADD: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+    alpha: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+};
+
+impl Renderer {
+    pub fn new(gpu: Gpu) -> Renderer {
+        let device = &gpu.device;
+        let entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty,
+            count: None,
+        };
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("frame"),
+            entries: &[entry(
+                0,
+                wgpu::ShaderStages::VERTEX_FRAGMENT,
+                wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+            )],
+        });
+        let nodes_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("nodes"),
+            entries: &[entry(
+                0,
+                wgpu::ShaderStages::VERTEX,
+                wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+            )],
+        });
+        let texture = wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        };
+        let gbuffer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gbuffer"),
+            entries: &[
+                entry(0, wgpu::ShaderStages::FRAGMENT, texture),
+                entry(1, wgpu::ShaderStages::FRAGMENT, texture),
+            ],
+        });
+        let layout = |second: &wgpu::BindGroupLayout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: None,
+                bind_group_layouts: &[Some(&frame_layout), Some(second)],
+                immediate_size: 0,
+            })
+        };
+        let splat_layout = layout(&nodes_layout);
+        let shade_layout = layout(&gbuffer_layout);
+        let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: None,
+            bind_group_layouts: &[Some(&frame_layout)],
+            immediate_size: 0,
+        });
+        let splat = module(device, "splat", include_str!("../../shaders/splat.wgsl"));
+        let mesh_module = module(device, "mesh", include_str!("../../shaders/mesh.wgsl"));
+        let shade_module = module(device, "shade", include_str!("../../shaders/shade.wgsl"));
+        let strip = wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleStrip,
+            ..Default::default()
+        };
+        let splat_pipeline = |fs: &str, targets: &[Option<wgpu::ColorTargetState>], depth| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(fs),
+                layout: Some(&splat_layout),
+                vertex: wgpu::VertexState {
+                    module: &splat,
+                    entry_point: Some("vs_splat"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: strip,
+                depth_stencil: depth,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &splat,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let visibility = splat_pipeline(
+            "fs_visibility",
+            &[],
+            depth_state(wgpu::CompareFunction::Greater, true),
+        );
+        let attributes = splat_pipeline(
+            "fs_attributes",
+            &gbuffer_targets(Some(ADD)),
+            depth_state(wgpu::CompareFunction::GreaterEqual, false),
+        );
+        let points = splat_pipeline(
+            "fs_points",
+            &gbuffer_targets(None),
+            depth_state(wgpu::CompareFunction::Greater, true),
+        );
+        let mesh_attributes = [
+            wgpu::VertexAttribute {
+                format: wgpu::VertexFormat::Float32x3,
+                offset: 0,
+                shader_location: 0,
+            },
+            wgpu::VertexAttribute {
+                format: wgpu::VertexFormat::Float32x3,
+                offset: 12,
+                shader_location: 1,
+            },
+            wgpu::VertexAttribute {
+                format: wgpu::VertexFormat::Unorm8x4,
+                offset: 24,
+                shader_location: 2,
+            },
+        ];
+        let mesh = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("mesh"),
+            layout: Some(&mesh_layout),
+            vertex: wgpu::VertexState {
+                module: &mesh_module,
+                entry_point: Some("vs_mesh"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: 28,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &mesh_attributes,
+                })],
+            },
+            primitive: Default::default(),
+            depth_stencil: depth_state(wgpu::CompareFunction::Greater, true),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &mesh_module,
+                entry_point: Some("fs_mesh"),
+                compilation_options: Default::default(),
+                targets: &gbuffer_targets(None),
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let shade = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("shade"),
+            layout: Some(&shade_layout),
+            vertex: wgpu::VertexState {
+                module: &shade_module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &shade_module,
+                entry_point: Some("fs_shade"),
+                compilation_options: Default::default(),
+                targets: &[Some(OUTPUT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Renderer {
+            gpu,
+            frame_layout,
+            nodes_layout,
+            gbuffer_layout,
+            visibility,
+            attributes,
+            points,
+            mesh,
+            shade,
+        }
+    }
+
+    /// Uploads a scene's list (once, in binding-size slices) and mesh.
+    pub fn upload(&self, scene: &Scene) -> GpuScene {
+        let device = &self.gpu.device;
+        let per_slice = (self.gpu.max_binding_bytes() / std::mem::size_of::<NodeRecord>() as u64)
+            .max(1) as usize;
+        let slices = scene
+            .nodes()
+            .chunks(per_slice)
+            .map(|chunk| {
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("nodes"),
+                    contents: bytemuck::cast_slice(chunk),
+                    usage: wgpu::BufferUsages::STORAGE,
+                });
+                let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("nodes"),
+                    layout: &self.nodes_layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: buffer.as_entire_binding(),
+                    }],
+                });
+                (bind, chunk.len() as u32)
+            })
+            .collect();
+        let mesh = scene.mesh.as_ref().map(|m| {
+            let mut vertices = Vec::with_capacity(m.positions.len() * 28);
+            for i in 0..m.positions.len() {
+                vertices.extend_from_slice(bytemuck::bytes_of(&m.positions[i]));
+                vertices.extend_from_slice(bytemuck::bytes_of(&m.normals[i]));
+                vertices.extend_from_slice(&m.colors[i]);
+            }
+            let vb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("mesh vertices"),
+                contents: &vertices,
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+            let ib = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("mesh indices"),
+                contents: bytemuck::cast_slice(&m.triangles),
+                usage: wgpu::BufferUsages::INDEX,
+            });
+            (vb, ib, (m.triangles.len() * 3) as u32)
+        });
+        GpuScene { slices, mesh }
+    }
+
+    /// Renders one frame and reads it back.
+    pub fn render(
+        &self,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        camera: &Camera,
+        settings: &Settings,
+        width: u32,
+        height: u32,
+    ) -> anyhow::Result<(Image, FrameStats)> {
+        let device = &self.gpu.device;
+        let meta = scene.meta();
+        let origin = DVec3::from(meta.origin);
+        let eye_rel = camera.eye - origin;
+        let (centre, radius) = bounding_sphere(meta);
+        // Near plane: a small fraction of the model, never beyond its nearest point.
+        let near = (radius * 1e-4)
+            .max((centre - camera.eye).length() * 1e-6)
+            .max(f64::MIN_POSITIVE);
+        let aspect = width as f64 / height as f64;
+        let eps = error_per_distance(settings.error_px, camera.fov_y, height);
+        let tan_y = (camera.fov_y * 0.5).tan();
+        let mode = match settings.mode {
+            Mode::Shaded => 0,
+            Mode::Levels => 1,
+            Mode::Normals => 2,
+            Mode::Radius => 3,
+            Mode::Points => 4,
+            Mode::Mesh => 5,
+        };
+        if settings.mode == Mode::Mesh && gpu_scene.mesh.is_none() {
+            anyhow::bail!("mesh mode needs a model with faces, read from its PLY file");
+        }
+        let srgb_to_linear = |c: f32| {
+            if c <= 0.04045 {
+                c / 12.92
+            } else {
+                ((c + 0.055) / 1.055).powf(2.4)
+            }
+        };
+        let uniform = FrameUniform {
+            view: camera.view_rotation().to_cols_array_2d(),
+            proj: camera.projection(aspect, near).to_cols_array_2d(),
+            model_offset: (-eye_rel).as_vec3().extend(0.0).to_array(),
+            viewport: [
+                width as f32,
+                height as f32,
+                1.0 / width as f32,
+                1.0 / height as f32,
+            ],
+            lod: [eps as f32, meta.error_scale, near as f32, DEPTH_PUSH],
+            lens: [
+                (tan_y * aspect) as f32,
+                tan_y as f32,
+                PREFILTER_PX,
+                if settings.ewa { 1.0 } else { 0.0 },
+            ],
+            light: settings.light.normalize_or(Vec3::Z).extend(0.25).to_array(),
+            background: settings
+                .background
+                .map(srgb_to_linear)
+                .into_iter()
+                .chain([1.0])
+                .collect::<Vec<_>>()
+                .try_into()
+                .unwrap(),
+            flags: [
+                mode,
+                settings.cull_back_faces as u32,
+                settings.lod as u32,
+                0,
+            ],
+            blend: [
+                settings.radius_scale,
+                if settings.mode == Mode::Shaded {
+                    settings.coverage_weight
+                } else {
+                    0.0
+                },
+                0.0,
+                0.0,
+            ],
+        };
+        let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("frame"),
+            contents: bytemuck::bytes_of(&uniform),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let frame_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("frame"),
+            layout: &self.frame_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: frame_buffer.as_entire_binding(),
+            }],
+        });
+
+        // CPU prefix, and the exact test over it for the statistics.
+        let nodes = scene.nodes();
+        let lod_eps = if settings.lod { eps } else { 0.0 };
+        let prefix_len = scene.index.prefix_len(nodes, eye_rel, lod_eps);
+        let selected = nodes[..prefix_len]
+            .par_iter()
+            .filter(|r| is_drawn(r, meta.error_scale, eye_rel, lod_eps))
+            .count();
+
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
+        let target = |format, label, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let g_usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        let color_sum = target(GBUFFER, "colour sum", g_usage);
+        let normal_sum = target(GBUFFER, "normal sum", g_usage);
+        let depth = target(DEPTH, "depth", wgpu::TextureUsages::RENDER_ATTACHMENT);
+        let output = target(
+            OUTPUT,
+            "output",
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
+        let views =
+            [&color_sum, &normal_sum, &depth, &output].map(|t| t.create_view(&Default::default()));
+        let queries = self.gpu.timestamps.then(|| {
+            device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("passes"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            })
+        });
+
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let clear_attachments = |encoder: &mut wgpu::CommandEncoder, first: bool| {
+            let ops = |load| wgpu::Operations {
+                load,
+                store: wgpu::StoreOp::Store,
+            };
+            let color = |view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: ops(wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)),
+                })
+            };
+            encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("clear"),
+                color_attachments: &[color(&views[0]), color(&views[1])],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &views[2],
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: queries.as_ref().filter(|_| first).map(|q| {
+                    wgpu::RenderPassTimestampWrites {
+                        query_set: q,
+                        beginning_of_pass_write_index: Some(0),
+                        end_of_pass_write_index: None,
+                    }
+                }),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+        };
+        clear_attachments(&mut encoder, true);
+        let load = wgpu::Operations {
+            load: wgpu::LoadOp::Load,
+            store: wgpu::StoreOp::Store,
+        };
+        let gbuffer_pass = |encoder: &mut wgpu::CommandEncoder, with_colors: bool, label| {
+            let color = |view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: load,
+                })
+            };
+            let colors = [color(&views[0]), color(&views[1])];
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(label),
+                color_attachments: if with_colors { &colors } else { &[] },
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &views[2],
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &frame_bind, &[]);
+            // The pass ends (is dropped) before the encoder is finished.
+            pass.forget_lifetime()
+        };
+        let draw_prefix = |pass: &mut wgpu::RenderPass, pipeline| {
+            pass.set_pipeline(pipeline);
+            let mut left = prefix_len as u32;
+            for (bind, count) in &gpu_scene.slices {
+                if left == 0 {
+                    break;
+                }
+                let n = left.min(*count);
+                pass.set_bind_group(1, bind, &[]);
+                pass.draw(0..4, 0..n);
+                left -= n;
+            }
+        };
+        match settings.mode {
+            Mode::Mesh => {
+                let (vb, ib, count) = gpu_scene.mesh.as_ref().expect("checked above");
+                let mut pass = gbuffer_pass(&mut encoder, true, "mesh");
+                pass.set_pipeline(&self.mesh);
+                pass.set_vertex_buffer(0, vb.slice(..));
+                pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..*count, 0, 0..1);
+            }
+            Mode::Points => {
+                let mut pass = gbuffer_pass(&mut encoder, true, "points");
+                draw_prefix(&mut pass, &self.points);
+            }
+            _ => {
+                {
+                    let mut pass = gbuffer_pass(&mut encoder, false, "visibility");
+                    draw_prefix(&mut pass, &self.visibility);
+                }
+                let mut pass = gbuffer_pass(&mut encoder, true, "attributes");
+                draw_prefix(&mut pass, &self.attributes);
+            }
+        }
+        let gbuffer_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("gbuffer"),
+            layout: &self.gbuffer_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&views[0]),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&views[1]),
+                },
+            ],
+        });
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shade"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &views[3],
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: queries.as_ref().map(|q| wgpu::RenderPassTimestampWrites {
+                    query_set: q,
+                    beginning_of_pass_write_index: None,
+                    end_of_pass_write_index: Some(1),
+                }),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.shade);
+            pass.set_bind_group(0, &frame_bind, &[]);
+            pass.set_bind_group(1, &gbuffer_bind, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        // Read back: the output and the weight channel of the colour sum (coverage).
+        let row = |bytes_per_pixel: u32| (width * bytes_per_pixel).div_ceil(256) * 256;
+        let readback = |texture: &wgpu::Texture, bpp: u32, encoder: &mut wgpu::CommandEncoder| {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size: (row(bpp) * height) as u64,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            encoder.copy_texture_to_buffer(
+                wgpu::TexelCopyTextureInfo {
+                    texture,
+                    mip_level: 0,
+                    origin: Default::default(),
+                    aspect: Default::default(),
+                },
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(row(bpp)),
+                        rows_per_image: None,
+                    },
+                },
+                size,
+            );
+            buffer
+        };
+        let out_buffer = readback(&output, 4, &mut encoder);
+        let weight_buffer = readback(&color_sum, 8, &mut encoder);
+        let query_buffer = queries.as_ref().map(|q| {
+            let resolve = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let read = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps read"),
+                size: 16,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            encoder.resolve_query_set(q, 0..2, &resolve, 0);
+            encoder.copy_buffer_to_buffer(&resolve, 0, &read, 0, 16);
+            read
+        });
+        self.gpu.queue.submit([encoder.finish()]);
+        let mapped = |buffer: &wgpu::Buffer| -> anyhow::Result<Vec<u8>> {
+            buffer.map_async(wgpu::MapMode::Read, .., |_| {});
+            device.poll(wgpu::PollType::wait_indefinitely())?;
+            let data = buffer.slice(..).get_mapped_range()?.to_vec();
+            buffer.unmap();
+            Ok(data)
+        };
+        let out = mapped(&out_buffer)?;
+        let weights = mapped(&weight_buffer)?;
+        let gpu_ms = match &query_buffer {
+            Some(b) => {
+                let t: Vec<u64> = bytemuck::cast_slice(&mapped(b)?).to_vec();
+                Some(
+                    t[1].saturating_sub(t[0]) as f64 * self.gpu.queue.get_timestamp_period() as f64
+                        / 1e6,
+                )
+            }
+            None => None,
+        };
+        // A pixel counts as covered once it is at least half opaque.
+        let coverage_threshold = if uniform.blend[1] > 0.0 {
+            0.5 * uniform.blend[1]
+        } else {
+            0.0
+        };
+        let mut rgba = Vec::with_capacity((width * height * 4) as usize);
+        let mut covered = Vec::with_capacity((width * height) as usize);
+        for y in 0..height as usize {
+            let o = y * row(4) as usize;
+            rgba.extend_from_slice(&out[o..o + width as usize * 4]);
+            let w = y * row(8) as usize;
+            for x in 0..width as usize {
+                let alpha =
+                    half::f16::from_le_bytes([weights[w + x * 8 + 6], weights[w + x * 8 + 7]]);
+                covered.push(alpha.to_f32() > coverage_threshold);
+            }
+        }
+        Ok((
+            Image {
+                width,
+                height,
+                rgba,
+                covered,
+            },
+            FrameStats {
+                prefix_len,
+                selected,
+                gpu_ms,
+            },
+        ))
+    }
+}
