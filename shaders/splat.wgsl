@@ -109,7 +109,9 @@ fn hit(in: SplatVarying) -> Hit {
         let screen = (in.clip.xy - in.extra.yz) / frame.lens.z;
         rho2 = min(rho2, dot(screen, screen));
     }
-    if rho2 > 1.0 {
+    // Both passes keep the same fragments: beyond the rim, or where the weight is too
+    // small for the half-float targets (it would leave colour 0 with w > 0: black).
+    if rho2 > 1.0 || kernel(rho2) < MIN_WEIGHT {
         discard;
     }
     // Every point of the disk lies within ±r of its centre's depth. Under the prefilter
@@ -123,12 +125,18 @@ struct DepthOnly {
     @builtin(frag_depth) depth: f32,
 }
 
-// Pass 1: depth pushed back along the view ray by a fraction of the radius, so that
-// overlapping splats of one surface pass pass 2's depth test and blend.
+// Pass 1: depth pushed back along the view ray so that the splats of one surface that
+// share a pixel pass pass 2's depth test and blend: by a fraction of the radius, plus
+// the depth range the pixel's prefilter footprint spans on the splat's plane (large
+// when the surface is seen at a grazing angle and minified).
 @fragment
 fn fs_visibility(in: SplatVarying) -> DepthOnly {
     let h = hit(in);
-    return DepthOnly(depth_of(h.depth + frame.lod.w * in.extra.x));
+    let dir = normalize(view_ray(in.clip.xy));
+    let c = max(abs(dot(dir, in.normal)), 0.02);
+    let pixel = h.depth * 2.0 * frame.lens.y * frame.viewport.w;
+    let footprint = frame.lens.z * pixel * sqrt(1.0 - c * c) / c;
+    return DepthOnly(depth_of(h.depth + frame.lod.w * in.extra.x + footprint));
 }
 
 struct Attributes {
@@ -145,17 +153,13 @@ fn kernel(rho2: f32) -> f32 {
 }
 
 const KERNEL_SHARPNESS: f32 = 2.5;
+const MIN_WEIGHT: f32 = 1.0 / 1024.0;
 
 // Pass 2: kernel weight of the splat-space distance, additive blending.
 @fragment
 fn fs_attributes(in: SplatVarying) -> Attributes {
     let h = hit(in);
     let w = kernel(h.rho2);
-    // Weights this small round to zero in the half-float targets next to colour·w and
-    // would leave black pixels: such fragments add nothing.
-    if w < 1.0 / 1024.0 {
-        discard;
-    }
     let q = view_ray(in.clip.xy) * h.depth;
     // Two-sided: a normal facing away from the eye is flipped before blending.
     let n = select(in.normal, -in.normal, dot(in.normal, q) > 0.0);

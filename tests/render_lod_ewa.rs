@@ -1,0 +1,203 @@
+//! Level of detail seen from far, and the EWA prefilter on a minified checkerboard.
+//! Each test prints the table it measured.
+
+mod common;
+
+use std::sync::OnceLock;
+
+use spt::io::ply::{FaceList, PolyMesh};
+use spt::render::metrics::compare;
+use spt::render::{Camera, Gpu, Image, Mode, Renderer, Scene, Settings};
+
+fn renderer() -> &'static Renderer {
+    static R: OnceLock<Renderer> = OnceLock::new();
+    R.get_or_init(|| {
+        if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+            unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+        }
+        Renderer::new(Gpu::new(None).expect("a GPU adapter (lavapipe, or llvmpipe via OpenGL)"))
+    })
+}
+
+#[test]
+fn far_away_level_of_detail_draws_ten_times_fewer_splats_at_the_same_quality() {
+    let scene = Scene::open(&common::default_model()).unwrap();
+    let r = renderer();
+    let up = r.upload(&scene);
+    let fov = 45f64.to_radians();
+    // The bounding sphere spans ~6 % of the image height: 2·asin(1/d) = 0.06·fov.
+    let distance = 1.0 / (0.03 * fov).sin();
+    eprintln!("| view | leaves: splats | ε=1: splats | ratio | PSNR leaves | PSNR ε=1 |");
+    for k in 0..4 {
+        let camera = Camera::orbit(scene.meta(), k as f64 * 90.0 + 20.0, 20.0, distance, fov);
+        let render =
+            |settings: Settings| r.render(&scene, &up, &camera, &settings, 512, 512).unwrap();
+        let (mesh, _) = render(Settings {
+            mode: Mode::Mesh,
+            ..Settings::default()
+        });
+        let (leaves, s0) = render(Settings {
+            error_px: 0.0,
+            ..Settings::default()
+        });
+        let (lod, s1) = render(Settings {
+            error_px: 1.0,
+            ..Settings::default()
+        });
+        let (c0, c1) = (compare(&leaves, &mesh), compare(&lod, &mesh));
+        let ratio = s0.selected as f64 / s1.selected as f64;
+        eprintln!(
+            "| {k} | {} | {} | {ratio:.1}× | {:.2} dB | {:.2} dB |",
+            s0.selected, s1.selected, c0.psnr_db, c1.psnr_db
+        );
+        assert!(ratio >= 10.0, "view {k}: only {ratio:.1}× fewer splats");
+        assert!(
+            c1.psnr_db >= c0.psnr_db - 1.0,
+            "view {k}: {:.2} dB vs leaves {:.2} dB",
+            c1.psnr_db,
+            c0.psnr_db
+        );
+    }
+}
+
+/// A flat checkerboard: `n`×`n` vertices, squares of `check` vertices, black and white.
+fn checkerboard(n: u32, check: u32) -> PolyMesh {
+    let mut positions = Vec::new();
+    let mut colors = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            positions.push([i as f64, j as f64, 0.0]);
+            let white = ((i / check) + (j / check)) % 2 == 0;
+            colors.push(if white { [235, 235, 235] } else { [20, 20, 20] });
+        }
+    }
+    let mut faces = FaceList::default();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let at = |a: u32, b: u32| b * n + a;
+            faces.push(&[at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            faces.push(&[at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    PolyMesh {
+        positions,
+        colors: Some(colors),
+        faces,
+        ..PolyMesh::default()
+    }
+}
+
+/// Box-filters an image down by `k` in each direction.
+fn downsample(img: &Image, k: u32) -> Image {
+    let (w, h) = (img.width / k, img.height / k);
+    let mut rgba = vec![0u8; (w * h * 4) as usize];
+    let mut covered = vec![false; (w * h) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let mut sum = [0u32; 4];
+            let mut any = false;
+            for dy in 0..k {
+                for dx in 0..k {
+                    let i = ((y * k + dy) * img.width + x * k + dx) as usize;
+                    for c in 0..4 {
+                        sum[c] += img.rgba[i * 4 + c] as u32;
+                    }
+                    any |= img.covered[i];
+                }
+            }
+            let o = (y * w + x) as usize;
+            for c in 0..4 {
+                rgba[o * 4 + c] = (sum[c] / (k * k)) as u8;
+            }
+            covered[o] = any;
+        }
+    }
+    Image {
+        width: w,
+        height: h,
+        rgba,
+        covered,
+    }
+}
+
+#[test]
+fn ewa_prefilter_reduces_aliasing_of_a_minified_checkerboard() {
+    let dir = common::temp_dir();
+    let path = dir.path().join("checker.ply");
+    common::write_standard(
+        &path,
+        &checkerboard(400, 4),
+        spt::io::ply::Encoding::BinaryLittleEndian,
+    );
+    let scene = Scene::open(&path).unwrap();
+    let r = renderer();
+    let up = r.upload(&scene);
+    // Grazing: the eye 25 units above the plane, looking across it.
+    let camera = Camera {
+        eye: glam::DVec3::new(200.0, -40.0, 25.0),
+        target: glam::DVec3::new(200.0, 200.0, 0.0),
+        up: glam::DVec3::Z,
+        fov_y: 50f64.to_radians(),
+    };
+    let flat = Settings {
+        light: glam::Vec3::Z,
+        error_px: 0.0,
+        ..Settings::default()
+    };
+    let (w, h) = (320, 240);
+    let (reference, _) = r
+        .render(
+            &scene,
+            &up,
+            &camera,
+            &Settings {
+                mode: Mode::Mesh,
+                ..flat
+            },
+            w * 8,
+            h * 8,
+        )
+        .unwrap();
+    let reference = downsample(&reference, 8);
+    let (with_ewa, _) = r
+        .render(&scene, &up, &camera, &Settings { ewa: true, ..flat }, w, h)
+        .unwrap();
+    let (without, _) = r
+        .render(&scene, &up, &camera, &Settings { ewa: false, ..flat }, w, h)
+        .unwrap();
+    let (a, b) = (
+        compare(&with_ewa, &reference),
+        compare(&without, &reference),
+    );
+    if let Some(out) = std::env::var_os("SPT_TEST_IMAGES") {
+        let out = std::path::PathBuf::from(out);
+        reference
+            .save_png(&out.join("checker_reference.png"))
+            .unwrap();
+        with_ewa.save_png(&out.join("checker_ewa.png")).unwrap();
+        without.save_png(&out.join("checker_no_ewa.png")).unwrap();
+    }
+    eprintln!("| against 8×8 supersampled mesh | PSNR (union) | PSNR (both) | holes | spill |");
+    for (name, c) in [("EWA prefilter", a), ("no prefilter", b)] {
+        eprintln!(
+            "| {name} | {:.2} dB | {:.2} dB | {:.3} % | {:.3} % |",
+            c.psnr_db,
+            c.psnr_both_db,
+            c.hole_rate * 100.0,
+            c.spill_rate * 100.0
+        );
+    }
+    assert!(
+        a.psnr_both_db > b.psnr_both_db,
+        "EWA {:.2} dB is not better than {:.2} dB",
+        a.psnr_both_db,
+        b.psnr_both_db
+    );
+    // Splats smaller than a pixel leave no holes with the prefilter.
+    assert!(
+        a.hole_rate < b.hole_rate.max(1e-4) || a.hole_rate < 0.002,
+        "holes {:?} vs {:?}",
+        a.hole_rate,
+        b.hole_rate
+    );
+}
