@@ -67,7 +67,7 @@ fn checkerboard(n: u32, check: u32) -> PolyMesh {
     for j in 0..n {
         for i in 0..n {
             positions.push([i as f64, j as f64, 0.0]);
-            let white = ((i / check) + (j / check)) % 2 == 0;
+            let white = ((i / check) + (j / check)).is_multiple_of(2);
             colors.push(if white { [235, 235, 235] } else { [20, 20, 20] });
         }
     }
@@ -99,8 +99,8 @@ fn downsample(img: &Image, k: u32) -> Image {
             for dy in 0..k {
                 for dx in 0..k {
                     let i = ((y * k + dy) * img.width + x * k + dx) as usize;
-                    for c in 0..4 {
-                        sum[c] += img.rgba[i * 4 + c] as u32;
+                    for (c, s) in sum.iter_mut().enumerate() {
+                        *s += img.rgba[i * 4 + c] as u32;
                     }
                     any |= img.covered[i];
                 }
