@@ -99,3 +99,35 @@ fn radius_color(radius: f32) -> vec3<f32> {
     let t = clamp((log2(radius / frame.lod.y) + 14.0) / 12.0, 0.0, 1.0);
     return mix(vec3<f32>(0.15, 0.3, 0.95), vec3<f32>(0.95, 0.25, 0.15), t);
 }
+
+// A node's disk in view space: centre, unit normal, rendered radius.
+struct ViewDisk {
+    center: vec3<f32>,
+    normal: vec3<f32>,
+    radius: f32,
+}
+
+fn view_disk(n: Node) -> ViewDisk {
+    let world = n.position + frame.model_offset.xyz;
+    let center = (frame.view * vec4<f32>(world, 1.0)).xyz;
+    let normal = normalize((frame.view * vec4<f32>(n.normal, 0.0)).xyz);
+    return ViewDisk(center, normal, n.radius * frame.blend.x);
+}
+
+// The per-splat culling of both strategies (vertex stage, or compute compaction): the
+// selection test, the view frustum (bounding sphere against the four sides and the near
+// plane) and, when asked, back faces.
+fn splat_visible(n: Node, disk: ViewDisk) -> bool {
+    if !selected(n, length(disk.center)) {
+        return false;
+    }
+    let r = disk.radius;
+    let depth = -disk.center.z;
+    let sx = sqrt(1.0 + frame.lens.x * frame.lens.x);
+    let sy = sqrt(1.0 + frame.lens.y * frame.lens.y);
+    if depth + r < frame.lod.z || abs(disk.center.x) - r * sx > frame.lens.x * depth
+        || abs(disk.center.y) - r * sy > frame.lens.y * depth {
+        return false;
+    }
+    return !(frame.flags.y != 0u && dot(disk.normal, disk.center) > 0.0);
+}

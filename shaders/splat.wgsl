@@ -1,7 +1,10 @@
 // Splats: pass 1 (visibility, depth only) and pass 2 (attributes, additive blending),
-// one instanced quad of 4 vertices per node of the list slice bound here.
+// one instanced quad of 4 vertices per node of the list slice bound here: every node
+// of the prefix (`vs_splat`, culled here), or the survivors that cull.wgsl compacted
+// (`vs_splat_compacted`).
 
 @group(1) @binding(0) var<storage, read> nodes: array<vec4<u32>>;
+@group(1) @binding(1) var<storage, read> survivors: array<u32>;
 
 struct SplatVarying {
     @builtin(position) clip: vec4<f32>,
@@ -22,26 +25,24 @@ fn culled() -> SplatVarying {
 
 @vertex
 fn vs_splat(@builtin(vertex_index) corner: u32, @builtin(instance_index) index: u32) -> SplatVarying {
+    return splat_vertex(index, corner, true);
+}
+
+@vertex
+fn vs_splat_compacted(@builtin(vertex_index) corner: u32, @builtin(instance_index) index: u32) -> SplatVarying {
+    return splat_vertex(survivors[index], corner, false);
+}
+
+fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     let node = decode_node(nodes[2u * index], nodes[2u * index + 1u]);
-    let world = node.position + frame.model_offset.xyz;
-    let center = (frame.view * vec4<f32>(world, 1.0)).xyz;
-    var normal = normalize((frame.view * vec4<f32>(node.normal, 0.0)).xyz);
-    let d = length(center);
-    if !selected(node, d) {
+    let disk = view_disk(node);
+    if cull && !splat_visible(node, disk) {
         return culled();
     }
-    let r = node.radius * frame.blend.x;
+    let center = disk.center;
+    let normal = disk.normal;
+    let r = disk.radius;
     let near = frame.lod.z;
-    // Frustum: the bounding sphere entirely outside a side, or behind the near plane.
-    let depth = -center.z;
-    let sx = sqrt(1.0 + frame.lens.x * frame.lens.x);
-    let sy = sqrt(1.0 + frame.lens.y * frame.lens.y);
-    if depth + r < near || abs(center.x) - r * sx > frame.lens.x * depth || abs(center.y) - r * sy > frame.lens.y * depth {
-        return culled();
-    }
-    if frame.flags.y != 0u && dot(normal, center) > 0.0 {
-        return culled();
-    }
     // Footprint: the screen box of the disk's four tangent corners p ± r u ± r v. A disk
     // crossing the near plane is skipped rather than drawn garbled.
     let u = normalize(select(cross(normal, vec3<f32>(0.0, 0.0, 1.0)), cross(normal, vec3<f32>(1.0, 0.0, 0.0)), abs(normal.z) > 0.9));

@@ -284,3 +284,42 @@ fn kinect_frame_renders_in_its_colours() {
         "the frame is grey: colours lost"
     );
 }
+
+#[test]
+fn compute_culling_draws_what_the_cpu_reference_selects() {
+    let scene = Scene::open(&common::default_model()).unwrap();
+    let r = renderer();
+    let up = r.upload(&scene);
+    let fov = 45f64.to_radians();
+    for (k, error_px) in [(0, 0.0), (1, 1.0), (2, 4.0)] {
+        // The whole model in view: frustum culling removes nothing.
+        let camera = Camera::orbit(scene.meta(), 60.0 * k as f64, 20.0, 3.0, fov);
+        let base = Settings {
+            error_px,
+            culling: spt::render::Culling::Vertex,
+            ..Settings::default()
+        };
+        let (vertex, sv) = r.render(&scene, &up, &camera, &base, 256, 256).unwrap();
+        let compute_settings = Settings {
+            culling: spt::render::Culling::Compute,
+            ..base
+        };
+        let (compute, sc) = r
+            .render(&scene, &up, &camera, &compute_settings, 256, 256)
+            .unwrap();
+        let c = compare(&compute, &vertex);
+        eprintln!(
+            "ε {error_px} px: CPU reference {}, GPU compute culling {:?}; images {:.1} dB apart",
+            sv.selected, sc.gpu_drawn, c.psnr_db
+        );
+        assert_eq!(
+            sc.gpu_drawn,
+            Some(sv.selected as u64),
+            "ε {error_px}: the GPU test and the CPU reference disagree"
+        );
+        assert!(
+            c.psnr_db >= 45.0 && c.hole_rate == 0.0,
+            "ε {error_px}: {c:?}"
+        );
+    }
+}

@@ -7,7 +7,7 @@ use anyhow::{Context, bail};
 use glam::{DVec3, Vec3};
 
 use crate::apps::info::count;
-use crate::render::{Camera, Gpu, Mode, Renderer, Scene, Settings};
+use crate::render::{Camera, Culling, Gpu, Mode, Renderer, Scene, Settings};
 
 /// The options `spt render` (and the viewer's screenshots) take.
 #[derive(Debug, Clone, clap::Args)]
@@ -48,6 +48,10 @@ pub struct RenderArgs {
     /// Skip splats whose normal faces away (oriented models).
     #[arg(long)]
     pub cull_back_faces: bool,
+    /// Culling of the splats: by a compute pass that compacts the survivors into an
+    /// indirect draw (faster on every model measured), or in the vertex stage.
+    #[arg(long, value_enum, default_value = "compute")]
+    pub culling: Culling,
     /// GPU backend: vulkan, gl, metal, dx12 or all (default: $SPT_BACKEND, else any).
     #[arg(long)]
     pub backend: Option<String>,
@@ -92,6 +96,7 @@ impl RenderArgs {
             cull_back_faces: self.cull_back_faces,
             light: DVec3::from(self.light).as_vec3().normalize_or(Vec3::Z),
             background: self.background.map(|c| c.clamp(0.0, 1.0) as f32),
+            culling: self.culling,
             ..Settings::default()
         }
     }
@@ -146,6 +151,9 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
         count(scene.nodes().len() as u64),
         count(stats.prefix_len as u64)
     );
+    if let Some(n) = stats.gpu_drawn {
+        println!("culled    {} splats survived the compute culling", count(n));
+    }
     match stats.gpu_ms {
         Some(ms) => println!("gpu time  {ms:.3} ms"),
         None => println!("gpu time  not measured (the adapter has no timestamp queries)"),

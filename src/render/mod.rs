@@ -9,5 +9,5 @@ pub mod scene;
 
 pub use camera::Camera;
 pub use gpu::Gpu;
-pub use renderer::{FrameStats, Image, Mode, Renderer, Settings};
+pub use renderer::{Culling, FrameStats, Image, Mode, Renderer, Settings};
 pub use scene::Scene;

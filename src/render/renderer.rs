@@ -39,6 +39,16 @@ pub enum Mode {
     Mesh,
 }
 
+/// How the splats of the prefix are culled (DESIGN.md §6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum Culling {
+    /// In the vertex stage: every node of the prefix is drawn as a quad; culled ones
+    /// collapse to a point outside the clip volume.
+    Vertex,
+    /// A compute pass tests each node once and compacts the survivors into an indirect draw.
+    Compute,
+}
+
 /// How a frame is drawn.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
@@ -57,6 +67,7 @@ pub struct Settings {
     /// Accumulated weight at which a pixel counts as fully covered; below it the pixel
     /// fades into the background (0: off). Also the coverage threshold of read-back masks.
     pub coverage_weight: f32,
+    pub culling: Culling,
 }
 
 impl Default for Settings {
@@ -71,6 +82,7 @@ impl Default for Settings {
             background: [1.0, 1.0, 1.0],
             radius_scale: 1.0,
             coverage_weight: 0.0,
+            culling: Culling::Compute,
         }
     }
 }
@@ -111,27 +123,54 @@ pub struct FrameStats {
     pub prefix_len: usize,
     /// Nodes that pass the exact selection test (CPU reference of the GPU test).
     pub selected: usize,
-    /// GPU time of the three passes (timestamp queries), when the adapter has them.
+    /// GPU time of the frame (timestamp queries), when the adapter has them.
     pub gpu_ms: Option<f64>,
+    /// Splats the GPU drew, counted by the compute culling (None with vertex culling).
+    pub gpu_drawn: Option<u64>,
+}
+
+/// One slice of the list on the GPU, with what compute culling needs.
+struct Slice {
+    count: u32,
+    /// Nodes, for vertex culling.
+    direct: wgpu::BindGroup,
+    /// Nodes, survivors (read_write) and the compaction record, for the cull pass.
+    cull: wgpu::BindGroup,
+    /// Nodes and survivors, for the compacted draw.
+    compacted: wgpu::BindGroup,
+    /// Indirect draw arguments followed by the slice's prefix count.
+    compaction: wgpu::Buffer,
 }
 
 /// The list and mesh of a scene on the GPU.
 pub struct GpuScene {
-    slices: Vec<(wgpu::BindGroup, u32)>,
+    slices: Vec<Slice>,
     mesh: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
+}
+
+/// The three splat pipelines of one culling strategy.
+struct SplatPipelines {
+    visibility: wgpu::RenderPipeline,
+    attributes: wgpu::RenderPipeline,
+    points: wgpu::RenderPipeline,
 }
 
 pub struct Renderer {
     pub gpu: Gpu,
     frame_layout: wgpu::BindGroupLayout,
     nodes_layout: wgpu::BindGroupLayout,
+    compacted_layout: wgpu::BindGroupLayout,
+    cull_layout: wgpu::BindGroupLayout,
     gbuffer_layout: wgpu::BindGroupLayout,
-    visibility: wgpu::RenderPipeline,
-    attributes: wgpu::RenderPipeline,
-    points: wgpu::RenderPipeline,
+    direct: SplatPipelines,
+    compacted: SplatPipelines,
+    cull: wgpu::ComputePipeline,
     mesh: wgpu::RenderPipeline,
     shade: wgpu::RenderPipeline,
 }
+
+/// Nodes per slice at most: one dispatch of 65,535 workgroups of 256 covers a slice.
+const MAX_SLICE_NODES: u64 = 65_535 * 256;
 
 const COMMON: &str = include_str!("../../shaders/common.wgsl");
 const GBUFFER: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
@@ -190,7 +229,7 @@ impl Renderer {
             label: Some("frame"),
             entries: &[entry(
                 0,
-                wgpu::ShaderStages::VERTEX_FRAGMENT,
+                wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
                 wgpu::BindingType::Buffer {
                     ty: wgpu::BufferBindingType::Uniform,
                     has_dynamic_offset: false,
@@ -209,6 +248,26 @@ impl Renderer {
                     min_binding_size: None,
                 },
             )],
+        });
+        let storage = |read_only| wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let compacted_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compacted nodes"),
+            entries: &[
+                entry(0, wgpu::ShaderStages::VERTEX, storage(true)),
+                entry(1, wgpu::ShaderStages::VERTEX, storage(true)),
+            ],
+        });
+        let cull_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("cull"),
+            entries: &[
+                entry(0, wgpu::ShaderStages::COMPUTE, storage(true)),
+                entry(1, wgpu::ShaderStages::COMPUTE, storage(false)),
+                entry(2, wgpu::ShaderStages::COMPUTE, storage(false)),
+            ],
         });
         let texture = wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Float { filterable: false },
@@ -230,6 +289,8 @@ impl Renderer {
             })
         };
         let splat_layout = layout(&nodes_layout);
+        let compacted_splat_layout = layout(&compacted_layout);
+        let cull_pipeline_layout = layout(&cull_layout);
         let shade_layout = layout(&gbuffer_layout);
         let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: None,
@@ -243,44 +304,66 @@ impl Renderer {
             topology: wgpu::PrimitiveTopology::TriangleStrip,
             ..Default::default()
         };
-        let splat_pipeline = |fs: &str, targets: &[Option<wgpu::ColorTargetState>], depth| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(fs),
-                layout: Some(&splat_layout),
-                vertex: wgpu::VertexState {
-                    module: &splat,
-                    entry_point: Some("vs_splat"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: strip,
-                depth_stencil: depth,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &splat,
-                    entry_point: Some(fs),
-                    compilation_options: Default::default(),
-                    targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+        let splat_pipeline =
+            |vs: &str, fs: &str, targets: &[Option<wgpu::ColorTargetState>], depth| {
+                let layout = if vs == "vs_splat" {
+                    &splat_layout
+                } else {
+                    &compacted_splat_layout
+                };
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(fs),
+                    layout: Some(layout),
+                    vertex: wgpu::VertexState {
+                        module: &splat,
+                        entry_point: Some(vs),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: strip,
+                    depth_stencil: depth,
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &splat,
+                        entry_point: Some(fs),
+                        compilation_options: Default::default(),
+                        targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
+        let pipelines = |vs: &str| SplatPipelines {
+            visibility: splat_pipeline(
+                vs,
+                "fs_visibility",
+                &[],
+                depth_state(wgpu::CompareFunction::Greater, true),
+            ),
+            attributes: splat_pipeline(
+                vs,
+                "fs_attributes",
+                &gbuffer_targets(Some(ADD)),
+                depth_state(wgpu::CompareFunction::GreaterEqual, false),
+            ),
+            points: splat_pipeline(
+                vs,
+                "fs_points",
+                &gbuffer_targets(None),
+                depth_state(wgpu::CompareFunction::Greater, true),
+            ),
         };
-        let visibility = splat_pipeline(
-            "fs_visibility",
-            &[],
-            depth_state(wgpu::CompareFunction::Greater, true),
-        );
-        let attributes = splat_pipeline(
-            "fs_attributes",
-            &gbuffer_targets(Some(ADD)),
-            depth_state(wgpu::CompareFunction::GreaterEqual, false),
-        );
-        let points = splat_pipeline(
-            "fs_points",
-            &gbuffer_targets(None),
-            depth_state(wgpu::CompareFunction::Greater, true),
-        );
+        let direct = pipelines("vs_splat");
+        let compacted = pipelines("vs_splat_compacted");
+        let cull_module = module(device, "cull", include_str!("../../shaders/cull.wgsl"));
+        let cull = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("cull"),
+            layout: Some(&cull_pipeline_layout),
+            module: &cull_module,
+            entry_point: Some("cull"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
         let mesh_attributes = [
             wgpu::VertexAttribute {
                 format: wgpu::VertexFormat::Float32x3,
@@ -348,10 +431,12 @@ impl Renderer {
             gpu,
             frame_layout,
             nodes_layout,
+            compacted_layout,
+            cull_layout,
             gbuffer_layout,
-            visibility,
-            attributes,
-            points,
+            direct,
+            compacted,
+            cull,
             mesh,
             shade,
         }
@@ -360,26 +445,54 @@ impl Renderer {
     /// Uploads a scene's list (once, in binding-size slices) and mesh.
     pub fn upload(&self, scene: &Scene) -> GpuScene {
         let device = &self.gpu.device;
-        let per_slice = (self.gpu.max_binding_bytes() / std::mem::size_of::<NodeRecord>() as u64)
-            .max(1) as usize;
+        let record = std::mem::size_of::<NodeRecord>() as u64;
+        let per_slice = (self.gpu.max_binding_bytes() / record).clamp(1, MAX_SLICE_NODES) as usize;
+        let bind = |layout, buffers: &[&wgpu::Buffer]| {
+            let entries: Vec<wgpu::BindGroupEntry> = buffers
+                .iter()
+                .enumerate()
+                .map(|(k, b)| wgpu::BindGroupEntry {
+                    binding: k as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout,
+                entries: &entries,
+            })
+        };
         let slices = scene
             .nodes()
             .chunks(per_slice)
             .map(|chunk| {
-                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                let nodes = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("nodes"),
                     contents: bytemuck::cast_slice(chunk),
                     usage: wgpu::BufferUsages::STORAGE,
                 });
-                let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("nodes"),
-                    layout: &self.nodes_layout,
-                    entries: &[wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: buffer.as_entire_binding(),
-                    }],
+                let survivors = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("survivors"),
+                    size: 4 * chunk.len() as u64,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
                 });
-                (bind, chunk.len() as u32)
+                let compaction = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("compaction"),
+                    size: 20,
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::INDIRECT
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                Slice {
+                    count: chunk.len() as u32,
+                    direct: bind(&self.nodes_layout, &[&nodes]),
+                    cull: bind(&self.cull_layout, &[&nodes, &survivors, &compaction]),
+                    compacted: bind(&self.compacted_layout, &[&nodes, &survivors]),
+                    compaction,
+                }
             })
             .collect();
         let mesh = scene.mesh.as_ref().map(|m| {
@@ -549,6 +662,42 @@ impl Renderer {
         });
 
         let mut encoder = device.create_command_encoder(&Default::default());
+        // Each slice's share of the prefix.
+        let mut left = prefix_len as u32;
+        let shares: Vec<u32> = gpu_scene
+            .slices
+            .iter()
+            .map(|slice| {
+                let n = left.min(slice.count);
+                left -= n;
+                n
+            })
+            .collect();
+        let compute = settings.culling == Culling::Compute && settings.mode != Mode::Mesh;
+        if compute {
+            for (slice, &n) in gpu_scene.slices.iter().zip(&shares) {
+                self.gpu.queue.write_buffer(
+                    &slice.compaction,
+                    0,
+                    bytemuck::cast_slice(&[4u32, 0, 0, 0, n]),
+                );
+            }
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("cull"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.cull);
+            pass.set_bind_group(0, &frame_bind, &[]);
+            for (slice, &n) in gpu_scene
+                .slices
+                .iter()
+                .zip(&shares)
+                .filter(|(_, n)| **n > 0)
+            {
+                pass.set_bind_group(1, &slice.cull, &[]);
+                pass.dispatch_workgroups(n.div_ceil(256), 1, 1);
+            }
+        }
         let clear_attachments = |encoder: &mut wgpu::CommandEncoder, first: bool| {
             let ops = |load| wgpu::Operations {
                 load,
@@ -618,17 +767,26 @@ impl Renderer {
             // The pass ends (is dropped) before the encoder is finished.
             pass.forget_lifetime()
         };
+        let pipelines = if compute {
+            &self.compacted
+        } else {
+            &self.direct
+        };
         let draw_prefix = |pass: &mut wgpu::RenderPass, pipeline| {
             pass.set_pipeline(pipeline);
-            let mut left = prefix_len as u32;
-            for (bind, count) in &gpu_scene.slices {
-                if left == 0 {
-                    break;
+            for (slice, &n) in gpu_scene
+                .slices
+                .iter()
+                .zip(&shares)
+                .filter(|(_, n)| **n > 0)
+            {
+                if compute {
+                    pass.set_bind_group(1, &slice.compacted, &[]);
+                    pass.draw_indirect(&slice.compaction, 0);
+                } else {
+                    pass.set_bind_group(1, &slice.direct, &[]);
+                    pass.draw(0..4, 0..n);
                 }
-                let n = left.min(*count);
-                pass.set_bind_group(1, bind, &[]);
-                pass.draw(0..4, 0..n);
-                left -= n;
             }
         };
         match settings.mode {
@@ -642,15 +800,15 @@ impl Renderer {
             }
             Mode::Points => {
                 let mut pass = gbuffer_pass(&mut encoder, true, "points");
-                draw_prefix(&mut pass, &self.points);
+                draw_prefix(&mut pass, &pipelines.points);
             }
             _ => {
                 {
                     let mut pass = gbuffer_pass(&mut encoder, false, "visibility");
-                    draw_prefix(&mut pass, &self.visibility);
+                    draw_prefix(&mut pass, &pipelines.visibility);
                 }
                 let mut pass = gbuffer_pass(&mut encoder, true, "attributes");
-                draw_prefix(&mut pass, &self.attributes);
+                draw_prefix(&mut pass, &pipelines.attributes);
             }
         }
         let gbuffer_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -740,6 +898,18 @@ impl Renderer {
             encoder.copy_buffer_to_buffer(&resolve, 0, &read, 0, 16);
             read
         });
+        let counts = compute.then(|| {
+            let read = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("survivor counts"),
+                size: 4 * gpu_scene.slices.len() as u64,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            for (k, slice) in gpu_scene.slices.iter().enumerate() {
+                encoder.copy_buffer_to_buffer(&slice.compaction, 4, &read, 4 * k as u64, 4);
+            }
+            read
+        });
         self.gpu.queue.submit([encoder.finish()]);
         let mapped = |buffer: &wgpu::Buffer| -> anyhow::Result<Vec<u8>> {
             buffer.map_async(wgpu::MapMode::Read, .., |_| {});
@@ -766,6 +936,15 @@ impl Renderer {
         } else {
             0.0
         };
+        let gpu_drawn = match &counts {
+            Some(b) => Some(
+                bytemuck::cast_slice::<u8, u32>(&mapped(b)?)
+                    .iter()
+                    .map(|&c| c as u64)
+                    .sum(),
+            ),
+            None => None,
+        };
         let mut rgba = Vec::with_capacity((width * height * 4) as usize);
         let mut covered = Vec::with_capacity((width * height) as usize);
         for y in 0..height as usize {
@@ -789,6 +968,7 @@ impl Renderer {
                 prefix_len,
                 selected,
                 gpu_ms,
+                gpu_drawn,
             },
         ))
     }
