@@ -323,3 +323,47 @@ fn compute_culling_draws_what_the_cpu_reference_selects() {
         );
     }
 }
+
+#[test]
+fn splats_crossing_the_near_plane_are_skipped_not_garbled() {
+    let scene = Scene::open(&common::default_model()).unwrap();
+    let meta = scene.meta();
+    // Stand on a leaf, 1 % of its radius above it, and look along the surface: that disk
+    // (and its neighbours) spans the near plane.
+    let leaf = scene.nodes().iter().find(|r| r.error == 0).unwrap();
+    let origin = glam::DVec3::from(meta.origin);
+    let (p, n) = (
+        leaf.position().as_dvec3() + origin,
+        leaf.normal().as_dvec3(),
+    );
+    let along = n.any_orthonormal_vector();
+    let eye = p + n * (leaf.radius() as f64 * 0.01);
+    for error_px in [0.0, 1.0] {
+        let camera = Camera {
+            eye,
+            target: eye + along,
+            up: n,
+            fov_y: 70f64.to_radians(),
+        };
+        let img = frame(
+            &scene,
+            &camera,
+            &Settings {
+                error_px,
+                ..Settings::default()
+            },
+        );
+        let covered = img.covered.iter().filter(|c| **c).count();
+        let black = (0..img.covered.len())
+            .filter(|&i| img.covered[i] && img.rgba[i * 4..i * 4 + 3] == [0, 0, 0])
+            .count();
+        eprintln!("near plane, ε {error_px}: {covered} pixels covered, {black} black");
+        assert!(covered > 1000, "the surface ahead is drawn");
+        assert!(black * 1000 <= covered, "{black} black pixels of {covered}");
+        for (i, &c) in img.covered.iter().enumerate() {
+            if !c {
+                assert_eq!(&img.rgba[i * 4..i * 4 + 3], [255, 255, 255], "pixel {i}");
+            }
+        }
+    }
+}
