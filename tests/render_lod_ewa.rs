@@ -3,26 +3,14 @@
 
 mod common;
 
-use std::sync::OnceLock;
-
 use spt::io::ply::{FaceList, PolyMesh};
 use spt::render::metrics::compare;
-use spt::render::{Camera, Gpu, Image, Mode, Renderer, Scene, Settings};
-
-fn renderer() -> &'static Renderer {
-    static R: OnceLock<Renderer> = OnceLock::new();
-    R.get_or_init(|| {
-        if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-            unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
-        }
-        Renderer::new(Gpu::new(None).expect("a GPU adapter (lavapipe, or llvmpipe via OpenGL)"))
-    })
-}
+use spt::render::{Camera, Image, Mode, Scene, Settings};
 
 #[test]
 fn far_away_level_of_detail_draws_ten_times_fewer_splats_at_the_same_quality() {
     let scene = Scene::open(&common::default_model()).unwrap();
-    let r = renderer();
+    let r = common::renderer();
     let up = r.upload(&scene);
     let fov = 45f64.to_radians();
     // The bounding sphere spans ~6 % of the image height: 2·asin(1/d) = 0.06·fov.
@@ -130,7 +118,7 @@ fn ewa_prefilter_reduces_aliasing_of_a_minified_checkerboard() {
         spt::io::ply::Encoding::BinaryLittleEndian,
     );
     let scene = Scene::open(&path).unwrap();
-    let r = renderer();
+    let r = common::renderer();
     let up = r.upload(&scene);
     // Grazing: the eye 25 units above the plane, looking across it.
     let camera = Camera {

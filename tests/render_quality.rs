@@ -4,27 +4,12 @@
 
 mod common;
 
-use std::sync::OnceLock;
-
 use spt::render::metrics::{Comparison, compare};
-use spt::render::{Camera, Gpu, Mode, Renderer, Scene, Settings};
-
-fn renderer() -> &'static Renderer {
-    static R: OnceLock<Renderer> = OnceLock::new();
-    R.get_or_init(|| {
-        // Mesa prints warnings without it; harmless, but keep test output readable.
-        if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-            unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
-        }
-        let gpu = Gpu::new(None).expect("a GPU adapter (lavapipe, or llvmpipe via OpenGL)");
-        eprintln!("adapter: {}", gpu.describe());
-        Renderer::new(gpu)
-    })
-}
+use spt::render::{Camera, Mode, Scene, Settings};
 
 /// Splats (ε = 0) against the mesh for 8 views around the model.
 fn eight_views(scene: &Scene, what: &str) -> Vec<Comparison> {
-    let r = renderer();
+    let r = common::renderer();
     let uploaded = r.upload(scene);
     let settings = Settings {
         error_px: 0.0,
@@ -95,7 +80,7 @@ fn shared_meshes_match_their_mesh() {
 
 /// One frame of `scene` from `camera` with `settings`, 256×256.
 fn frame(scene: &Scene, camera: &Camera, settings: &Settings) -> spt::render::Image {
-    let r = renderer();
+    let r = common::renderer();
     let uploaded = r.upload(scene);
     r.render(scene, &uploaded, camera, settings, 256, 256)
         .unwrap()
@@ -225,7 +210,7 @@ fn hard_views_render_without_garbage() {
         );
     }
     // The root alone is one node.
-    let r = renderer();
+    let r = common::renderer();
     let up = r.upload(&scene);
     let (_, stats) = r
         .render(
@@ -288,7 +273,7 @@ fn kinect_frame_renders_in_its_colours() {
 #[test]
 fn compute_culling_draws_what_the_cpu_reference_selects() {
     let scene = Scene::open(&common::default_model()).unwrap();
-    let r = renderer();
+    let r = common::renderer();
     let up = r.upload(&scene);
     let fov = 45f64.to_radians();
     for (k, error_px) in [(0, 0.0), (1, 1.0), (2, 4.0)] {

@@ -4,10 +4,15 @@
 pub mod camera;
 pub mod gpu;
 pub mod metrics;
+mod pipelines;
 pub mod renderer;
 pub mod scene;
+pub mod settings;
+pub mod upload;
 
 pub use camera::Camera;
 pub use gpu::Gpu;
-pub use renderer::{Culling, FrameStats, Image, Mode, Renderer, Settings};
+pub use renderer::{FrameStats, Image, Renderer};
 pub use scene::Scene;
+pub use settings::{Culling, Mode, Settings};
+pub use upload::GpuScene;

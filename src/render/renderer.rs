@@ -18,79 +18,11 @@ use wgpu::util::DeviceExt;
 
 use super::camera::{Camera, bounding_sphere};
 use super::gpu::Gpu;
+use super::pipelines::{DEPTH, GBUFFER, OUTPUT, Pipelines};
 use super::scene::Scene;
-use crate::tree::NodeRecord;
+use super::settings::{Culling, DEPTH_PUSH, Mode, PREFILTER_PX, Settings};
+use super::upload::GpuScene;
 use crate::tree::select::{error_per_distance, is_drawn};
-
-/// Display modes (DESIGN.md §7b).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Mode {
-    /// Real colours (grey when the model has none), lit.
-    Shaded,
-    /// Colour by tree level.
-    Levels,
-    /// View-space normals as colours.
-    Normals,
-    /// Colour by splat radius (blue small, red large).
-    Radius,
-    /// Plain points: no blending, nearest splat wins.
-    Points,
-    /// The mesh the model came from (reference; needs a PLY with faces).
-    Mesh,
-}
-
-/// How the splats of the prefix are culled (DESIGN.md §6).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-pub enum Culling {
-    /// In the vertex stage: every node of the prefix is drawn as a quad; culled ones
-    /// collapse to a point outside the clip volume.
-    Vertex,
-    /// A compute pass tests each node once and compacts the survivors into an indirect draw.
-    Compute,
-}
-
-/// How a frame is drawn.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Settings {
-    /// The largest screen-space error, pixels (0: leaves only).
-    pub error_px: f64,
-    pub mode: Mode,
-    pub ewa: bool,
-    pub lod: bool,
-    pub cull_back_faces: bool,
-    /// Direction toward the light in view space (x right, y up, z toward the viewer).
-    pub light: Vec3,
-    /// Background colour, sRGB 0–1.
-    pub background: [f32; 3],
-    /// Rendered radius / stored radius: more overlap blends more smoothly.
-    pub radius_scale: f32,
-    /// Accumulated weight at which a pixel counts as fully covered; below it the pixel
-    /// fades into the background (0: off). Also the coverage threshold of read-back masks.
-    pub coverage_weight: f32,
-    pub culling: Culling,
-}
-
-impl Default for Settings {
-    fn default() -> Self {
-        Settings {
-            error_px: 1.0,
-            mode: Mode::Shaded,
-            ewa: true,
-            lod: true,
-            cull_back_faces: false,
-            light: Vec3::new(0.4, 0.6, 1.0),
-            background: [1.0, 1.0, 1.0],
-            radius_scale: 1.0,
-            coverage_weight: 0.0,
-            culling: Culling::Compute,
-        }
-    }
-}
-
-/// Prefilter radius in pixels.
-pub const PREFILTER_PX: f32 = 1.0;
-/// Pass 1 pushes each splat back by this many radii.
-pub const DEPTH_PUSH: f32 = 1.0;
 
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
@@ -129,392 +61,15 @@ pub struct FrameStats {
     pub gpu_drawn: Option<u64>,
 }
 
-/// One slice of the list on the GPU, with what compute culling needs.
-struct Slice {
-    count: u32,
-    /// Nodes, for vertex culling.
-    direct: wgpu::BindGroup,
-    /// Nodes, survivors (read_write) and the compaction record, for the cull pass.
-    cull: wgpu::BindGroup,
-    /// Nodes and survivors, for the compacted draw.
-    compacted: wgpu::BindGroup,
-    /// Indirect draw arguments followed by the slice's prefix count.
-    compaction: wgpu::Buffer,
-}
-
-/// The list and mesh of a scene on the GPU.
-pub struct GpuScene {
-    slices: Vec<Slice>,
-    mesh: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
-}
-
-/// The three splat pipelines of one culling strategy.
-struct SplatPipelines {
-    visibility: wgpu::RenderPipeline,
-    attributes: wgpu::RenderPipeline,
-    points: wgpu::RenderPipeline,
-}
-
 pub struct Renderer {
     pub gpu: Gpu,
-    frame_layout: wgpu::BindGroupLayout,
-    nodes_layout: wgpu::BindGroupLayout,
-    compacted_layout: wgpu::BindGroupLayout,
-    cull_layout: wgpu::BindGroupLayout,
-    gbuffer_layout: wgpu::BindGroupLayout,
-    direct: SplatPipelines,
-    compacted: SplatPipelines,
-    cull: wgpu::ComputePipeline,
-    mesh: wgpu::RenderPipeline,
-    shade: wgpu::RenderPipeline,
+    pub(super) pipelines: Pipelines,
 }
-
-/// Nodes per slice at most: one dispatch of 65,535 workgroups of 256 covers a slice.
-const MAX_SLICE_NODES: u64 = 65_535 * 256;
-
-const COMMON: &str = include_str!("../../shaders/common.wgsl");
-const GBUFFER: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-const OUTPUT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
-
-fn module(device: &wgpu::Device, name: &str, source: &str) -> wgpu::ShaderModule {
-    device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(name),
-        source: wgpu::ShaderSource::Wgsl(format!("{COMMON}\n{source}").into()),
-    })
-}
-
-fn depth_state(compare: wgpu::CompareFunction, write: bool) -> Option<wgpu::DepthStencilState> {
-    Some(wgpu::DepthStencilState {
-        format: DEPTH,
-        depth_write_enabled: Some(write),
-        depth_compare: Some(compare),
-        stencil: Default::default(),
-        bias: Default::default(),
-    })
-}
-
-fn gbuffer_targets(blend: Option<wgpu::BlendState>) -> [Option<wgpu::ColorTargetState>; 2] {
-    let t = wgpu::ColorTargetState {
-        format: GBUFFER,
-        blend,
-        write_mask: wgpu::ColorWrites::ALL,
-    };
-    [Some(t.clone()), Some(t)]
-}
-
-const ADD: wgpu::BlendState = wgpu::BlendState {
-    color: wgpu::BlendComponent {
-        src_factor: wgpu::BlendFactor::One,
-        dst_factor: wgpu::BlendFactor::One,
-        operation: wgpu::BlendOperation::Add,
-    },
-    alpha: wgpu::BlendComponent {
-        src_factor: wgpu::BlendFactor::One,
-        dst_factor: wgpu::BlendFactor::One,
-        operation: wgpu::BlendOperation::Add,
-    },
-};
 
 impl Renderer {
     pub fn new(gpu: Gpu) -> Renderer {
-        let device = &gpu.device;
-        let entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility,
-            ty,
-            count: None,
-        };
-        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("frame"),
-            entries: &[entry(
-                0,
-                wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
-                wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-            )],
-        });
-        let nodes_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("nodes"),
-            entries: &[entry(
-                0,
-                wgpu::ShaderStages::VERTEX,
-                wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: true },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-            )],
-        });
-        let storage = |read_only| wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let compacted_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compacted nodes"),
-            entries: &[
-                entry(0, wgpu::ShaderStages::VERTEX, storage(true)),
-                entry(1, wgpu::ShaderStages::VERTEX, storage(true)),
-            ],
-        });
-        let cull_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("cull"),
-            entries: &[
-                entry(0, wgpu::ShaderStages::COMPUTE, storage(true)),
-                entry(1, wgpu::ShaderStages::COMPUTE, storage(false)),
-                entry(2, wgpu::ShaderStages::COMPUTE, storage(false)),
-            ],
-        });
-        let texture = wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        };
-        let gbuffer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gbuffer"),
-            entries: &[
-                entry(0, wgpu::ShaderStages::FRAGMENT, texture),
-                entry(1, wgpu::ShaderStages::FRAGMENT, texture),
-            ],
-        });
-        let layout = |second: &wgpu::BindGroupLayout| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: None,
-                bind_group_layouts: &[Some(&frame_layout), Some(second)],
-                immediate_size: 0,
-            })
-        };
-        let splat_layout = layout(&nodes_layout);
-        let compacted_splat_layout = layout(&compacted_layout);
-        let cull_pipeline_layout = layout(&cull_layout);
-        let shade_layout = layout(&gbuffer_layout);
-        let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: None,
-            bind_group_layouts: &[Some(&frame_layout)],
-            immediate_size: 0,
-        });
-        let splat = module(device, "splat", include_str!("../../shaders/splat.wgsl"));
-        let mesh_module = module(device, "mesh", include_str!("../../shaders/mesh.wgsl"));
-        let shade_module = module(device, "shade", include_str!("../../shaders/shade.wgsl"));
-        let strip = wgpu::PrimitiveState {
-            topology: wgpu::PrimitiveTopology::TriangleStrip,
-            ..Default::default()
-        };
-        let splat_pipeline =
-            |vs: &str, fs: &str, targets: &[Option<wgpu::ColorTargetState>], depth| {
-                let layout = if vs == "vs_splat" {
-                    &splat_layout
-                } else {
-                    &compacted_splat_layout
-                };
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(fs),
-                    layout: Some(layout),
-                    vertex: wgpu::VertexState {
-                        module: &splat,
-                        entry_point: Some(vs),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: strip,
-                    depth_stencil: depth,
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &splat,
-                        entry_point: Some(fs),
-                        compilation_options: Default::default(),
-                        targets,
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-            };
-        let pipelines = |vs: &str| SplatPipelines {
-            visibility: splat_pipeline(
-                vs,
-                "fs_visibility",
-                &[],
-                depth_state(wgpu::CompareFunction::Greater, true),
-            ),
-            attributes: splat_pipeline(
-                vs,
-                "fs_attributes",
-                &gbuffer_targets(Some(ADD)),
-                depth_state(wgpu::CompareFunction::GreaterEqual, false),
-            ),
-            points: splat_pipeline(
-                vs,
-                "fs_points",
-                &gbuffer_targets(None),
-                depth_state(wgpu::CompareFunction::Greater, true),
-            ),
-        };
-        let direct = pipelines("vs_splat");
-        let compacted = pipelines("vs_splat_compacted");
-        let cull_module = module(device, "cull", include_str!("../../shaders/cull.wgsl"));
-        let cull = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("cull"),
-            layout: Some(&cull_pipeline_layout),
-            module: &cull_module,
-            entry_point: Some("cull"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let mesh_attributes = [
-            wgpu::VertexAttribute {
-                format: wgpu::VertexFormat::Float32x3,
-                offset: 0,
-                shader_location: 0,
-            },
-            wgpu::VertexAttribute {
-                format: wgpu::VertexFormat::Float32x3,
-                offset: 12,
-                shader_location: 1,
-            },
-            wgpu::VertexAttribute {
-                format: wgpu::VertexFormat::Unorm8x4,
-                offset: 24,
-                shader_location: 2,
-            },
-        ];
-        let mesh = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("mesh"),
-            layout: Some(&mesh_layout),
-            vertex: wgpu::VertexState {
-                module: &mesh_module,
-                entry_point: Some("vs_mesh"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: 28,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &mesh_attributes,
-                })],
-            },
-            primitive: Default::default(),
-            depth_stencil: depth_state(wgpu::CompareFunction::Greater, true),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &mesh_module,
-                entry_point: Some("fs_mesh"),
-                compilation_options: Default::default(),
-                targets: &gbuffer_targets(None),
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let shade = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shade"),
-            layout: Some(&shade_layout),
-            vertex: wgpu::VertexState {
-                module: &shade_module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &shade_module,
-                entry_point: Some("fs_shade"),
-                compilation_options: Default::default(),
-                targets: &[Some(OUTPUT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        Renderer {
-            gpu,
-            frame_layout,
-            nodes_layout,
-            compacted_layout,
-            cull_layout,
-            gbuffer_layout,
-            direct,
-            compacted,
-            cull,
-            mesh,
-            shade,
-        }
-    }
-
-    /// Uploads a scene's list (once, in binding-size slices) and mesh.
-    pub fn upload(&self, scene: &Scene) -> GpuScene {
-        let device = &self.gpu.device;
-        let record = std::mem::size_of::<NodeRecord>() as u64;
-        let per_slice = (self.gpu.max_binding_bytes() / record).clamp(1, MAX_SLICE_NODES) as usize;
-        let bind = |layout, buffers: &[&wgpu::Buffer]| {
-            let entries: Vec<wgpu::BindGroupEntry> = buffers
-                .iter()
-                .enumerate()
-                .map(|(k, b)| wgpu::BindGroupEntry {
-                    binding: k as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect();
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: None,
-                layout,
-                entries: &entries,
-            })
-        };
-        let slices = scene
-            .nodes()
-            .chunks(per_slice)
-            .map(|chunk| {
-                let nodes = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("nodes"),
-                    contents: bytemuck::cast_slice(chunk),
-                    usage: wgpu::BufferUsages::STORAGE,
-                });
-                let survivors = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("survivors"),
-                    size: 4 * chunk.len() as u64,
-                    usage: wgpu::BufferUsages::STORAGE,
-                    mapped_at_creation: false,
-                });
-                let compaction = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("compaction"),
-                    size: 20,
-                    usage: wgpu::BufferUsages::STORAGE
-                        | wgpu::BufferUsages::INDIRECT
-                        | wgpu::BufferUsages::COPY_DST
-                        | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                });
-                Slice {
-                    count: chunk.len() as u32,
-                    direct: bind(&self.nodes_layout, &[&nodes]),
-                    cull: bind(&self.cull_layout, &[&nodes, &survivors, &compaction]),
-                    compacted: bind(&self.compacted_layout, &[&nodes, &survivors]),
-                    compaction,
-                }
-            })
-            .collect();
-        let mesh = scene.mesh.as_ref().map(|m| {
-            let mut vertices = Vec::with_capacity(m.positions.len() * 28);
-            for i in 0..m.positions.len() {
-                vertices.extend_from_slice(bytemuck::bytes_of(&m.positions[i]));
-                vertices.extend_from_slice(bytemuck::bytes_of(&m.normals[i]));
-                vertices.extend_from_slice(&m.colors[i]);
-            }
-            let vb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("mesh vertices"),
-                contents: &vertices,
-                usage: wgpu::BufferUsages::VERTEX,
-            });
-            let ib = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("mesh indices"),
-                contents: bytemuck::cast_slice(&m.triangles),
-                usage: wgpu::BufferUsages::INDEX,
-            });
-            (vb, ib, (m.triangles.len() * 3) as u32)
-        });
-        GpuScene { slices, mesh }
+        let pipelines = Pipelines::new(&gpu.device);
+        Renderer { gpu, pipelines }
     }
 
     /// Renders one frame and reads it back.
@@ -607,7 +162,7 @@ impl Renderer {
         });
         let frame_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("frame"),
-            layout: &self.frame_layout,
+            layout: &self.pipelines.frame_layout,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
                 resource: frame_buffer.as_entire_binding(),
@@ -686,7 +241,7 @@ impl Renderer {
                 label: Some("cull"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&self.cull);
+            pass.set_pipeline(&self.pipelines.cull);
             pass.set_bind_group(0, &frame_bind, &[]);
             for (slice, &n) in gpu_scene
                 .slices
@@ -768,9 +323,9 @@ impl Renderer {
             pass.forget_lifetime()
         };
         let pipelines = if compute {
-            &self.compacted
+            &self.pipelines.compacted
         } else {
-            &self.direct
+            &self.pipelines.direct
         };
         let draw_prefix = |pass: &mut wgpu::RenderPass, pipeline| {
             pass.set_pipeline(pipeline);
@@ -793,7 +348,7 @@ impl Renderer {
             Mode::Mesh => {
                 let (vb, ib, count) = gpu_scene.mesh.as_ref().expect("checked above");
                 let mut pass = gbuffer_pass(&mut encoder, true, "mesh");
-                pass.set_pipeline(&self.mesh);
+                pass.set_pipeline(&self.pipelines.mesh);
                 pass.set_vertex_buffer(0, vb.slice(..));
                 pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
                 pass.draw_indexed(0..*count, 0, 0..1);
@@ -813,7 +368,7 @@ impl Renderer {
         }
         let gbuffer_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("gbuffer"),
-            layout: &self.gbuffer_layout,
+            layout: &self.pipelines.gbuffer_layout,
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 0,
@@ -846,7 +401,7 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.shade);
+            pass.set_pipeline(&self.pipelines.shade);
             pass.set_bind_group(0, &frame_bind, &[]);
             pass.set_bind_group(1, &gbuffer_bind, &[]);
             pass.draw(0..3, 0..1);

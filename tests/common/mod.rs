@@ -11,6 +11,23 @@ use spt::io::ply::{Encoding, FaceList, PlyLayout, PolyMesh, Scalar, write_ply};
 use spt::surfel::LeafSurfels;
 use spt::tree::{SequentialList, record::half_value};
 
+/// The renderer shared by a test binary: any adapter (lavapipe, or llvmpipe through
+/// OpenGL on a machine without Vulkan).
+pub fn renderer() -> &'static spt::render::Renderer {
+    static R: std::sync::OnceLock<spt::render::Renderer> = std::sync::OnceLock::new();
+    R.get_or_init(|| {
+        // Mesa warns on stderr without it; harmless, but keep test output readable.
+        if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+            // SAFETY: set once, before any thread of this test binary reads it.
+            unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+        }
+        let gpu =
+            spt::render::Gpu::new(None).expect("a GPU adapter (lavapipe, or llvmpipe via OpenGL)");
+        eprintln!("adapter: {}", gpu.describe());
+        spt::render::Renderer::new(gpu)
+    })
+}
+
 /// Runs the `spt` binary with `args`: (exit code, stdout, stderr).
 pub fn run_spt<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (Option<i32>, String, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_spt"))

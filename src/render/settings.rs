@@ -1,0 +1,73 @@
+//! How a frame is drawn: display mode, culling strategy, level of detail, light.
+
+use glam::Vec3;
+
+/// Display modes (DESIGN.md §7b).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Mode {
+    /// Real colours (grey when the model has none), lit.
+    Shaded,
+    /// Colour by tree level.
+    Levels,
+    /// View-space normals as colours.
+    Normals,
+    /// Colour by splat radius (blue small, red large).
+    Radius,
+    /// Plain points: no blending, nearest splat wins.
+    Points,
+    /// The mesh the model came from (reference; needs a PLY with faces).
+    Mesh,
+}
+
+/// How the splats of the prefix are culled (DESIGN.md §6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum Culling {
+    /// In the vertex stage: every node of the prefix is drawn as a quad; culled ones
+    /// collapse to a point outside the clip volume.
+    Vertex,
+    /// A compute pass tests each node once and compacts the survivors into an indirect draw.
+    Compute,
+}
+
+/// How a frame is drawn.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// The largest screen-space error, pixels (0: leaves only).
+    pub error_px: f64,
+    pub mode: Mode,
+    pub ewa: bool,
+    pub lod: bool,
+    pub cull_back_faces: bool,
+    /// Direction toward the light in view space (x right, y up, z toward the viewer).
+    pub light: Vec3,
+    /// Background colour, sRGB 0–1.
+    pub background: [f32; 3],
+    /// Rendered radius / stored radius: more overlap blends more smoothly.
+    pub radius_scale: f32,
+    /// Accumulated weight at which a pixel counts as fully covered; below it the pixel
+    /// fades into the background (0: off). Also the coverage threshold of read-back masks.
+    pub coverage_weight: f32,
+    pub culling: Culling,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            error_px: 1.0,
+            mode: Mode::Shaded,
+            ewa: true,
+            lod: true,
+            cull_back_faces: false,
+            light: Vec3::new(0.4, 0.6, 1.0),
+            background: [1.0, 1.0, 1.0],
+            radius_scale: 1.0,
+            coverage_weight: 0.0,
+            culling: Culling::Compute,
+        }
+    }
+}
+
+/// Prefilter radius in pixels.
+pub const PREFILTER_PX: f32 = 1.0;
+/// Pass 1 pushes each splat back by this many radii.
+pub const DEPTH_PUSH: f32 = 1.0;

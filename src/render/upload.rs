@@ -1,0 +1,110 @@
+//! A scene's list and mesh on the GPU, uploaded once: the list in slices of at most one
+//! storage binding, each with the buffers compute culling compacts into.
+
+use wgpu::util::DeviceExt;
+
+use super::renderer::Renderer;
+use super::scene::Scene;
+use crate::tree::NodeRecord;
+
+/// Nodes per slice at most: one dispatch of 65,535 workgroups of 256 covers a slice.
+const MAX_SLICE_NODES: u64 = 65_535 * 256;
+
+/// One slice of the list on the GPU, with what compute culling needs.
+pub(super) struct Slice {
+    pub count: u32,
+    /// Nodes, for vertex culling.
+    pub direct: wgpu::BindGroup,
+    /// Nodes, survivors (read_write) and the compaction record, for the cull pass.
+    pub cull: wgpu::BindGroup,
+    /// Nodes and survivors, for the compacted draw.
+    pub compacted: wgpu::BindGroup,
+    /// Indirect draw arguments followed by the slice's prefix count.
+    pub compaction: wgpu::Buffer,
+}
+
+/// The list and mesh of a scene on the GPU.
+pub struct GpuScene {
+    pub(super) slices: Vec<Slice>,
+    pub(super) mesh: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
+}
+
+impl Renderer {
+    /// Uploads a scene's list (once, in binding-size slices) and mesh.
+    pub fn upload(&self, scene: &Scene) -> GpuScene {
+        let device = &self.gpu.device;
+        let record = std::mem::size_of::<NodeRecord>() as u64;
+        let per_slice = (self.gpu.max_binding_bytes() / record).clamp(1, MAX_SLICE_NODES) as usize;
+        let bind = |layout, buffers: &[&wgpu::Buffer]| {
+            let entries: Vec<wgpu::BindGroupEntry> = buffers
+                .iter()
+                .enumerate()
+                .map(|(k, b)| wgpu::BindGroupEntry {
+                    binding: k as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout,
+                entries: &entries,
+            })
+        };
+        let slices = scene
+            .nodes()
+            .chunks(per_slice)
+            .map(|chunk| {
+                let nodes = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("nodes"),
+                    contents: bytemuck::cast_slice(chunk),
+                    usage: wgpu::BufferUsages::STORAGE,
+                });
+                let survivors = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("survivors"),
+                    size: 4 * chunk.len() as u64,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                });
+                let compaction = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("compaction"),
+                    size: 20,
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::INDIRECT
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                Slice {
+                    count: chunk.len() as u32,
+                    direct: bind(&self.pipelines.nodes_layout, &[&nodes]),
+                    cull: bind(
+                        &self.pipelines.cull_layout,
+                        &[&nodes, &survivors, &compaction],
+                    ),
+                    compacted: bind(&self.pipelines.compacted_layout, &[&nodes, &survivors]),
+                    compaction,
+                }
+            })
+            .collect();
+        let mesh = scene.mesh.as_ref().map(|m| {
+            let mut vertices = Vec::with_capacity(m.positions.len() * 28);
+            for i in 0..m.positions.len() {
+                vertices.extend_from_slice(bytemuck::bytes_of(&m.positions[i]));
+                vertices.extend_from_slice(bytemuck::bytes_of(&m.normals[i]));
+                vertices.extend_from_slice(&m.colors[i]);
+            }
+            let vb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("mesh vertices"),
+                contents: &vertices,
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+            let ib = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("mesh indices"),
+                contents: bytemuck::cast_slice(&m.triangles),
+                usage: wgpu::BufferUsages::INDEX,
+            });
+            (vb, ib, (m.triangles.len() * 3) as u32)
+        });
+        GpuScene { slices, mesh }
+    }
+}
