@@ -83,6 +83,16 @@ impl Renderer {
         height: u32,
     ) -> anyhow::Result<(Image, FrameStats)> {
         let device = &self.gpu.device;
+        let limits = device.limits();
+        if width.max(height) > limits.max_texture_dimension_2d
+            || (width as u64).div_ceil(32) * 256 * height as u64 > limits.max_buffer_size
+        {
+            anyhow::bail!(
+                "{width}×{height} is larger than this adapter renders (at most {} pixels a side, {} MB a read-back buffer)",
+                limits.max_texture_dimension_2d,
+                limits.max_buffer_size >> 20
+            );
+        }
         let meta = scene.meta();
         let origin = DVec3::from(meta.origin);
         let eye_rel = camera.eye - origin;
