@@ -52,6 +52,10 @@ pub struct RenderArgs {
     /// indirect draw (faster on every model measured), or in the vertex stage.
     #[arg(long, value_enum, default_value = "compute")]
     pub culling: Culling,
+    /// Render this many frames of the same view and report median and p95 times (the
+    /// image of the last one is written).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub frames: u32,
     /// GPU backend: vulkan, gl, metal, dx12 or all (default: $SPT_BACKEND, else any).
     #[arg(long)]
     pub backend: Option<String>,
@@ -134,16 +138,19 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     println!("adapter   {}", gpu.describe());
     let renderer = Renderer::new(gpu);
     let uploaded = renderer.upload(&scene);
-    let (image, stats) = renderer
-        .render(
-            &scene,
-            &uploaded,
-            &camera,
-            &args.settings(),
-            args.size.0,
-            args.size.1,
-        )
-        .with_context(|| format!("rendering {}", model.display()))?;
+    let settings = args.settings();
+    let (mut gpu_ms, mut wall_ms) = (Vec::new(), Vec::new());
+    let mut last = None;
+    for _ in 0..args.frames {
+        let start = std::time::Instant::now();
+        let frame = renderer
+            .render(&scene, &uploaded, &camera, &settings, args.size.0, args.size.1)
+            .with_context(|| format!("rendering {}", model.display()))?;
+        wall_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        gpu_ms.extend(frame.1.gpu_ms);
+        last = Some(frame);
+    }
+    let (image, stats) = last.expect("at least one frame");
     image.save_png(output)?;
     println!(
         "splats    {} drawn of {} nodes, prefix {}",
@@ -154,10 +161,23 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     if let Some(n) = stats.gpu_drawn {
         println!("culled    {} splats survived the compute culling", count(n));
     }
-    match stats.gpu_ms {
-        Some(ms) => println!("gpu time  {ms:.3} ms"),
-        None => println!("gpu time  not measured (the adapter has no timestamp queries)"),
+    let summary = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        let p95 = v[((v.len() as f64 * 0.95).ceil() as usize).clamp(1, v.len()) - 1];
+        format!("{:.3} ms (median of {}), p95 {:.3} ms", v[v.len() / 2], v.len(), p95)
+    };
+    if gpu_ms.is_empty() {
+        println!("gpu time  not measured (the adapter has no timestamp queries)");
+    } else {
+        let median = {
+            let mut v = gpu_ms.clone();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        println!("gpu time  {}", summary(&mut gpu_ms));
+        println!("rate      {:.3} M splats/s (GPU)", stats.selected as f64 / median / 1e3);
     }
+    println!("wall time {} per frame (read-back included)", summary(&mut wall_ms));
     println!("wrote     {}", output.display());
     Ok(())
 }
