@@ -32,10 +32,6 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Builds the sequential point tree of a PLY model and writes it as an .spt file,
-    /// which opens instantly (memory-mapped). Shows each stage (load, surfels, tree,
-    /// errors, sort, write) with its time, then a summary. The output is written to a
-    /// temporary file and renamed: a failed convert never leaves a partial file.
     /// Renders one frame of a model (PLY or .spt) to PNG, headless, by three-pass EWA
     /// splatting of its sequential point tree; prints splats drawn, prefix length and GPU
     /// time. `--mode mesh` draws the mesh itself as the reference.
@@ -46,8 +42,12 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
         #[command(flatten)]
-        args: spt::apps::render::RenderArgs,
+        args: Box<spt::apps::render::RenderArgs>,
     },
+    /// Builds the sequential point tree of a PLY model and writes it as an .spt file,
+    /// which opens instantly (memory-mapped). Shows each stage (load, surfels, tree,
+    /// errors, sort, write) with its time, then a summary. The output is written to a
+    /// temporary file and renamed: a failed convert never leaves a partial file.
     Convert {
         /// The model: a PLY file.
         input: PathBuf,

@@ -144,7 +144,14 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     for _ in 0..args.frames {
         let start = std::time::Instant::now();
         let frame = renderer
-            .render(&scene, &uploaded, &camera, &settings, args.size.0, args.size.1)
+            .render(
+                &scene,
+                &uploaded,
+                &camera,
+                &settings,
+                args.size.0,
+                args.size.1,
+            )
             .with_context(|| format!("rendering {}", model.display()))?;
         wall_ms.push(start.elapsed().as_secs_f64() * 1e3);
         gpu_ms.extend(frame.1.gpu_ms);
@@ -164,7 +171,12 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     let summary = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
         let p95 = v[((v.len() as f64 * 0.95).ceil() as usize).clamp(1, v.len()) - 1];
-        format!("{:.3} ms (median of {}), p95 {:.3} ms", v[v.len() / 2], v.len(), p95)
+        format!(
+            "{:.3} ms (median of {}), p95 {:.3} ms",
+            v[v.len() / 2],
+            v.len(),
+            p95
+        )
     };
     if gpu_ms.is_empty() {
         println!("gpu time  not measured (the adapter has no timestamp queries)");
@@ -175,9 +187,15 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
             v[v.len() / 2]
         };
         println!("gpu time  {}", summary(&mut gpu_ms));
-        println!("rate      {:.3} M splats/s (GPU)", stats.selected as f64 / median / 1e3);
+        println!(
+            "rate      {:.3} M splats/s (GPU)",
+            stats.selected as f64 / median / 1e3
+        );
     }
-    println!("wall time {} per frame (read-back included)", summary(&mut wall_ms));
+    println!(
+        "wall time {} per frame (read-back included)",
+        summary(&mut wall_ms)
+    );
     println!("wrote     {}", output.display());
     Ok(())
 }

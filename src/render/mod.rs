@@ -5,6 +5,7 @@ pub mod camera;
 pub mod gpu;
 pub mod metrics;
 mod pipelines;
+mod readback;
 pub mod renderer;
 pub mod scene;
 pub mod settings;

@@ -19,6 +19,7 @@ use wgpu::util::DeviceExt;
 use super::camera::{Camera, bounding_sphere};
 use super::gpu::Gpu;
 use super::pipelines::{DEPTH, GBUFFER, OUTPUT, Pipelines};
+use super::readback;
 use super::scene::Scene;
 use super::settings::{Culling, DEPTH_PUSH, Mode, PREFILTER_PX, Settings};
 use super::upload::GpuScene;
@@ -416,36 +417,10 @@ impl Renderer {
             pass.set_bind_group(1, &gbuffer_bind, &[]);
             pass.draw(0..3, 0..1);
         }
-        // Read back: the output and the weight channel of the colour sum (coverage).
-        let row = |bytes_per_pixel: u32| (width * bytes_per_pixel).div_ceil(256) * 256;
-        let readback = |texture: &wgpu::Texture, bpp: u32, encoder: &mut wgpu::CommandEncoder| {
-            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("readback"),
-                size: (row(bpp) * height) as u64,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            });
-            encoder.copy_texture_to_buffer(
-                wgpu::TexelCopyTextureInfo {
-                    texture,
-                    mip_level: 0,
-                    origin: Default::default(),
-                    aspect: Default::default(),
-                },
-                wgpu::TexelCopyBufferInfo {
-                    buffer: &buffer,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(row(bpp)),
-                        rows_per_image: None,
-                    },
-                },
-                size,
-            );
-            buffer
-        };
-        let out_buffer = readback(&output, 4, &mut encoder);
-        let weight_buffer = readback(&color_sum, 8, &mut encoder);
+        // Read back: the output, the weight channel of the colour sum (coverage), the
+        // timestamps, and the survivor counts of compute culling.
+        let out_buffer = readback::copy_texture(device, &mut encoder, &output, 4);
+        let weight_buffer = readback::copy_texture(device, &mut encoder, &color_sum, 8);
         let query_buffer = queries.as_ref().map(|q| {
             let resolve = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamps"),
@@ -453,75 +428,53 @@ impl Renderer {
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
-            let read = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps read"),
-                size: 16,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            });
             encoder.resolve_query_set(q, 0..2, &resolve, 0);
-            encoder.copy_buffer_to_buffer(&resolve, 0, &read, 0, 16);
-            read
+            readback::copy_ranges(
+                device,
+                &mut encoder,
+                "timestamps read",
+                &[(&resolve, 0, 16)],
+            )
         });
         let counts = compute.then(|| {
-            let read = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("survivor counts"),
-                size: 4 * gpu_scene.slices.len() as u64,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            });
-            for (k, slice) in gpu_scene.slices.iter().enumerate() {
-                encoder.copy_buffer_to_buffer(&slice.compaction, 4, &read, 4 * k as u64, 4);
-            }
-            read
+            let ranges: Vec<_> = gpu_scene
+                .slices
+                .iter()
+                .map(|s| (&s.compaction, 4, 4))
+                .collect();
+            readback::copy_ranges(device, &mut encoder, "survivor counts", &ranges)
         });
         self.gpu.queue.submit([encoder.finish()]);
-        let mapped = |buffer: &wgpu::Buffer| -> anyhow::Result<Vec<u8>> {
-            buffer.map_async(wgpu::MapMode::Read, .., |_| {});
-            device.poll(wgpu::PollType::wait_indefinitely())?;
-            let data = buffer.slice(..).get_mapped_range()?.to_vec();
-            buffer.unmap();
-            Ok(data)
-        };
-        let out = mapped(&out_buffer)?;
-        let weights = mapped(&weight_buffer)?;
-        let gpu_ms = match &query_buffer {
-            Some(b) => {
-                let t: Vec<u64> = bytemuck::cast_slice(&mapped(b)?).to_vec();
-                Some(
-                    t[1].saturating_sub(t[0]) as f64 * self.gpu.queue.get_timestamp_period() as f64
-                        / 1e6,
-                )
-            }
-            None => None,
-        };
+        let rgba = readback::unpad_rgba8(&readback::read(device, &out_buffer)?, width, height);
         // A pixel counts as covered once it is at least half opaque.
         let coverage_threshold = if uniform.blend[1] > 0.0 {
             0.5 * uniform.blend[1]
         } else {
             0.0
         };
+        let covered = readback::coverage(
+            &readback::read(device, &weight_buffer)?,
+            width,
+            height,
+            coverage_threshold,
+        );
+        let gpu_ms = match &query_buffer {
+            Some(b) => {
+                let t: Vec<u64> = bytemuck::cast_slice(&readback::read(device, b)?).to_vec();
+                let period_ns = self.gpu.queue.get_timestamp_period() as f64;
+                Some(t[1].saturating_sub(t[0]) as f64 * period_ns / 1e6)
+            }
+            None => None,
+        };
         let gpu_drawn = match &counts {
             Some(b) => Some(
-                bytemuck::cast_slice::<u8, u32>(&mapped(b)?)
+                bytemuck::cast_slice::<u8, u32>(&readback::read(device, b)?)
                     .iter()
                     .map(|&c| c as u64)
                     .sum(),
             ),
             None => None,
         };
-        let mut rgba = Vec::with_capacity((width * height * 4) as usize);
-        let mut covered = Vec::with_capacity((width * height) as usize);
-        for y in 0..height as usize {
-            let o = y * row(4) as usize;
-            rgba.extend_from_slice(&out[o..o + width as usize * 4]);
-            let w = y * row(8) as usize;
-            for x in 0..width as usize {
-                let alpha =
-                    half::f16::from_le_bytes([weights[w + x * 8 + 6], weights[w + x * 8 + 7]]);
-                covered.push(alpha.to_f32() > coverage_threshold);
-            }
-        }
         Ok((
             Image {
                 width,

@@ -1,0 +1,93 @@
+//! Getting a frame back from the GPU: textures and small buffers are copied into
+//! mappable buffers by the frame's own encoder, and read after the submit.
+
+/// Bytes per row of a texture copy: rows are padded to multiples of 256 bytes.
+pub(super) fn padded_row(width: u32, bytes_per_pixel: u32) -> u32 {
+    (width * bytes_per_pixel).div_ceil(256) * 256
+}
+
+fn mappable(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    })
+}
+
+/// Copies a whole 2D texture of `bytes_per_pixel` into a new mappable buffer.
+pub(super) fn copy_texture(
+    device: &wgpu::Device,
+    encoder: &mut wgpu::CommandEncoder,
+    texture: &wgpu::Texture,
+    bytes_per_pixel: u32,
+) -> wgpu::Buffer {
+    let size = texture.size();
+    let row = padded_row(size.width, bytes_per_pixel);
+    let buffer = mappable(device, "readback", (row * size.height) as u64);
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: Default::default(),
+            aspect: Default::default(),
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: None,
+            },
+        },
+        size,
+    );
+    buffer
+}
+
+/// Copies `(buffer, offset, length)` ranges, in order, into one new mappable buffer.
+pub(super) fn copy_ranges(
+    device: &wgpu::Device,
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    ranges: &[(&wgpu::Buffer, u64, u64)],
+) -> wgpu::Buffer {
+    let read = mappable(
+        device,
+        label,
+        ranges.iter().map(|r| r.2).sum::<u64>().max(4),
+    );
+    let mut at = 0;
+    for &(source, offset, length) in ranges {
+        encoder.copy_buffer_to_buffer(source, offset, &read, at, length);
+        at += length;
+    }
+    read
+}
+
+/// Maps a buffer (after the submit that fills it) and copies its contents out.
+pub(super) fn read(device: &wgpu::Device, buffer: &wgpu::Buffer) -> anyhow::Result<Vec<u8>> {
+    buffer.map_async(wgpu::MapMode::Read, .., |_| {});
+    device.poll(wgpu::PollType::wait_indefinitely())?;
+    let data = buffer.slice(..).get_mapped_range()?.to_vec();
+    buffer.unmap();
+    Ok(data)
+}
+
+/// The rows of a padded RGBA8 copy, without their padding.
+pub(super) fn unpad_rgba8(data: &[u8], width: u32, height: u32) -> Vec<u8> {
+    let row = padded_row(width, 4) as usize;
+    (0..height as usize)
+        .flat_map(|y| &data[y * row..y * row + width as usize * 4])
+        .copied()
+        .collect()
+}
+
+/// Which pixels of a padded Rgba16Float copy have a weight (alpha) above `threshold`.
+pub(super) fn coverage(data: &[u8], width: u32, height: u32, threshold: f32) -> Vec<bool> {
+    let row = padded_row(width, 8) as usize;
+    (0..height as usize)
+        .flat_map(|y| (0..width as usize).map(move |x| y * row + x * 8 + 6))
+        .map(|at| half::f16::from_le_bytes([data[at], data[at + 1]]).to_f32() > threshold)
+        .collect()
+}

@@ -1,0 +1,31 @@
+//! Each subcommand's `--help` opens with its own description.
+
+mod common;
+
+#[test]
+fn every_subcommand_explains_itself() {
+    for (command, opening) in [
+        ("info", "What a model file holds"),
+        ("convert", "Builds the sequential point tree"),
+        ("render", "Renders one frame"),
+    ] {
+        let (code, stdout, _) = common::run_spt(&[command, "--help"]);
+        assert_eq!(code, Some(0), "{command}");
+        assert!(
+            stdout.starts_with(opening),
+            "spt {command} --help opens with:\n{stdout}"
+        );
+        // One description only: no other subcommand's text leaked into it.
+        let first = stdout.lines().next().unwrap();
+        for other in [
+            "What a model file holds",
+            "Builds the sequential",
+            "Renders one frame",
+        ] {
+            assert!(
+                other == opening || !first.contains(other),
+                "{command}: {first}"
+            );
+        }
+    }
+}
