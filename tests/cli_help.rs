@@ -4,11 +4,12 @@ mod common;
 
 #[test]
 fn every_subcommand_explains_itself() {
-    for (command, opening) in [
+    let openings = [
         ("info", "What a model file holds"),
         ("convert", "Builds the sequential point tree"),
         ("render", "Renders one frame"),
-    ] {
+    ];
+    for (command, opening) in openings {
         let (code, stdout, _) = common::run_spt(&[command, "--help"]);
         assert_eq!(code, Some(0), "{command}");
         assert!(
@@ -17,11 +18,7 @@ fn every_subcommand_explains_itself() {
         );
         // One description only: no other subcommand's text leaked into it.
         let first = stdout.lines().next().unwrap();
-        for other in [
-            "What a model file holds",
-            "Builds the sequential",
-            "Renders one frame",
-        ] {
+        for (_, other) in openings {
             assert!(
                 other == opening || !first.contains(other),
                 "{command}: {first}"
