@@ -170,6 +170,9 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     }
     let summary = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
+        if v.len() == 1 {
+            return format!("{:.3} ms", v[0]);
+        }
         let p95 = v[((v.len() as f64 * 0.95).ceil() as usize).clamp(1, v.len()) - 1];
         format!(
             "{:.3} ms (median of {}), p95 {:.3} ms",
