@@ -80,6 +80,7 @@ fn downsample(img: &Image, k: u32) -> Image {
     let (w, h) = (img.width / k, img.height / k);
     let mut rgba = vec![0u8; (w * h * 4) as usize];
     let mut covered = vec![false; (w * h) as usize];
+    let mut depth = vec![0.0f32; (w * h) as usize];
     for y in 0..h {
         for x in 0..w {
             let mut sum = [0u32; 4];
@@ -91,6 +92,15 @@ fn downsample(img: &Image, k: u32) -> Image {
                         *s += img.rgba[i * 4 + c] as u32;
                     }
                     any |= img.covered[i];
+                    if img.covered[i] {
+                        // The nearest surface in the block.
+                        let d = &mut depth[(y * w + x) as usize];
+                        *d = if *d == 0.0 {
+                            img.depth[i]
+                        } else {
+                            d.min(img.depth[i])
+                        };
+                    }
                 }
             }
             let o = (y * w + x) as usize;
@@ -105,6 +115,7 @@ fn downsample(img: &Image, k: u32) -> Image {
         height: h,
         rgba,
         covered,
+        depth,
     }
 }
 

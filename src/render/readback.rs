@@ -91,3 +91,22 @@ pub(super) fn coverage(data: &[u8], width: u32, height: u32, threshold: f32) -> 
         .map(|at| half::f16::from_le_bytes([data[at], data[at + 1]]).to_f32() > threshold)
         .collect()
 }
+
+/// View distance per pixel from padded Rgba16Float copies of the colour sum (weight in
+/// alpha) and the normal sum (z·w in alpha): z = Σzw / Σw, 0 where nothing was drawn.
+pub(super) fn depth(color_sum: &[u8], normal_sum: &[u8], width: u32, height: u32) -> Vec<f32> {
+    let row = padded_row(width, 8) as usize;
+    let alpha =
+        |data: &[u8], at: usize| half::f16::from_le_bytes([data[at], data[at + 1]]).to_f32();
+    (0..height as usize)
+        .flat_map(|y| (0..width as usize).map(move |x| y * row + x * 8 + 6))
+        .map(|at| {
+            let w = alpha(color_sum, at);
+            if w > 0.0 {
+                alpha(normal_sum, at) / w
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}

@@ -48,6 +48,8 @@ pub struct Image {
     /// RGBA8, sRGB, row-major, top row first.
     pub rgba: Vec<u8>,
     pub covered: Vec<bool>,
+    /// View distance of each covered pixel (the blended z; 0 where not covered).
+    pub depth: Vec<f32>,
 }
 
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
@@ -421,6 +423,7 @@ impl Renderer {
         // timestamps, and the survivor counts of compute culling.
         let out_buffer = readback::copy_texture(device, &mut encoder, &output, 4);
         let weight_buffer = readback::copy_texture(device, &mut encoder, &color_sum, 8);
+        let normal_buffer = readback::copy_texture(device, &mut encoder, &normal_sum, 8);
         let query_buffer = queries.as_ref().map(|q| {
             let resolve = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamps"),
@@ -452,11 +455,13 @@ impl Renderer {
         } else {
             0.0
         };
-        let covered = readback::coverage(
-            &readback::read(device, &weight_buffer)?,
+        let weights = readback::read(device, &weight_buffer)?;
+        let covered = readback::coverage(&weights, width, height, coverage_threshold);
+        let depth = readback::depth(
+            &weights,
+            &readback::read(device, &normal_buffer)?,
             width,
             height,
-            coverage_threshold,
         );
         let gpu_ms = match &query_buffer {
             Some(b) => {
@@ -481,6 +486,7 @@ impl Renderer {
                 height,
                 rgba,
                 covered,
+                depth,
             },
             FrameStats {
                 prefix_len,
