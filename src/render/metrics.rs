@@ -72,7 +72,7 @@ pub fn compare(test: &Image, reference: &Image) -> Comparison {
     let (mut sse_both, mut both) = (0.0f64, 0usize);
     let (mut sse_interior, mut interior) = (0.0f64, 0usize);
     let edges = near_edges(reference);
-    for i in 0..test.covered.len() {
+    for (i, &near_edge) in edges.iter().enumerate() {
         let (a, b) = (test.covered[i], reference.covered[i]);
         covered += b as usize;
         holes += (b && !a) as usize;
@@ -88,7 +88,7 @@ pub fn compare(test: &Image, reference: &Image) -> Comparison {
             if a && b {
                 sse_both += e;
                 both += 1;
-                if !edges[i] {
+                if !near_edge {
                     sse_interior += e;
                     interior += 1;
                 }
