@@ -2,6 +2,7 @@
 //! splatting renderer with its mesh reference pass. WGSL lives in `shaders/`.
 
 pub mod camera;
+mod frame;
 pub mod gpu;
 pub mod metrics;
 mod pipelines;

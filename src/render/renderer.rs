@@ -11,34 +11,19 @@
 //! The list is uploaded once, in slices no larger than one storage binding (128 MiB on
 //! lavapipe), each drawn with its own bind group.
 
-use bytemuck::{Pod, Zeroable};
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
-use super::camera::{Camera, bounding_sphere};
+use super::camera::Camera;
+use super::frame::FrameUniform;
 use super::gpu::Gpu;
 use super::pipelines::{DEPTH, GBUFFER, OUTPUT, Pipelines};
 use super::readback;
 use super::scene::Scene;
-use super::settings::{Culling, DEPTH_PUSH, Mode, PREFILTER_PX, Settings};
+use super::settings::{Culling, Mode, Settings};
 use super::upload::GpuScene;
 use crate::tree::select::{error_per_distance, is_drawn};
-
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-struct FrameUniform {
-    view: [[f32; 4]; 4],
-    proj: [[f32; 4]; 4],
-    model_offset: [f32; 4],
-    viewport: [f32; 4],
-    lod: [f32; 4],
-    lens: [f32; 4],
-    light: [f32; 4],
-    background: [f32; 4],
-    flags: [u32; 4],
-    blend: [f32; 4],
-}
 
 /// A frame read back: sRGB pixels and which pixels something covered.
 #[derive(Debug, Clone)]
@@ -99,75 +84,11 @@ impl Renderer {
         let meta = scene.meta();
         let origin = DVec3::from(meta.origin);
         let eye_rel = camera.eye - origin;
-        let (centre, radius) = bounding_sphere(meta);
-        // Near plane: a small fraction of the model, never beyond its nearest point.
-        let near = (radius * 1e-4)
-            .max((centre - camera.eye).length() * 1e-6)
-            .max(f64::MIN_POSITIVE);
-        let aspect = width as f64 / height as f64;
-        let eps = error_per_distance(settings.error_px, camera.fov_y, height);
-        let tan_y = (camera.fov_y * 0.5).tan();
-        let mode = match settings.mode {
-            Mode::Shaded => 0,
-            Mode::Levels => 1,
-            Mode::Normals => 2,
-            Mode::Radius => 3,
-            Mode::Points => 4,
-            Mode::Mesh => 5,
-        };
         if settings.mode == Mode::Mesh && gpu_scene.mesh.is_none() {
             anyhow::bail!("mesh mode needs a model with faces, read from its PLY file");
         }
-        let srgb_to_linear = |c: f32| {
-            if c <= 0.04045 {
-                c / 12.92
-            } else {
-                ((c + 0.055) / 1.055).powf(2.4)
-            }
-        };
-        let uniform = FrameUniform {
-            view: camera.view_rotation().to_cols_array_2d(),
-            proj: camera.projection(aspect, near).to_cols_array_2d(),
-            model_offset: (-eye_rel).as_vec3().extend(0.0).to_array(),
-            viewport: [
-                width as f32,
-                height as f32,
-                1.0 / width as f32,
-                1.0 / height as f32,
-            ],
-            lod: [eps as f32, meta.error_scale, near as f32, DEPTH_PUSH],
-            lens: [
-                (tan_y * aspect) as f32,
-                tan_y as f32,
-                PREFILTER_PX,
-                if settings.ewa { 1.0 } else { 0.0 },
-            ],
-            light: settings.light.normalize_or(Vec3::Z).extend(0.25).to_array(),
-            background: settings
-                .background
-                .map(srgb_to_linear)
-                .into_iter()
-                .chain([1.0])
-                .collect::<Vec<_>>()
-                .try_into()
-                .unwrap(),
-            flags: [
-                mode,
-                settings.cull_back_faces as u32,
-                settings.lod as u32,
-                0,
-            ],
-            blend: [
-                settings.radius_scale,
-                if settings.mode == Mode::Shaded {
-                    settings.coverage_weight
-                } else {
-                    0.0
-                },
-                0.0,
-                0.0,
-            ],
-        };
+        let eps = error_per_distance(settings.error_px, camera.fov_y, height);
+        let uniform = FrameUniform::new(meta, camera, settings, width, height);
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),
             contents: bytemuck::bytes_of(&uniform),
