@@ -3,6 +3,7 @@
 
 pub mod camera;
 mod frame;
+mod gbuffer;
 pub mod gpu;
 pub mod metrics;
 mod pipelines;

@@ -17,8 +17,9 @@ use wgpu::util::DeviceExt;
 
 use super::camera::Camera;
 use super::frame::FrameUniform;
+use super::gbuffer::{self, GBuffer};
 use super::gpu::Gpu;
-use super::pipelines::{DEPTH, GBUFFER, OUTPUT, Pipelines};
+use super::pipelines::{OUTPUT, Pipelines};
 use super::readback;
 use super::scene::Scene;
 use super::settings::{Culling, Mode, Settings};
@@ -112,36 +113,15 @@ impl Renderer {
             .filter(|r| is_drawn(r, meta.error_scale, eye_rel, lod_eps))
             .count();
 
-        let size = wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        };
-        let target = |format, label, usage| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
-        let g_usage = wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC;
-        let color_sum = target(GBUFFER, "colour sum", g_usage);
-        let normal_sum = target(GBUFFER, "normal sum", g_usage);
-        let depth = target(DEPTH, "depth", wgpu::TextureUsages::RENDER_ATTACHMENT);
-        let output = target(
+        let gbuffer = GBuffer::new(device, (width, height));
+        let output = gbuffer::target(
+            device,
+            (width, height),
             OUTPUT,
             "output",
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
         );
-        let views =
-            [&color_sum, &normal_sum, &depth, &output].map(|t| t.create_view(&Default::default()));
+        let output_view = output.create_view(&Default::default());
         let queries = self.gpu.timestamps.then(|| {
             device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("passes"),
@@ -202,9 +182,9 @@ impl Renderer {
             };
             encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("clear"),
-                color_attachments: &[color(&views[0]), color(&views[1])],
+                color_attachments: &[color(&gbuffer.color_view), color(&gbuffer.normal_view)],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &views[2],
+                    view: &gbuffer.depth_view,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(0.0),
                         store: wgpu::StoreOp::Store,
@@ -236,12 +216,12 @@ impl Renderer {
                     ops: load,
                 })
             };
-            let colors = [color(&views[0]), color(&views[1])];
+            let colors = [color(&gbuffer.color_view), color(&gbuffer.normal_view)];
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(label),
                 color_attachments: if with_colors { &colors } else { &[] },
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &views[2],
+                    view: &gbuffer.depth_view,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Load,
                         store: wgpu::StoreOp::Store,
@@ -306,11 +286,11 @@ impl Renderer {
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&views[0]),
+                    resource: wgpu::BindingResource::TextureView(&gbuffer.color_view),
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&views[1]),
+                    resource: wgpu::BindingResource::TextureView(&gbuffer.normal_view),
                 },
             ],
         });
@@ -318,7 +298,7 @@ impl Renderer {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("shade"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &views[3],
+                    view: &output_view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
@@ -343,8 +323,8 @@ impl Renderer {
         // Read back: the output, the weight channel of the colour sum (coverage), the
         // timestamps, and the survivor counts of compute culling.
         let out_buffer = readback::copy_texture(device, &mut encoder, &output, 4);
-        let weight_buffer = readback::copy_texture(device, &mut encoder, &color_sum, 8);
-        let normal_buffer = readback::copy_texture(device, &mut encoder, &normal_sum, 8);
+        let weight_buffer = readback::copy_texture(device, &mut encoder, &gbuffer.color_sum, 8);
+        let normal_buffer = readback::copy_texture(device, &mut encoder, &gbuffer.normal_sum, 8);
         let query_buffer = queries.as_ref().map(|q| {
             let resolve = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamps"),
