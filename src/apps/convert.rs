@@ -5,6 +5,8 @@ use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
 
+use rayon::prelude::*;
+
 use crate::apps::info::{count, peak_memory_bytes};
 use crate::apps::progress::Stage;
 use crate::io::atomic::write_atomically;
@@ -99,15 +101,14 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
         rate(bytes as f64 / 1e6, stage.seconds())
     ));
 
-    let errors: Vec<f64> = list
+    // Smallest non-zero and largest node error, without a copy of the errors.
+    let (emin, emax) = list
         .nodes
-        .iter()
+        .par_iter()
         .map(|r| r.error(scale))
         .filter(|e| *e > 0.0)
-        .collect();
-    let (emin, emax) = errors
-        .iter()
-        .fold((f64::MAX, 0.0f64), |(a, b), &e| (a.min(e), b.max(e)));
+        .fold(|| (f64::MAX, 0.0f64), |(a, b), e| (a.min(e), b.max(e)))
+        .reduce(|| (f64::MAX, 0.0), |x, y| (x.0.min(y.0), x.1.max(y.1)));
     let total = start.elapsed().as_secs_f64();
     println!(
         "{} nodes ({} leaves, {} internal), depth {}, {} bytes per node ({} record + 4 parent index)",
@@ -118,7 +119,7 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
         std::mem::size_of::<NodeRecord>() + 4,
         std::mem::size_of::<NodeRecord>()
     );
-    if errors.is_empty() {
+    if emax == 0.0 {
         println!("errors: all zero (a single leaf)");
     } else {
         println!("errors: {emin:.3e} to {emax:.3e} model units (error scale {scale:.6e})");

@@ -7,7 +7,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::io::ply::{PlyModel, read_ply};
-use crate::io::spt_file::{MAGIC, SptFile};
+use crate::io::spt_file::{SptFile, is_spt};
 use crate::io::{Bounds, GeometryStats};
 use crate::surfel::{LeafSurfels, SurfelStats, leaf_surfels};
 use crate::tree::{NodeRecord, TreeMeta};
@@ -373,14 +373,6 @@ impl SptInfo {
         );
         out
     }
-}
-
-/// Whether `path` starts with the `.spt` magic.
-fn is_spt(path: &Path) -> bool {
-    let mut magic = [0u8; 8];
-    std::fs::File::open(path)
-        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
-        .is_ok_and(|_| &magic == MAGIC)
 }
 
 /// Runs `spt info` on a PLY or `.spt` file: prints the report as text or JSON. A

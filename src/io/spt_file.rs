@@ -68,6 +68,14 @@ pub enum SptError {
     },
 }
 
+/// Whether `path` starts with the `.spt` magic (false for anything unreadable).
+pub fn is_spt(path: &Path) -> bool {
+    let mut magic = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
+        .is_ok_and(|_| &magic == MAGIC)
+}
+
 fn header_bytes(list: &SequentialList, checksum: u64) -> Vec<u8> {
     let m = &list.meta;
     let mut h = Vec::with_capacity(HEADER_BYTES);

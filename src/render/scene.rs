@@ -7,7 +7,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use crate::io::ply::read_ply;
-use crate::io::spt_file::{MAGIC, SptFile};
+use crate::io::spt_file::{SptFile, is_spt};
 use crate::surfel::leaf_surfels;
 use crate::tree::select::PrefixIndex;
 use crate::tree::{NodeRecord, SequentialList, TreeMeta, build_sequential_list};
@@ -45,11 +45,7 @@ impl Scene {
 
     /// Opens a PLY (built into a tree in memory, mesh kept) or an `.spt` file.
     pub fn open(path: &Path) -> anyhow::Result<Scene> {
-        let mut magic = [0u8; 8];
-        let is_spt = std::fs::File::open(path)
-            .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
-            .is_ok_and(|_| &magic == MAGIC);
-        if is_spt {
+        if is_spt(path) {
             let file = SptFile::open(path)?;
             let index = PrefixIndex::new(&file.meta, file.nodes());
             return Ok(Scene {
