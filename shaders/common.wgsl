@@ -17,11 +17,14 @@ struct Frame {
     // xyz: direction toward the light, view space; w: specular strength.
     light: vec4<f32>,
     background: vec4<f32>,
-    // x: display mode, y: cull back faces, z: level of detail on, w: unused.
+    // x: display mode, y: cull back faces, z: level of detail on, w: LOD frozen at lod_eye.
     flags: vec4<u32>,
     // x: splat radius scale (rendered radius / stored radius); y: the accumulated
     // weight Σw at which a pixel is fully covered (silhouettes fade below it; 0: off).
     blend: vec4<f32>,
+    // xyz: the eye the level of detail is chosen for, relative to the camera's eye
+    // (world-aligned); used when flags.w is set (frozen LOD).
+    lod_eye: vec4<f32>,
 }
 
 const MODE_SHADED: u32 = 0u;
@@ -118,7 +121,11 @@ fn view_disk(n: Node) -> ViewDisk {
 // selection test, the view frustum (bounding sphere against the four sides and the near
 // plane) and, when asked, back faces.
 fn splat_visible(n: Node, disk: ViewDisk) -> bool {
-    if !selected(n, length(disk.center)) {
+    var lod_distance = length(disk.center);
+    if frame.flags.w != 0u {
+        lod_distance = length(n.position + frame.model_offset.xyz - frame.lod_eye.xyz);
+    }
+    if !selected(n, lod_distance) {
         return false;
     }
     let r = disk.radius;

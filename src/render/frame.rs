@@ -23,6 +23,7 @@ pub(super) struct FrameUniform {
     pub background: [f32; 4],
     pub flags: [u32; 4],
     pub blend: [f32; 4],
+    pub lod_eye: [f32; 4],
 }
 
 impl FrameUniform {
@@ -89,7 +90,7 @@ impl FrameUniform {
                 mode,
                 settings.cull_back_faces as u32,
                 settings.lod as u32,
-                0,
+                settings.lod_eye.is_some() as u32,
             ],
             blend: [
                 settings.radius_scale,
@@ -101,6 +102,12 @@ impl FrameUniform {
                 0.0,
                 0.0,
             ],
+            lod_eye: settings
+                .lod_eye
+                .map_or(DVec3::ZERO, |e| e - camera.eye)
+                .as_vec3()
+                .extend(0.0)
+                .to_array(),
         }
     }
 }

@@ -117,17 +117,27 @@ pub fn compare(test: &Image, reference: &Image) -> Comparison {
 impl Image {
     /// Writes the image as PNG, atomically.
     pub fn save_png(&self, path: &std::path::Path) -> anyhow::Result<()> {
-        let img = image::RgbaImage::from_raw(self.width, self.height, self.rgba.clone())
-            .ok_or_else(|| anyhow::anyhow!("image buffer of the wrong size"))?;
-        crate::io::atomic::write_atomically(path, |w| {
-            let mut bytes = Vec::new();
-            img.write_to(
-                &mut std::io::Cursor::new(&mut bytes),
-                image::ImageFormat::Png,
-            )
-            .map_err(std::io::Error::other)?;
-            w.write_all(&bytes)
-        })
-        .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))
+        save_png(path, self.width, self.height, &self.rgba)
     }
+}
+
+/// Writes RGBA8 pixels (row-major, top row first) as a PNG, atomically.
+pub fn save_png(
+    path: &std::path::Path,
+    width: u32,
+    height: u32,
+    rgba: &[u8],
+) -> anyhow::Result<()> {
+    let img = image::RgbaImage::from_raw(width, height, rgba.to_vec())
+        .ok_or_else(|| anyhow::anyhow!("image buffer of the wrong size"))?;
+    crate::io::atomic::write_atomically(path, |w| {
+        let mut bytes = Vec::new();
+        img.write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
+        .map_err(std::io::Error::other)?;
+        w.write_all(&bytes)
+    })
+    .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))
 }

@@ -2,6 +2,8 @@
 //! splatting renderer with its mesh reference pass. WGSL lives in `shaders/`.
 
 pub mod camera;
+mod counters;
+mod encode;
 mod frame;
 mod gbuffer;
 pub mod gpu;
@@ -11,11 +13,16 @@ mod readback;
 pub mod renderer;
 pub mod scene;
 pub mod settings;
+mod targets;
 pub mod upload;
 
 pub use camera::Camera;
+pub use counters::{CounterReadback, GpuCounters};
+pub use encode::EncodedFrame;
 pub use gpu::Gpu;
+pub use pipelines::OUTPUT_GAMMA;
 pub use renderer::{FrameStats, Image, Renderer};
-pub use scene::Scene;
+pub use scene::{LoadReport, Scene, Silent};
 pub use settings::{Culling, Mode, Settings};
+pub use targets::FrameTargets;
 pub use upload::GpuScene;

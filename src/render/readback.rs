@@ -45,26 +45,6 @@ pub(super) fn copy_texture(
     buffer
 }
 
-/// Copies `(buffer, offset, length)` ranges, in order, into one new mappable buffer.
-pub(super) fn copy_ranges(
-    device: &wgpu::Device,
-    encoder: &mut wgpu::CommandEncoder,
-    label: &str,
-    ranges: &[(&wgpu::Buffer, u64, u64)],
-) -> wgpu::Buffer {
-    let read = mappable(
-        device,
-        label,
-        ranges.iter().map(|r| r.2).sum::<u64>().max(4),
-    );
-    let mut at = 0;
-    for &(source, offset, length) in ranges {
-        encoder.copy_buffer_to_buffer(source, offset, &read, at, length);
-        at += length;
-    }
-    read
-}
-
 /// Maps a buffer (after the submit that fills it) and copies its contents out.
 pub(super) fn read(device: &wgpu::Device, buffer: &wgpu::Buffer) -> anyhow::Result<Vec<u8>> {
     buffer.map_async(wgpu::MapMode::Read, .., |_| {});

@@ -1,6 +1,6 @@
 //! How a frame is drawn: display mode, culling strategy, level of detail, light.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 /// Display modes (DESIGN.md §7b).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -48,6 +48,9 @@ pub struct Settings {
     /// fades into the background (0: off). Also the coverage threshold of read-back masks.
     pub coverage_weight: f32,
     pub culling: Culling,
+    /// The eye the level of detail is chosen for (file coordinates) when it is frozen
+    /// while the camera moves; None: the camera's own eye.
+    pub lod_eye: Option<DVec3>,
 }
 
 impl Default for Settings {
@@ -63,6 +66,7 @@ impl Default for Settings {
             radius_scale: 1.0,
             coverage_weight: 0.0,
             culling: Culling::Compute,
+            lod_eye: None,
         }
     }
 }

@@ -4,7 +4,7 @@
 use wgpu::util::DeviceExt;
 
 use super::renderer::Renderer;
-use super::scene::Scene;
+use super::scene::{LoadReport, Scene, Silent};
 use crate::tree::NodeRecord;
 
 /// Nodes per slice at most: one dispatch of 65,535 workgroups of 256 covers a slice.
@@ -32,6 +32,12 @@ pub struct GpuScene {
 impl Renderer {
     /// Uploads a scene's list (once, in binding-size slices) and mesh.
     pub fn upload(&self, scene: &Scene) -> GpuScene {
+        self.upload_reporting(scene, &Silent)
+    }
+
+    /// [`Renderer::upload`], telling `report` the nodes uploaded, slice by slice.
+    pub fn upload_reporting(&self, scene: &Scene, report: &dyn LoadReport) -> GpuScene {
+        report.stage("uploading", scene.nodes().len() as u64);
         let device = &self.gpu.device;
         let record = std::mem::size_of::<NodeRecord>() as u64;
         let per_slice = (self.gpu.max_binding_bytes() / record).clamp(1, MAX_SLICE_NODES) as usize;
@@ -74,6 +80,7 @@ impl Renderer {
                         | wgpu::BufferUsages::COPY_SRC,
                     mapped_at_creation: false,
                 });
+                report.advance(chunk.len() as u64);
                 Slice {
                     count: chunk.len() as u32,
                     direct: bind(&self.pipelines.nodes_layout, &[&nodes]),

@@ -1,0 +1,180 @@
+//! A frame's GPU counters: its two timestamps (GPU time) and, with compute culling, the
+//! survivors of each slice (splats drawn). Read either at once (offline frames) or a
+//! few frames late without stalling (the viewer), through one small copy per frame.
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use super::encode::EncodedFrame;
+use super::readback;
+use super::renderer::Renderer;
+use super::targets::FrameTargets;
+use super::upload::GpuScene;
+
+/// What the GPU measured of one frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GpuCounters {
+    /// From the first pass's start to the end of shading, when the adapter has
+    /// timestamp queries.
+    pub gpu_ms: Option<f64>,
+    /// Splats the compute culling kept (None with vertex culling).
+    pub drawn: Option<u64>,
+}
+
+/// Bytes of one frame's counters: two u64 timestamps, then one u32 per slice.
+fn counters_bytes(gpu_scene: &GpuScene) -> u64 {
+    16 + 4 * gpu_scene.slices.len() as u64
+}
+
+impl Renderer {
+    /// Records copies of the frame's counters into `into` (at least `counters_bytes`).
+    pub(super) fn copy_counters(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &FrameTargets,
+        gpu_scene: &GpuScene,
+        into: &wgpu::Buffer,
+    ) {
+        if let Some((_, resolve)) = &targets.queries {
+            encoder.copy_buffer_to_buffer(resolve, 0, into, 0, 16);
+        }
+        for (k, slice) in gpu_scene.slices.iter().enumerate() {
+            // The indirect draw's instance count: the survivors.
+            encoder.copy_buffer_to_buffer(&slice.compaction, 4, into, 16 + 4 * k as u64, 4);
+        }
+    }
+
+    /// Decodes counters copied by [`Renderer::copy_counters`].
+    pub(super) fn parse_counters(&self, bytes: &[u8], frame: &EncodedFrame) -> GpuCounters {
+        let gpu_ms = self.gpu.timestamps.then(|| {
+            let t: [u64; 2] = bytemuck::pod_read_unaligned(&bytes[..16]);
+            let period_ns = self.gpu.queue.get_timestamp_period() as f64;
+            t[1].saturating_sub(t[0]) as f64 * period_ns / 1e6
+        });
+        let drawn = frame.compute.then(|| {
+            bytes[16..]
+                .chunks_exact(4)
+                .map(|c| u32::from_le_bytes(c.try_into().unwrap()) as u64)
+                .sum()
+        });
+        GpuCounters { gpu_ms, drawn }
+    }
+
+    /// A mappable buffer for one frame's counters.
+    pub(super) fn counters_buffer(&self, gpu_scene: &GpuScene) -> wgpu::Buffer {
+        self.mappable_counters(counters_bytes(gpu_scene))
+    }
+
+    fn counters_buffer_like(&self, buffer: &wgpu::Buffer) -> wgpu::Buffer {
+        self.mappable_counters(buffer.size())
+    }
+
+    fn mappable_counters(&self, size: u64) -> wgpu::Buffer {
+        self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("counters"),
+            size,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Reads a frame's counters now: records the copy, submits, waits.
+    pub(super) fn read_counters_now(
+        &self,
+        mut encoder: wgpu::CommandEncoder,
+        targets: &FrameTargets,
+        gpu_scene: &GpuScene,
+        frame: &EncodedFrame,
+    ) -> anyhow::Result<GpuCounters> {
+        let buffer = self.counters_buffer(gpu_scene);
+        self.copy_counters(&mut encoder, targets, gpu_scene, &buffer);
+        self.gpu.queue.submit([encoder.finish()]);
+        let bytes = readback::read(&self.gpu.device, &buffer)?;
+        Ok(self.parse_counters(&bytes, frame))
+    }
+}
+
+/// Counters read a few frames late, never waiting for the GPU: a small ring of mappable
+/// buffers; a frame whose counters find no free buffer simply goes unmeasured.
+pub struct CounterReadback {
+    free: Vec<wgpu::Buffer>,
+    /// Copies recorded but not yet submitted.
+    recorded: Option<(wgpu::Buffer, EncodedFrame)>,
+    /// Submitted and being mapped: the flag turns true once mapping ended, and the
+    /// result says whether it succeeded.
+    in_flight: VecDeque<(wgpu::Buffer, EncodedFrame, Arc<(AtomicBool, AtomicBool)>)>,
+}
+
+/// Frames of counters in flight at most.
+const RING: usize = 4;
+
+impl CounterReadback {
+    pub fn new(renderer: &Renderer, gpu_scene: &GpuScene) -> CounterReadback {
+        CounterReadback {
+            free: (0..RING)
+                .map(|_| renderer.counters_buffer(gpu_scene))
+                .collect(),
+            recorded: None,
+            in_flight: VecDeque::new(),
+        }
+    }
+
+    /// Records the copy of this frame's counters, if a buffer is free.
+    pub fn record(
+        &mut self,
+        renderer: &Renderer,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &FrameTargets,
+        gpu_scene: &GpuScene,
+        frame: &EncodedFrame,
+    ) {
+        if let Some(buffer) = self.free.pop() {
+            renderer.copy_counters(encoder, targets, gpu_scene, &buffer);
+            self.recorded = Some((buffer, frame.clone()));
+        }
+    }
+
+    /// Starts mapping what [`CounterReadback::record`] copied; call after the submit.
+    pub fn submitted(&mut self) {
+        if let Some((buffer, frame)) = self.recorded.take() {
+            let ready = Arc::new((AtomicBool::new(false), AtomicBool::new(false)));
+            let flag = ready.clone();
+            buffer.map_async(wgpu::MapMode::Read, .., move |result| {
+                flag.1.store(result.is_ok(), Ordering::Relaxed);
+                flag.0.store(true, Ordering::Release);
+            });
+            self.in_flight.push_back((buffer, frame, ready));
+        }
+    }
+
+    /// The newest frame whose counters have arrived, if any (polls without waiting).
+    pub fn poll(&mut self, renderer: &Renderer) -> Option<(EncodedFrame, GpuCounters)> {
+        // An error here only means nothing new arrived.
+        let _ = renderer.gpu.device.poll(wgpu::PollType::Poll);
+        let mut newest = None;
+        while let Some((_, _, ready)) = self.in_flight.front() {
+            if !ready.0.load(Ordering::Acquire) {
+                break;
+            }
+            let (buffer, frame, ready) = self.in_flight.pop_front().expect("front exists");
+            let bytes = ready
+                .1
+                .load(Ordering::Relaxed)
+                .then(|| buffer.slice(..).get_mapped_range().ok())
+                .flatten();
+            match bytes {
+                Some(bytes) => {
+                    let counters = renderer.parse_counters(&bytes, &frame);
+                    newest = Some((frame, counters));
+                    drop(bytes);
+                    buffer.unmap();
+                    self.free.push(buffer);
+                }
+                // A failed mapping: replace the buffer.
+                None => self.free.push(renderer.counters_buffer_like(&buffer)),
+            }
+        }
+        newest
+    }
+}

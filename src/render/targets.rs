@@ -1,0 +1,125 @@
+//! What one frame size needs on the GPU, made once and kept between frames (the viewer
+//! keeps one per window size): the G-buffer, the shaded output, the frame uniform and
+//! the bind groups that point at them, and the timestamp queries.
+
+use super::gbuffer::GBuffer;
+use super::pipelines::{OUTPUT, OUTPUT_GAMMA, Pipelines};
+
+/// Render targets and per-frame buffers for one `size`.
+pub struct FrameTargets {
+    pub size: (u32, u32),
+    pub(super) gbuffer: GBuffer,
+    /// The shaded frame: RGBA8, sRGB-encoded. Can also be viewed as plain `Rgba8Unorm`
+    /// ([`FrameTargets::gamma_view`]) to draw an overlay in gamma space or to copy the
+    /// bytes as they are.
+    pub output: wgpu::Texture,
+    pub(super) output_view: wgpu::TextureView,
+    pub(super) frame_buffer: wgpu::Buffer,
+    pub(super) frame_bind: wgpu::BindGroup,
+    pub(super) gbuffer_bind: wgpu::BindGroup,
+    /// Two timestamps (start of the first pass, end of shading) and their resolve buffer.
+    pub(super) queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+}
+
+impl FrameTargets {
+    pub(super) fn new(
+        device: &wgpu::Device,
+        pipelines: &Pipelines,
+        size: (u32, u32),
+        timestamps: bool,
+    ) -> FrameTargets {
+        let gbuffer = GBuffer::new(device, size);
+        let output = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("output"),
+            size: wgpu::Extent3d {
+                width: size.0,
+                height: size.1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: OUTPUT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[OUTPUT_GAMMA],
+        });
+        let frame_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame"),
+            size: std::mem::size_of::<super::frame::FrameUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let frame_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("frame"),
+            layout: &pipelines.frame_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: frame_buffer.as_entire_binding(),
+            }],
+        });
+        let gbuffer_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("gbuffer"),
+            layout: &pipelines.gbuffer_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&gbuffer.color_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&gbuffer.normal_view),
+                },
+            ],
+        });
+        let queries = timestamps.then(|| {
+            let set = device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("passes"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            });
+            let resolve = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            (set, resolve)
+        });
+        FrameTargets {
+            size,
+            output_view: output.create_view(&Default::default()),
+            output,
+            gbuffer,
+            frame_buffer,
+            frame_bind,
+            gbuffer_bind,
+            queries,
+        }
+    }
+
+    /// The output seen as plain `Rgba8Unorm`: its bytes are already sRGB-encoded, so an
+    /// overlay drawn through this view blends in gamma space, as egui expects.
+    pub fn gamma_view(&self) -> wgpu::TextureView {
+        self.output.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(OUTPUT_GAMMA),
+            ..Default::default()
+        })
+    }
+}
+
+/// Checks that a `width`×`height` frame fits the adapter's limits (texture side, and a
+/// read-back buffer of the widest G-buffer format).
+pub(super) fn check_size(limits: &wgpu::Limits, (width, height): (u32, u32)) -> anyhow::Result<()> {
+    if width.max(height) > limits.max_texture_dimension_2d
+        || (width as u64).div_ceil(32) * 256 * height as u64 > limits.max_buffer_size
+    {
+        anyhow::bail!(
+            "{width}×{height} is larger than this adapter renders (at most {} pixels a side, {} MB a read-back buffer)",
+            limits.max_texture_dimension_2d,
+            limits.max_buffer_size >> 20
+        );
+    }
+    Ok(())
+}
