@@ -4,12 +4,6 @@
 @group(1) @binding(0) var color_sum: texture_2d<f32>;
 @group(1) @binding(1) var normal_sum: texture_2d<f32>;
 
-@vertex
-fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-
 @fragment
 fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let texel = vec2<i32>(frag.xy);

@@ -5,6 +5,13 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+/// Parses `spt view`'s options on their own (for the default command).
+#[derive(Parser)]
+struct ViewOnly {
+    #[command(flatten)]
+    args: spt::apps::view::ViewArgs,
+}
+
 #[derive(Parser)]
 #[command(
     name = "spt",
@@ -16,8 +23,9 @@ use clap::{Parser, Subcommand};
                   `spt convert MODEL.ply MODEL.spt`."
 )]
 struct Cli {
+    /// Without a command: the viewer on the default model (`spt view`).
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
 }
 
 #[derive(Subcommand)]
@@ -44,6 +52,13 @@ enum Command {
         #[command(flatten)]
         args: Box<spt::apps::render::RenderArgs>,
     },
+    /// Opens the viewer: a window that draws the model (PLY or .spt; default
+    /// data/torus_knot.ply) and turns under the mouse, with a panel for the level of detail,
+    /// display modes and statistics. PLY files are converted in the background with a
+    /// progress bar; .spt files open by memory map. Drop a file on the window or press
+    /// Ctrl+O to open another. `--screenshot out.png` draws --frames frames, saves the
+    /// picture and exits.
+    View(Box<spt::apps::view::ViewArgs>),
     /// Builds the sequential point tree of a PLY model and writes it as an .spt file,
     /// which opens instantly (memory-mapped). Shows each stage (load, surfels, tree,
     /// errors, sort, write) with its time, then a summary. The output is written to a
@@ -58,7 +73,11 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
+    let command = cli.command.unwrap_or_else(|| {
+        Command::View(Box::new(ViewOnly::parse_from(["spt"]).args))
+    });
+    let result = match command {
+        Command::View(args) => spt::apps::view::run(*args),
         Command::Info { file, json } => spt::apps::info::run(&file, json),
         Command::Convert { input, output } => spt::apps::convert::run(&input, &output),
         Command::Render {

@@ -59,7 +59,18 @@ impl Camera {
     /// corner c, in view axes relative to the centre, needs d ≥ c_z + |c_x| / tan(fov_x/2)
     /// and d ≥ c_z + |c_y| / tan(fov_y/2)), with a 5 % margin.
     pub fn framed(meta: &TreeMeta, fov_y: f64, aspect: f64) -> Camera {
-        let probe = Camera::orbit(meta, 30.0, 20.0, 1.0, fov_y);
+        Camera::framed_from(meta, 30.0, 20.0, fov_y, aspect)
+    }
+
+    /// [`Camera::framed`] seen from a given azimuth and elevation (degrees).
+    pub fn framed_from(
+        meta: &TreeMeta,
+        azimuth_deg: f64,
+        elevation_deg: f64,
+        fov_y: f64,
+        aspect: f64,
+    ) -> Camera {
+        let probe = Camera::orbit(meta, azimuth_deg, elevation_deg, 1.0, fov_y);
         let (centre, radius) = bounding_sphere(meta);
         let forward = (probe.target - probe.eye).normalize();
         let right = forward.cross(DVec3::Z).normalize_or(DVec3::X);
@@ -79,7 +90,7 @@ impl Camera {
                 .max(toward + corner.dot(up).abs() / tan_y);
         }
         let distance = (distance * 1.05).max(radius * 1e-3) / radius;
-        Camera::orbit(meta, 30.0, 20.0, distance, fov_y)
+        Camera::orbit(meta, azimuth_deg, elevation_deg, distance, fov_y)
     }
 
     /// World-aligned camera-relative → view space (rotation only), f32.

@@ -13,7 +13,7 @@
 use glam::DVec3;
 
 use super::camera::Camera;
-use super::frame::FrameUniform;
+use super::frame::{FrameUniform, srgb_to_linear};
 use super::renderer::Renderer;
 use super::scene::Scene;
 use super::settings::{Culling, Mode, Settings};
@@ -242,5 +242,30 @@ impl Renderer {
             eps: lod_eps,
             lod_eye,
         })
+    }
+}
+
+impl Renderer {
+    /// Records a frame with nothing in it: the output cleared to `background` (sRGB).
+    pub fn encode_empty(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &FrameTargets,
+        background: [f32; 3],
+    ) {
+        let [r, g, b] = background.map(|c| srgb_to_linear(c) as f64);
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("empty"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &targets.output_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: load_ops(wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 })),
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
     }
 }

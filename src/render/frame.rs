@@ -26,6 +26,15 @@ pub(super) struct FrameUniform {
     pub lod_eye: [f32; 4],
 }
 
+/// The sRGB transfer function, inverted: an sRGB-encoded value in 0–1 to linear.
+pub(super) fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 impl FrameUniform {
     /// The uniform for `camera` over a `width`×`height` target. The model offset
     /// (origin − eye) is computed in f64 and only then rounded to f32.
@@ -52,13 +61,6 @@ impl FrameUniform {
             Mode::Radius => 3,
             Mode::Points => 4,
             Mode::Mesh => 5,
-        };
-        let srgb_to_linear = |c: f32| {
-            if c <= 0.04045 {
-                c / 12.92
-            } else {
-                ((c + 0.055) / 1.055).powf(2.4)
-            }
         };
         FrameUniform {
             view: camera.view_rotation().to_cols_array_2d(),

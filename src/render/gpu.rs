@@ -9,6 +9,8 @@ pub const BACKEND_ENV: &str = "SPT_BACKEND";
 
 /// A device and queue with what the renderer needs to know of them.
 pub struct Gpu {
+    /// Kept to make (and remake) window surfaces.
+    pub instance: wgpu::Instance,
     pub adapter: wgpu::Adapter,
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
@@ -33,6 +35,16 @@ impl Gpu {
     /// Opens an adapter: from `backend`, else from `SPT_BACKEND`, else any (a hardware
     /// adapter preferred). Fails with a clear message when none exists.
     pub fn new(backend: Option<&str>) -> anyhow::Result<Gpu> {
+        let instance = Gpu::instance(backend, None)?;
+        Gpu::with_instance(instance, None)
+    }
+
+    /// The instance for `backend` (as [`Gpu::new`] chooses it), knowing the display
+    /// that windows will be shown on, when there are windows.
+    pub fn instance(
+        backend: Option<&str>,
+        display: Option<Box<dyn wgpu::wgt::WgpuHasDisplayHandle>>,
+    ) -> anyhow::Result<wgpu::Instance> {
         let chosen = match backend
             .map(str::to_owned)
             .or_else(|| std::env::var(BACKEND_ENV).ok())
@@ -40,19 +52,34 @@ impl Gpu {
             Some(name) => parse_backends(&name)?,
             None => wgpu::Backends::all(),
         };
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        let mut desc = match display {
+            Some(d) => wgpu::InstanceDescriptor::new_with_display_handle(d),
+            None => wgpu::InstanceDescriptor::new_without_display_handle(),
+        };
         desc.backends = chosen;
-        let instance = wgpu::Instance::new(desc);
+        Ok(wgpu::Instance::new(desc))
+    }
+
+    /// Opens an adapter of `instance` (one that can draw into `surface`, when given).
+    pub fn with_instance(
+        instance: wgpu::Instance,
+        surface: Option<&wgpu::Surface>,
+    ) -> anyhow::Result<Gpu> {
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             force_fallback_adapter: false,
-            compatible_surface: None,
+            compatible_surface: surface,
             apply_limit_buckets: false,
         }))
         .with_context(|| {
             format!(
-                "no GPU adapter for backends {chosen:?}: install a driver (software Vulkan: \
-                 apt-get install mesa-vulkan-drivers) or choose another with --backend / {BACKEND_ENV}"
+                "no GPU adapter{}: install a driver (software Vulkan: apt-get install \
+                 mesa-vulkan-drivers) or choose another backend with --backend / {BACKEND_ENV}",
+                if surface.is_some() {
+                    " that can draw into this window"
+                } else {
+                    ""
+                }
             )
         })?;
         let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
@@ -65,6 +92,7 @@ impl Gpu {
         .context("cannot open the GPU device")?;
         let info = adapter.get_info();
         Ok(Gpu {
+            instance,
             adapter,
             device,
             queue,

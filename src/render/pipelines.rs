@@ -2,6 +2,8 @@
 //! WGSL appended to `shaders/common.wgsl`) and pipelines, made once per device.
 
 const COMMON: &str = include_str!("../../shaders/common.wgsl");
+/// The full-screen triangle's vertex stage, shared by shading and presentation.
+pub const FULLSCREEN: &str = include_str!("../../shaders/fullscreen.wgsl");
 pub(super) const GBUFFER: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub(super) const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// The shaded output: written linear, stored sRGB-encoded.
@@ -151,7 +153,11 @@ impl Pipelines {
         });
         let splat = module(device, "splat", include_str!("../../shaders/splat.wgsl"));
         let mesh_module = module(device, "mesh", include_str!("../../shaders/mesh.wgsl"));
-        let shade_module = module(device, "shade", include_str!("../../shaders/shade.wgsl"));
+        let shade_module = module(
+            device,
+            "shade",
+            &format!("{FULLSCREEN}\n{}", include_str!("../../shaders/shade.wgsl")),
+        );
         let strip = wgpu::PrimitiveState {
             topology: wgpu::PrimitiveTopology::TriangleStrip,
             ..Default::default()

@@ -29,6 +29,13 @@ pub struct GpuScene {
     pub(super) mesh: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
 }
 
+impl GpuScene {
+    /// Triangles of the mesh reference (0 without one).
+    pub fn mesh_triangles(&self) -> u32 {
+        self.mesh.as_ref().map_or(0, |m| m.2 / 3)
+    }
+}
+
 impl Renderer {
     /// Uploads a scene's list (once, in binding-size slices) and mesh.
     pub fn upload(&self, scene: &Scene) -> GpuScene {

@@ -1,0 +1,579 @@
+//! The viewer's window: winit events turned into [`Input`]s, egui's panel drawn over
+//! the frame, the frame presented, models opened in the background (command line, file
+//! dialog, drag and drop), screenshots, and the scripted `--screenshot` run.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, mpsc};
+use std::time::{Duration, Instant};
+
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoopProxy};
+use winit::keyboard::{Key, NamedKey};
+use winit::window::{Window, WindowId};
+
+use super::ViewArgs;
+use super::input::{Button, Command, Input, Move};
+use super::loader::Loading;
+use super::panel::{self, PanelStatus};
+use super::present::{Presented, Presenter};
+use super::viewer::Viewer;
+use crate::apps::info::count;
+use crate::render::metrics::save_png;
+use crate::render::{Gpu, OUTPUT_GAMMA, Renderer};
+
+/// Sent to the event loop from other threads: something finished, redraw.
+#[derive(Debug, Clone, Copy)]
+pub struct Wake;
+
+/// What exists once the window does.
+struct Windowed {
+    window: Arc<Window>,
+    presenter: Presenter,
+    egui_state: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+    viewer: Viewer,
+    adapter: String,
+}
+
+/// The scripted `--screenshot` run: frames drawn with the model so far, and their times.
+#[derive(Default)]
+struct Script {
+    frames: u32,
+    frame_ms: Vec<f64>,
+    gpu_ms: Vec<f64>,
+}
+
+pub struct App {
+    args: ViewArgs,
+    launched: Instant,
+    proxy: EventLoopProxy<Wake>,
+    egui_ctx: egui::Context,
+    windowed: Option<Windowed>,
+    loading: Option<Loading>,
+    /// A model to open once the window exists.
+    first_model: Option<PathBuf>,
+    dialog: Option<mpsc::Receiver<Option<PathBuf>>>,
+    message: Option<(String, bool)>,
+    pointer: (f64, f64),
+    dragging: Option<Button>,
+    shift: bool,
+    control: bool,
+    last_frame: Option<Instant>,
+    first_frame_logged: bool,
+    screenshot_requested: bool,
+    script: Script,
+    /// The error the process exits with.
+    pub failure: Option<anyhow::Error>,
+}
+
+impl App {
+    pub fn new(args: ViewArgs, model: PathBuf, proxy: EventLoopProxy<Wake>) -> App {
+        App {
+            args,
+            launched: Instant::now(),
+            proxy,
+            egui_ctx: egui::Context::default(),
+            windowed: None,
+            loading: None,
+            first_model: Some(model),
+            dialog: None,
+            message: None,
+            pointer: (0.0, 0.0),
+            dragging: None,
+            shift: false,
+            control: false,
+            last_frame: None,
+            first_frame_logged: false,
+            screenshot_requested: false,
+            script: Script::default(),
+            failure: None,
+        }
+    }
+
+    fn create_window(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        let (w, h) = self.args.render.size;
+        let attributes = Window::default_attributes()
+            .with_title("spt")
+            .with_inner_size(winit::dpi::PhysicalSize::new(w, h));
+        let window = Arc::new(event_loop.create_window(attributes)?);
+        let instance = Gpu::instance(
+            self.args.render.backend.as_deref(),
+            Some(Box::new(event_loop.owned_display_handle())),
+        )?;
+        let surface = instance
+            .create_surface(window.clone())
+            .map_err(|e| anyhow::anyhow!("cannot draw into the window: {e}"))?;
+        let gpu = Gpu::with_instance(instance, Some(&surface))?;
+        let adapter = gpu.describe();
+        eprintln!("adapter   {adapter}");
+        let renderer = Arc::new(Renderer::new(gpu));
+        let presenter = Presenter::new(&renderer, window.clone(), surface)?;
+        let max_side = renderer.gpu.device.limits().max_texture_dimension_2d as usize;
+        let egui_state = egui_winit::State::new(
+            self.egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(max_side),
+        );
+        let egui_renderer = egui_wgpu::Renderer::new(
+            &renderer.gpu.device,
+            OUTPUT_GAMMA,
+            egui_wgpu::RendererOptions::default(),
+        );
+        let mut viewer = Viewer::new(renderer, self.args.render.settings());
+        viewer.show_panel = !self.args.hide_panel;
+        self.windowed = Some(Windowed {
+            window,
+            presenter,
+            egui_state,
+            egui_renderer,
+            viewer,
+            adapter,
+        });
+        Ok(())
+    }
+
+    /// Starts opening `path` in the background.
+    fn open(&mut self, path: &Path) {
+        let Some(w) = &self.windowed else { return };
+        let proxy = self.proxy.clone();
+        self.loading = Some(Loading::start(path, w.viewer.renderer.clone(), move || {
+            let _ = proxy.send_event(Wake);
+        }));
+        self.message = None;
+    }
+
+    /// Asks for a file on another thread, so that the window keeps drawing.
+    fn open_dialog(&mut self) {
+        let (send, receive) = mpsc::channel();
+        let proxy = self.proxy.clone();
+        let spawned = std::thread::Builder::new()
+            .name("file dialog".into())
+            .spawn(move || {
+                let picked = rfd::FileDialog::new()
+                    .set_title("Open a model")
+                    .add_filter("models (PLY, spt)", &["ply", "spt"])
+                    .pick_file();
+                let _ = send.send(picked);
+                let _ = proxy.send_event(Wake);
+            });
+        match spawned {
+            Ok(_) => self.dialog = Some(receive),
+            Err(e) => self.message = Some((format!("cannot open a file dialog: {e}"), true)),
+        }
+    }
+
+    /// Takes a finished load or dialog, if any.
+    fn poll_background(&mut self) {
+        if let Some(dialog) = &self.dialog {
+            match dialog.try_recv() {
+                Ok(Some(path)) => {
+                    self.dialog = None;
+                    self.open(&path);
+                }
+                Ok(None) | Err(mpsc::TryRecvError::Disconnected) => self.dialog = None,
+                Err(mpsc::TryRecvError::Empty) => {}
+            }
+        }
+        let Some(loading) = &self.loading else { return };
+        let Some(outcome) = loading.try_finish() else {
+            return;
+        };
+        let loading = self.loading.take().expect("checked above");
+        let seconds = loading.started.elapsed().as_secs_f64();
+        let Some(w) = &mut self.windowed else { return };
+        match outcome {
+            Ok((scene, gpu_scene)) => {
+                let (width, height) = w.presenter.window_size();
+                let mut camera_args = self.args.render.clone();
+                camera_args.size = (width.max(1), height.max(1));
+                let camera = match camera_args.camera(&scene) {
+                    Ok(c) => c,
+                    Err(e) => {
+                        self.message = Some((format!("{e:#}"), true));
+                        return;
+                    }
+                };
+                eprintln!(
+                    "model     {} ready in {seconds:.2} s ({} nodes)",
+                    loading.path.display(),
+                    count(scene.nodes().len() as u64)
+                );
+                w.viewer
+                    .install(loading.path.clone(), scene, gpu_scene, &camera, seconds);
+                w.window.set_title(&format!(
+                    "spt: {}",
+                    loading
+                        .path
+                        .file_name()
+                        .map_or_else(String::new, |n| n.to_string_lossy().to_string())
+                ));
+            }
+            Err(e) => {
+                let text = format!("{e:#}");
+                eprintln!("error: {text}");
+                if self.args.screenshot.is_some() {
+                    self.failure = Some(e);
+                }
+                self.message = Some((text, true));
+            }
+        }
+    }
+
+    /// Applies an input; carries out what the viewer hands back.
+    fn input(&mut self, input: Input) {
+        let Some(w) = &mut self.windowed else { return };
+        let viewport = w.presenter.window_size();
+        let handed_back = w.viewer.handle(input, viewport);
+        w.window.request_redraw();
+        match handed_back {
+            Some(Command::Screenshot) => self.screenshot_requested = true,
+            Some(Command::Open) => self.open_dialog(),
+            _ => {}
+        }
+    }
+
+    fn redraw(&mut self, event_loop: &ActiveEventLoop) {
+        self.poll_background();
+        let now = Instant::now();
+        let seconds = self
+            .last_frame
+            .map_or(0.0, |t| now.duration_since(t).as_secs_f64());
+        let Some(w) = &mut self.windowed else { return };
+        let size = w.presenter.window_size();
+        if size.0 == 0 || size.1 == 0 {
+            return; // minimized
+        }
+        w.viewer.advance(seconds.min(0.25));
+        if self.args.spin != 0.0
+            && let Some(m) = &mut w.viewer.model
+        {
+            m.camera.orbit(-self.args.spin / 0.3, 0.0);
+        }
+
+        // The panel.
+        let raw = w.egui_state.take_egui_input(&w.window);
+        let status = PanelStatus {
+            adapter: &w.adapter,
+            loading: self.loading.as_ref().map(|l| {
+                let (stage, fraction) = l.progress.snapshot();
+                let name = l.path.file_name().map_or_else(
+                    || l.path.display().to_string(),
+                    |n| n.to_string_lossy().to_string(),
+                );
+                (name, stage, fraction, l.started.elapsed().as_secs_f64())
+            }),
+            message: self.message.as_ref().map(|(m, e)| (m.as_str(), *e)),
+        };
+        let mut commands = Vec::new();
+        let viewer = &mut w.viewer;
+        let output = self.egui_ctx.run_ui(raw, |ui| {
+            if viewer.show_panel {
+                commands = panel::show(ui.ctx(), viewer, &status);
+            }
+        });
+        w.egui_state
+            .handle_platform_output(&w.window, output.platform_output);
+        let primitives = self
+            .egui_ctx
+            .tessellate(output.shapes, output.pixels_per_point);
+
+        // The frame, the panel over it, then presentation.
+        let renderer = w.viewer.renderer.clone();
+        let device = &renderer.gpu.device;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        if let Err(e) = w.viewer.draw(&mut encoder, size) {
+            self.message = Some((format!("{e:#}"), true));
+            // Fall back to what always draws.
+            w.viewer.settings.mode = crate::render::Mode::Shaded;
+            return;
+        }
+        let targets = w.viewer.current_targets().expect("just drawn");
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [size.0, size.1],
+            pixels_per_point: output.pixels_per_point,
+        };
+        for (id, deltas) in &output.textures_delta.set {
+            for delta in deltas {
+                w.egui_renderer
+                    .update_texture(device, &renderer.gpu.queue, *id, delta);
+            }
+        }
+        let extra = w.egui_renderer.update_buffers(
+            device,
+            &renderer.gpu.queue,
+            &mut encoder,
+            &primitives,
+            &screen,
+        );
+        {
+            let view = targets.gamma_view();
+            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("panel"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            w.egui_renderer
+                .render(&mut pass.forget_lifetime(), &primitives, &screen);
+        }
+        for id in &output.textures_delta.free {
+            w.egui_renderer.free_texture(id);
+        }
+        if !extra.is_empty() {
+            renderer.gpu.queue.submit(extra);
+        }
+        let presented = w.presenter.present(&renderer, encoder, targets);
+        if matches!(presented, Presented::Skipped) {
+            w.window.request_redraw();
+            return;
+        }
+        w.viewer.submitted();
+        self.last_frame = Some(now);
+        for commands in commands {
+            self.input(Input::Command(commands));
+        }
+        let Some(w) = &mut self.windowed else { return };
+        if w.viewer.model.is_some() {
+            if !self.first_frame_logged {
+                self.first_frame_logged = true;
+                eprintln!(
+                    "first frame {:.2} s after launch",
+                    self.launched.elapsed().as_secs_f64()
+                );
+            }
+            self.script.frames += 1;
+            if self.script.frames > 1 {
+                self.script.frame_ms.push(seconds * 1e3);
+            }
+            self.script.gpu_ms.extend(w.viewer.stats.gpu.gpu_ms);
+        }
+        if self.screenshot_requested {
+            self.screenshot_requested = false;
+            let name = format!(
+                "spt-screenshot-{}.png",
+                std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map_or(0, |d| d.as_secs())
+            );
+            self.message = Some(match save_screenshot(&w.viewer, Path::new(&name)) {
+                Ok(()) => (format!("saved {name}"), false),
+                Err(e) => (format!("{e:#}"), true),
+            });
+        }
+        if let Some(path) = self.args.screenshot.clone()
+            && w.viewer.model.is_some()
+            && self.script.frames >= self.args.render.frames
+        {
+            match save_screenshot(&w.viewer, &path) {
+                Ok(()) => self.report_script(&path),
+                Err(e) => self.failure = Some(e),
+            }
+            event_loop.exit();
+        }
+    }
+
+    /// What `--screenshot` measured, on stdout.
+    fn report_script(&mut self, path: &Path) {
+        let Some(w) = &self.windowed else { return };
+        let stats = &w.viewer.stats;
+        if let Some(m) = &w.viewer.model {
+            println!(
+                "splats    {} drawn of {} nodes, prefix {}",
+                stats.gpu.drawn.map_or("–".into(), count),
+                count(m.scene.nodes().len() as u64),
+                count(stats.prefix_len as u64)
+            );
+        }
+        for (name, values) in [
+            ("frame", &mut self.script.frame_ms),
+            ("gpu", &mut self.script.gpu_ms),
+        ] {
+            if values.is_empty() {
+                continue;
+            }
+            values.sort_by(f64::total_cmp);
+            let p95 = values[((values.len() as f64 * 0.95).ceil() as usize).clamp(1, values.len()) - 1];
+            println!(
+                "{name:<9} {:.2} ms median of {}, p95 {:.2} ms",
+                values[values.len() / 2],
+                values.len(),
+                p95
+            );
+        }
+        println!("wrote     {}", path.display());
+    }
+
+    /// Keeps drawing while something moves or loads; otherwise waits for input.
+    fn schedule(&self, event_loop: &ActiveEventLoop) {
+        let Some(w) = &self.windowed else { return };
+        let busy = w.viewer.is_animating()
+            || self.args.spin != 0.0
+            || self.args.screenshot.is_some()
+            || self.screenshot_requested;
+        if busy {
+            w.window.request_redraw();
+            event_loop.set_control_flow(ControlFlow::Poll);
+        } else if self.loading.is_some() {
+            // Progress, ten times a second.
+            event_loop.set_control_flow(ControlFlow::WaitUntil(
+                Instant::now() + Duration::from_millis(100),
+            ));
+            w.window.request_redraw();
+        } else {
+            event_loop.set_control_flow(ControlFlow::Wait);
+        }
+    }
+}
+
+fn save_screenshot(viewer: &Viewer, path: &Path) -> anyhow::Result<()> {
+    let (width, height, rgba) = viewer.read_pixels()?;
+    save_png(path, width, height, &rgba)
+}
+
+/// The viewer's meaning of a key, if any.
+fn key_input(key: &Key, pressed: bool, control: bool) -> Option<Input> {
+    let hold = |m| Some(Input::Hold(m, pressed));
+    let once = |c| pressed.then_some(Input::Command(c));
+    match key {
+        Key::Named(NamedKey::ArrowLeft) => hold(Move::TurnLeft),
+        Key::Named(NamedKey::ArrowRight) => hold(Move::TurnRight),
+        Key::Named(NamedKey::ArrowUp) => hold(Move::TurnUp),
+        Key::Named(NamedKey::ArrowDown) => hold(Move::TurnDown),
+        Key::Named(NamedKey::Tab) => once(Command::TogglePanel),
+        Key::Named(NamedKey::F12) => once(Command::Screenshot),
+        Key::Character(c) => match c.to_lowercase().as_str() {
+            "o" if control => once(Command::Open),
+            "w" => hold(Move::Forward),
+            "s" => hold(Move::Back),
+            "a" => hold(Move::Left),
+            "d" => hold(Move::Right),
+            "q" => hold(Move::Down),
+            "e" => hold(Move::Up),
+            "f" => once(Command::Frame),
+            "r" => once(Command::Reset),
+            "m" => once(Command::NextMode),
+            "x" => once(Command::ToggleEwa),
+            "l" => once(Command::ToggleFreeze),
+            "p" => once(Command::Screenshot),
+            "+" | "=" => once(Command::MoreError),
+            "-" | "_" => once(Command::LessError),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+impl ApplicationHandler<Wake> for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.windowed.is_some() {
+            return;
+        }
+        if let Err(e) = self.create_window(event_loop) {
+            self.failure = Some(e);
+            event_loop.exit();
+            return;
+        }
+        eprintln!(
+            "window    ready {:.2} s after launch",
+            self.launched.elapsed().as_secs_f64()
+        );
+        if let Some(path) = self.first_model.take() {
+            self.open(&path);
+        }
+        self.schedule(event_loop);
+    }
+
+    fn user_event(&mut self, _: &ActiveEventLoop, _: Wake) {
+        if let Some(w) = &self.windowed {
+            w.window.request_redraw();
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let Some(w) = &mut self.windowed else { return };
+        let response = w.egui_state.on_window_event(&w.window, &event);
+        if response.repaint {
+            w.window.request_redraw();
+        }
+        let over_panel = self.egui_ctx.egui_wants_pointer_input();
+        let typing = self.egui_ctx.egui_wants_keyboard_input();
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(_) => {
+                let renderer = w.viewer.renderer.clone();
+                w.presenter.resize(&renderer);
+                w.window.request_redraw();
+            }
+            WindowEvent::RedrawRequested => self.redraw(event_loop),
+            WindowEvent::DroppedFile(path) => self.open(&path),
+            WindowEvent::ModifiersChanged(m) => {
+                self.shift = m.state().shift_key();
+                self.control = m.state().control_key();
+            }
+            WindowEvent::KeyboardInput { event, .. } if !typing => {
+                let pressed = event.state == ElementState::Pressed;
+                if let Some(input) = key_input(&event.logical_key, pressed, self.control) {
+                    // Key repeats of one-shot commands are ignored; held keys repeat harmlessly.
+                    if !(event.repeat && matches!(input, Input::Command(_))) {
+                        self.input(input);
+                    }
+                }
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                let button = match button {
+                    MouseButton::Left => Some(Button::Left),
+                    MouseButton::Middle => Some(Button::Middle),
+                    MouseButton::Right => Some(Button::Right),
+                    _ => None,
+                };
+                self.dragging = match state {
+                    ElementState::Pressed if !over_panel => button.or(self.dragging),
+                    ElementState::Released if button == self.dragging => None,
+                    _ => self.dragging,
+                };
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let (dx, dy) = (position.x - self.pointer.0, position.y - self.pointer.1);
+                self.pointer = (position.x, position.y);
+                if let Some(button) = self.dragging {
+                    self.input(Input::Drag {
+                        button,
+                        shift: self.shift,
+                        dx,
+                        dy,
+                    });
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } if !over_panel => {
+                let notches = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y as f64,
+                    MouseScrollDelta::PixelDelta(p) => p.y / 50.0,
+                };
+                self.input(Input::Wheel {
+                    notches,
+                    x: self.pointer.0,
+                    y: self.pointer.1,
+                });
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        self.schedule(event_loop);
+    }
+}

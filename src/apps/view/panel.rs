@@ -1,0 +1,206 @@
+//! The viewer's panel (egui): level of detail, display, camera, statistics, loading and
+//! messages. Buttons that act on the viewer come back as [`Command`]s, handled exactly
+//! as their keys are.
+
+use egui::{Color32, RichText};
+
+use super::input::Command;
+use super::viewer::{ERROR_PX_RANGE, Viewer};
+use crate::apps::info::count;
+use crate::render::{Culling, Mode};
+
+/// What the panel shows besides the viewer itself.
+pub struct PanelStatus<'a> {
+    /// The adapter, as [`crate::render::Gpu::describe`] puts it.
+    pub adapter: &'a str,
+    /// A model being opened: its name, stage, fraction done and seconds so far.
+    pub loading: Option<(String, &'static str, Option<f32>, f64)>,
+    /// The last error (red) or notice.
+    pub message: Option<(&'a str, bool)>,
+}
+
+const MODES: [(Mode, &str); 6] = [
+    (Mode::Shaded, "shaded"),
+    (Mode::Levels, "tree levels"),
+    (Mode::Normals, "normals"),
+    (Mode::Radius, "splat radius"),
+    (Mode::Points, "points (no blending)"),
+    (Mode::Mesh, "mesh (reference)"),
+];
+
+/// Draws the panel; returns the commands its buttons gave.
+pub fn show(ctx: &egui::Context, viewer: &mut Viewer, status: &PanelStatus) -> Vec<Command> {
+    let mut commands = Vec::new();
+    egui::Window::new("spt")
+        .default_pos([8.0, 8.0])
+        .default_width(300.0)
+        .max_width(300.0)
+        .resizable(false)
+        .show(ctx, |ui| {
+            ui.set_max_width(300.0);
+            model_section(ui, viewer, status, &mut commands);
+            ui.separator();
+            lod_section(ui, viewer);
+            ui.separator();
+            display_section(ui, viewer);
+            ui.separator();
+            ui.horizontal(|ui| {
+                if ui.button("Frame (F)").clicked() {
+                    commands.push(Command::Frame);
+                }
+                if ui.button("Reset view (R)").clicked() {
+                    commands.push(Command::Reset);
+                }
+                if ui.button("Screenshot (F12)").clicked() {
+                    commands.push(Command::Screenshot);
+                }
+            });
+            ui.separator();
+            stats_section(ui, viewer, status);
+            ui.collapsing("Controls", |ui| {
+                ui.label(
+                    "Left drag: orbit · Shift+left or middle drag: pan · wheel: zoom at the \
+                     pointer · right drag: light\nWASD: move · Q/E: down/up · arrows: orbit\n\
+                     F: frame · R: reset · M: next mode · +/−: ε_px ×2/÷2 · X: EWA · L: freeze \
+                     LOD\nTab: hide this panel · F12 or P: screenshot · Ctrl+O: open · \
+                     drop a file to open it",
+                );
+            });
+        });
+    commands
+}
+
+fn model_section(
+    ui: &mut egui::Ui,
+    viewer: &Viewer,
+    status: &PanelStatus,
+    commands: &mut Vec<Command>,
+) {
+    ui.horizontal(|ui| {
+        if ui.button("Open… (Ctrl+O)").clicked() {
+            commands.push(Command::Open);
+        }
+        if let Some(m) = &viewer.model {
+            let name = m.path.file_name().map_or_else(
+                || m.path.display().to_string(),
+                |n| n.to_string_lossy().to_string(),
+            );
+            ui.label(RichText::new(name).strong())
+                .on_hover_text(m.path.display().to_string());
+        }
+    });
+    if let Some((name, stage, fraction, seconds)) = &status.loading {
+        ui.label(format!("opening {name}: {stage}, {seconds:.1} s"));
+        let bar = match fraction {
+            Some(f) => egui::ProgressBar::new(*f).show_percentage(),
+            None => egui::ProgressBar::new(0.0).animate(true),
+        };
+        ui.add(bar);
+    }
+    if let Some((text, is_error)) = status.message {
+        let color = if is_error {
+            Color32::from_rgb(220, 50, 50)
+        } else {
+            ui.visuals().text_color()
+        };
+        ui.label(RichText::new(text).color(color));
+    }
+}
+
+fn lod_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
+    let s = &mut viewer.settings;
+    ui.add_enabled(
+        s.lod,
+        egui::Slider::new(&mut s.error_px, ERROR_PX_RANGE.0..=ERROR_PX_RANGE.1)
+            .logarithmic(true)
+            .text("ε (pixels)"),
+    )
+    .on_hover_text("Largest screen-space error of the level of detail, in pixels");
+    let mut leaves_only = !s.lod;
+    if ui
+        .checkbox(&mut leaves_only, "Leaves only (no level of detail)")
+        .changed()
+    {
+        s.lod = !leaves_only;
+    }
+    let mut frozen = s.lod_eye.is_some();
+    if ui
+        .checkbox(&mut frozen, "Freeze LOD (L)")
+        .on_hover_text("Keep the current selection while the camera moves, to inspect it")
+        .changed()
+    {
+        viewer.set_frozen(frozen);
+    }
+}
+
+fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
+    let has_mesh = viewer
+        .model
+        .as_ref()
+        .is_some_and(|m| m.gpu_scene.mesh_triangles() > 0);
+    let s = &mut viewer.settings;
+    egui::ComboBox::from_label("Display (M)")
+        .selected_text(MODES.iter().find(|m| m.0 == s.mode).map_or("", |m| m.1))
+        .show_ui(ui, |ui| {
+            for (mode, name) in MODES {
+                if mode != Mode::Mesh || has_mesh {
+                    ui.selectable_value(&mut s.mode, mode, name);
+                }
+            }
+        });
+    ui.checkbox(&mut s.ewa, "EWA prefilter (X)");
+    ui.checkbox(&mut s.cull_back_faces, "Back-face culling");
+    ui.horizontal(|ui| {
+        ui.label("Culling");
+        ui.radio_value(&mut s.culling, Culling::Compute, "compute");
+        ui.radio_value(&mut s.culling, Culling::Vertex, "vertex");
+    });
+    ui.horizontal(|ui| {
+        ui.label("Background");
+        ui.color_edit_button_rgb(&mut s.background);
+    });
+}
+
+fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
+    let st = &viewer.stats;
+    let ms = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.2} ms"));
+    egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
+        let mut row = |name: &str, value: String| {
+            ui.label(name);
+            ui.label(value);
+            ui.end_row();
+        };
+        row("fps", format!("{:.1}", st.fps));
+        row("CPU", ms(Some(st.cpu_ms)));
+        row("GPU", ms(st.gpu.gpu_ms));
+        if let Some(m) = &viewer.model {
+            let total = m.scene.nodes().len() as u64;
+            row(
+                "splats drawn",
+                match st.gpu.drawn {
+                    Some(d) => format!("{} / {}", count(d), count(total)),
+                    None => format!("– / {} (vertex culling)", count(total)),
+                },
+            );
+            row("prefix", count(st.prefix_len as u64));
+            let meta = m.scene.meta();
+            row(
+                "model",
+                format!(
+                    "{} leaves, depth {}",
+                    count(meta.leaf_count),
+                    meta.depth
+                ),
+            );
+            let size = glam::DVec3::from(meta.bounds.max) - glam::DVec3::from(meta.bounds.min);
+            row(
+                "size",
+                format!("{:.4} × {:.4} × {:.4}", size.x, size.y, size.z),
+            );
+            let o = meta.origin;
+            row("origin", format!("{} {} {}", o[0], o[1], o[2]));
+            row("opened in", format!("{:.2} s", m.load_seconds));
+        }
+    });
+    ui.add(egui::Label::new(RichText::new(status.adapter).small()).wrap());
+}

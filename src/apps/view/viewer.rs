@@ -1,0 +1,350 @@
+//! The viewer without its window: the model on the GPU, the camera, the display
+//! settings and the statistics; it takes [`Input`]s and records frames into an encoder.
+//! The window layer (`app.rs`) adds the surface, the panel and the event loop; tests
+//! drive this directly.
+
+use std::collections::{HashSet, VecDeque};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use super::controls::OrbitCamera;
+use super::input::{Button, Command, Input, Move};
+use crate::render::camera::bounding_sphere;
+use crate::render::{
+    Camera, CounterReadback, FrameTargets, GpuCounters, GpuScene, Mode, Renderer, Scene, Settings,
+};
+
+/// A model ready to draw.
+pub struct Model {
+    pub path: PathBuf,
+    pub scene: Scene,
+    pub gpu_scene: GpuScene,
+    /// Seconds from the request to open it to ready on the GPU.
+    pub load_seconds: f64,
+    counters: CounterReadback,
+    pub camera: OrbitCamera,
+    home: OrbitCamera,
+}
+
+/// What the panel shows of the recent frames.
+#[derive(Debug, Clone, Default)]
+pub struct Stats {
+    /// Frames presented in the last second.
+    pub fps: f64,
+    /// CPU time to choose the prefix and record the frame's passes, ms.
+    pub cpu_ms: f64,
+    /// The newest GPU measurement (a few frames late), and its frame's prefix.
+    pub gpu: GpuCounters,
+    pub measured_prefix: usize,
+    /// Prefix of the frame just recorded.
+    pub prefix_len: usize,
+    recent: VecDeque<Instant>,
+}
+
+impl Stats {
+    fn frame_presented(&mut self, now: Instant) {
+        self.recent.push_back(now);
+        while self
+            .recent
+            .front()
+            .is_some_and(|t| now.duration_since(*t) > Duration::from_secs(1))
+        {
+            self.recent.pop_front();
+        }
+        let span = now.duration_since(*self.recent.front().expect("just pushed"));
+        self.fps = if self.recent.len() > 1 {
+            (self.recent.len() - 1) as f64 / span.as_secs_f64()
+        } else {
+            0.0
+        };
+    }
+}
+
+pub struct Viewer {
+    pub renderer: Arc<Renderer>,
+    pub model: Option<Model>,
+    pub settings: Settings,
+    pub show_panel: bool,
+    pub stats: Stats,
+    targets: Option<FrameTargets>,
+    held: HashSet<Move>,
+}
+
+/// ε_px stays within these bounds (the slider's range).
+pub const ERROR_PX_RANGE: (f64, f64) = (0.01, 256.0);
+
+impl Viewer {
+    pub fn new(renderer: Arc<Renderer>, settings: Settings) -> Viewer {
+        Viewer {
+            renderer,
+            model: None,
+            settings,
+            show_panel: true,
+            stats: Stats::default(),
+            targets: None,
+            held: HashSet::new(),
+        }
+    }
+
+    /// Makes `scene` (already on the GPU) the model shown, seen by `camera`.
+    pub fn install(
+        &mut self,
+        path: PathBuf,
+        scene: Scene,
+        gpu_scene: GpuScene,
+        camera: &Camera,
+        load_seconds: f64,
+    ) {
+        let radius = bounding_sphere(scene.meta()).1;
+        let orbit = OrbitCamera::from_camera(camera, radius);
+        let counters = CounterReadback::new(&self.renderer, &gpu_scene);
+        if self.settings.mode == Mode::Mesh && gpu_scene.mesh_triangles() == 0 {
+            self.settings.mode = Mode::Shaded;
+        }
+        self.settings.lod_eye = None;
+        self.stats = Stats::default();
+        self.model = Some(Model {
+            path,
+            scene,
+            gpu_scene,
+            load_seconds,
+            counters,
+            camera: orbit,
+            home: orbit,
+        });
+    }
+
+    pub fn camera(&self) -> Option<Camera> {
+        self.model.as_ref().map(|m| m.camera.camera())
+    }
+
+    /// Applies one input; returns the commands the window layer carries out itself
+    /// (screenshot, open).
+    pub fn handle(&mut self, input: Input, viewport: (u32, u32)) -> Option<Command> {
+        match input {
+            Input::Hold(m, down) => {
+                if down {
+                    self.held.insert(m);
+                } else {
+                    self.held.remove(&m);
+                }
+                None
+            }
+            Input::Command(c) => self.command(c, viewport),
+            Input::Drag {
+                button,
+                shift,
+                dx,
+                dy,
+            } => {
+                match (button, shift) {
+                    (Button::Right, _) => self.turn_light(dx, dy),
+                    (Button::Middle, _) | (Button::Left, true) => {
+                        if let Some(m) = &mut self.model {
+                            m.camera.pan(dx, dy, viewport)
+                        }
+                    }
+                    (Button::Left, false) => {
+                        if let Some(m) = &mut self.model {
+                            m.camera.orbit(dx, dy)
+                        }
+                    }
+                }
+                None
+            }
+            Input::Wheel { notches, x, y } => {
+                if let Some(m) = &mut self.model {
+                    m.camera.zoom_at(notches, (x, y), viewport);
+                }
+                None
+            }
+        }
+    }
+
+    fn command(&mut self, c: Command, viewport: (u32, u32)) -> Option<Command> {
+        let s = &mut self.settings;
+        match c {
+            Command::MoreError => s.error_px = (s.error_px * 2.0).min(ERROR_PX_RANGE.1),
+            Command::LessError => s.error_px = (s.error_px * 0.5).max(ERROR_PX_RANGE.0),
+            Command::ToggleEwa => s.ewa = !s.ewa,
+            Command::TogglePanel => self.show_panel = !self.show_panel,
+            Command::NextMode => {
+                let has_mesh = self
+                    .model
+                    .as_ref()
+                    .is_some_and(|m| m.gpu_scene.mesh_triangles() > 0);
+                s.mode = next_mode(s.mode, has_mesh);
+            }
+            Command::ToggleFreeze => self.set_frozen(self.settings.lod_eye.is_none()),
+            Command::Frame => {
+                if let Some(m) = &mut self.model {
+                    let aspect = viewport.0 as f64 / viewport.1.max(1) as f64;
+                    let framed = Camera::framed_from(
+                        m.scene.meta(),
+                        m.camera.azimuth_deg,
+                        m.camera.elevation_deg,
+                        m.camera.fov_y,
+                        aspect,
+                    );
+                    let min = m.camera.min_distance;
+                    m.camera = OrbitCamera::from_camera(&framed, 0.0);
+                    m.camera.min_distance = min;
+                }
+            }
+            Command::Reset => {
+                if let Some(m) = &mut self.model {
+                    m.camera = m.home;
+                }
+            }
+            Command::Screenshot | Command::Open => return Some(c),
+        }
+        None
+    }
+
+    /// Freezes the level of detail at the current eye (the selection stays as it is
+    /// while the camera moves), or lets it follow the camera again.
+    pub fn set_frozen(&mut self, frozen: bool) {
+        self.settings.lod_eye = if frozen {
+            self.camera().map(|c| c.eye)
+        } else {
+            None
+        };
+    }
+
+    /// Right drag: the light direction (view space) turns with the pointer.
+    fn turn_light(&mut self, dx: f64, dy: f64) {
+        let rotation = glam::Quat::from_rotation_y(dx as f32 * 0.01)
+            * glam::Quat::from_rotation_x(dy as f32 * 0.01);
+        self.settings.light = (rotation * self.settings.light).normalize_or(glam::Vec3::Z);
+    }
+
+    /// Something moves on its own (held keys): the window keeps redrawing.
+    pub fn is_animating(&self) -> bool {
+        !self.held.is_empty()
+    }
+
+    /// Moves the camera for the keys held over `seconds`.
+    pub fn advance(&mut self, seconds: f64) {
+        let Some(m) = &mut self.model else { return };
+        let axis = |plus: Move, minus: Move| {
+            (self.held.contains(&plus) as i32 - self.held.contains(&minus) as i32) as f64
+        };
+        let (f, r, u) = (
+            axis(Move::Forward, Move::Back),
+            axis(Move::Right, Move::Left),
+            axis(Move::Up, Move::Down),
+        );
+        // One distance to the target per second.
+        m.camera.walk(f * seconds, r * seconds, u * seconds);
+        m.camera.turn(
+            axis(Move::TurnRight, Move::TurnLeft),
+            axis(Move::TurnDown, Move::TurnUp),
+            seconds,
+        );
+    }
+
+    /// The frame targets, (re)made for `size`.
+    pub fn targets(&mut self, size: (u32, u32)) -> anyhow::Result<&FrameTargets> {
+        if self.targets.as_ref().is_none_or(|t| t.size != size) {
+            self.targets = None;
+            self.targets = Some(self.renderer.targets(size)?);
+        }
+        Ok(self.targets.as_ref().expect("just made"))
+    }
+
+    /// Records the frame (the model, or the background alone) into the targets of
+    /// `size`, with the copy of its GPU counters.
+    pub fn draw(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        size: (u32, u32),
+    ) -> anyhow::Result<()> {
+        let start = Instant::now();
+        self.targets(size)?;
+        let targets = self.targets.as_ref().expect("made above");
+        match &mut self.model {
+            Some(m) => {
+                let camera = m.camera.camera();
+                let frame = self.renderer.encode(
+                    encoder,
+                    targets,
+                    &m.scene,
+                    &m.gpu_scene,
+                    &camera,
+                    &self.settings,
+                )?;
+                self.stats.prefix_len = frame.prefix_len;
+                m.counters
+                    .record(&self.renderer, encoder, targets, &m.gpu_scene, &frame);
+            }
+            None => self
+                .renderer
+                .encode_empty(encoder, targets, self.settings.background),
+        }
+        self.stats.cpu_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(())
+    }
+
+    /// After the submit of a drawn frame: starts reading its counters and takes those of
+    /// earlier frames that have arrived.
+    pub fn submitted(&mut self) {
+        self.stats.frame_presented(Instant::now());
+        if let Some(m) = &mut self.model {
+            m.counters.submitted();
+        }
+        self.collect_counters();
+    }
+
+    fn collect_counters(&mut self) {
+        if let Some(m) = &mut self.model
+            && let Some((frame, counters)) = m.counters.poll(&self.renderer)
+        {
+            self.stats.gpu = counters;
+            self.stats.measured_prefix = frame.prefix_len;
+        }
+    }
+
+    /// Draws one frame without a window, waits for the GPU and takes its counters (the
+    /// statistics a window would show a few frames later).
+    pub fn frame_and_wait(&mut self, size: (u32, u32)) -> anyhow::Result<()> {
+        let device = &self.renderer.gpu.device;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        self.draw(&mut encoder, size)?;
+        self.renderer.gpu.queue.submit([encoder.finish()]);
+        self.submitted();
+        self.renderer
+            .gpu
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())?;
+        self.collect_counters();
+        Ok(())
+    }
+
+    /// The pixels of the last frame drawn (with anything drawn over them), RGBA8 sRGB.
+    pub fn read_pixels(&self) -> anyhow::Result<(u32, u32, Vec<u8>)> {
+        let targets = self
+            .targets
+            .as_ref()
+            .ok_or_else(|| anyhow::anyhow!("nothing drawn yet"))?;
+        let rgba = self.renderer.read_output(targets)?;
+        Ok((targets.size.0, targets.size.1, rgba))
+    }
+
+    /// The targets of the last frame, for the window layer to draw over and present.
+    pub fn current_targets(&self) -> Option<&FrameTargets> {
+        self.targets.as_ref()
+    }
+}
+
+/// The display mode after `mode`; mesh only for models that have one.
+pub fn next_mode(mode: Mode, has_mesh: bool) -> Mode {
+    match mode {
+        Mode::Shaded => Mode::Levels,
+        Mode::Levels => Mode::Normals,
+        Mode::Normals => Mode::Radius,
+        Mode::Radius => Mode::Points,
+        Mode::Points if has_mesh => Mode::Mesh,
+        Mode::Points | Mode::Mesh => Mode::Shaded,
+    }
+}
