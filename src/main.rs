@@ -73,9 +73,9 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let command = cli.command.unwrap_or_else(|| {
-        Command::View(Box::new(ViewOnly::parse_from(["spt"]).args))
-    });
+    let command = cli
+        .command
+        .unwrap_or_else(|| Command::View(Box::new(ViewOnly::parse_from(["spt"]).args)));
     let result = match command {
         Command::View(args) => spt::apps::view::run(*args),
         Command::Info { file, json } => spt::apps::info::run(&file, json),

@@ -22,9 +22,10 @@ pub struct GpuCounters {
     pub drawn: Option<u64>,
 }
 
-/// Bytes of one frame's counters: two u64 timestamps, then one u32 per slice.
+/// Bytes of one frame's counters: two u64 timestamps, then one u32 per slice (of the
+/// whole list, uploaded or not).
 fn counters_bytes(gpu_scene: &GpuScene) -> u64 {
-    16 + 4 * gpu_scene.slices.len() as u64
+    16 + 4 * gpu_scene.planned_slices().max(1) as u64
 }
 
 impl Renderer {
@@ -53,7 +54,7 @@ impl Renderer {
             t[1].saturating_sub(t[0]) as f64 * period_ns / 1e6
         });
         let drawn = frame.compute.then(|| {
-            bytes[16..]
+            bytes[16..16 + 4 * frame.slices]
                 .chunks_exact(4)
                 .map(|c| u32::from_le_bytes(c.try_into().unwrap()) as u64)
                 .sum()
@@ -103,8 +104,11 @@ pub struct CounterReadback {
     recorded: Option<(wgpu::Buffer, EncodedFrame)>,
     /// Submitted and being mapped: the flag turns true once mapping ended, and the
     /// result says whether it succeeded.
-    in_flight: VecDeque<(wgpu::Buffer, EncodedFrame, Arc<(AtomicBool, AtomicBool)>)>,
+    in_flight: VecDeque<(wgpu::Buffer, EncodedFrame, Arc<Mapping>)>,
 }
+
+/// (mapping ended, mapping succeeded), set by the map callback.
+type Mapping = (AtomicBool, AtomicBool);
 
 /// Frames of counters in flight at most.
 const RING: usize = 4;

@@ -30,6 +30,11 @@ pub struct EncodedFrame {
     pub compute: bool,
     /// ε of the selection test, world error per unit of distance.
     pub eps: f64,
+    /// ε had to be raised above the settings' because the prefix they ask for is not
+    /// all on the GPU yet (while a model uploads): the frame is a coarser cut.
+    pub coarsened: bool,
+    /// Slices of the list on the GPU when the frame was recorded.
+    pub slices: usize,
     /// The eye the level of detail was chosen for, relative to the model's origin.
     pub lod_eye: DVec3,
 }
@@ -91,6 +96,40 @@ fn gbuffer_pass<'e>(
     })
 }
 
+/// The least ε ≥ `eps` whose prefix (seen from `eye`) lies within the first `uploaded`
+/// nodes, and that prefix. Any ε gives a complete cut of the tree, so a frame drawn
+/// while the list uploads is coarser, never holed. The prefix shrinks as ε grows, so
+/// the least fitting ε is found by doubling, then bisection.
+fn fitting_eps(scene: &Scene, eye: DVec3, eps: f64, uploaded: usize) -> (f64, usize) {
+    let nodes = scene.nodes();
+    let prefix = |e: f64| scene.index.prefix_len(nodes, eye, e);
+    let wanted = prefix(eps);
+    if wanted <= uploaded {
+        return (eps, wanted);
+    }
+    if uploaded == 0 {
+        return (eps, 0);
+    }
+    let mut lo = eps;
+    let mut hi = eps.max(scene.meta().error_scale as f64 * 1e-9);
+    for _ in 0..200 {
+        if prefix(hi) <= uploaded {
+            break;
+        }
+        lo = hi;
+        hi *= 2.0;
+    }
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if prefix(mid) <= uploaded {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    (hi, prefix(hi).min(uploaded))
+}
+
 impl Renderer {
     /// Targets for frames of `size`, checked against the adapter's limits.
     pub fn targets(&self, size: (u32, u32)) -> anyhow::Result<FrameTargets> {
@@ -119,15 +158,15 @@ impl Renderer {
         }
         let meta = scene.meta();
         let (width, height) = targets.size;
-        let uniform = FrameUniform::new(meta, camera, settings, width, height);
+        let eps = error_per_distance(settings.error_px, camera.fov_y, height);
+        let wanted_eps = if settings.lod { eps } else { 0.0 };
+        let lod_eye = settings.lod_eye.unwrap_or(camera.eye) - DVec3::from(meta.origin);
+        let (lod_eps, prefix_len) =
+            fitting_eps(scene, lod_eye, wanted_eps, gpu_scene.uploaded_nodes());
+        let uniform = FrameUniform::new(meta, camera, settings, (width, height), lod_eps);
         self.gpu
             .queue
             .write_buffer(&targets.frame_buffer, 0, bytemuck::bytes_of(&uniform));
-
-        let eps = error_per_distance(settings.error_px, camera.fov_y, height);
-        let lod_eps = if settings.lod { eps } else { 0.0 };
-        let lod_eye = settings.lod_eye.unwrap_or(camera.eye) - DVec3::from(meta.origin);
-        let prefix_len = scene.index.prefix_len(scene.nodes(), lod_eye, lod_eps);
         // Each slice's share of the prefix.
         let mut left = prefix_len as u32;
         let shares: Vec<u32> = gpu_scene
@@ -240,6 +279,8 @@ impl Renderer {
             prefix_len,
             compute,
             eps: lod_eps,
+            coarsened: lod_eps != wanted_eps,
+            slices: gpu_scene.slices.len(),
             lod_eye,
         })
     }

@@ -7,7 +7,6 @@ use glam::{DVec3, Vec3};
 use super::camera::{Camera, bounding_sphere};
 use super::settings::{DEPTH_PUSH, Mode, PREFILTER_PX, Settings};
 use crate::tree::TreeMeta;
-use crate::tree::select::error_per_distance;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl`, field for field.
 #[repr(C)]
@@ -36,14 +35,15 @@ pub(super) fn srgb_to_linear(c: f32) -> f32 {
 }
 
 impl FrameUniform {
-    /// The uniform for `camera` over a `width`×`height` target. The model offset
+    /// The uniform for `camera` over a `width`×`height` target, selecting with
+    /// `lod_eps` (world error per unit of distance; 0: leaves only). The model offset
     /// (origin − eye) is computed in f64 and only then rounded to f32.
     pub fn new(
         meta: &TreeMeta,
         camera: &Camera,
         settings: &Settings,
-        width: u32,
-        height: u32,
+        (width, height): (u32, u32),
+        lod_eps: f64,
     ) -> FrameUniform {
         let eye_rel = camera.eye - DVec3::from(meta.origin);
         let (centre, radius) = bounding_sphere(meta);
@@ -52,7 +52,6 @@ impl FrameUniform {
             .max((centre - camera.eye).length() * 1e-6)
             .max(f64::MIN_POSITIVE);
         let aspect = width as f64 / height as f64;
-        let eps = error_per_distance(settings.error_px, camera.fov_y, height);
         let tan_y = (camera.fov_y * 0.5).tan();
         let mode = match settings.mode {
             Mode::Shaded => 0,
@@ -72,7 +71,7 @@ impl FrameUniform {
                 1.0 / width as f32,
                 1.0 / height as f32,
             ],
-            lod: [eps as f32, meta.error_scale, near as f32, DEPTH_PUSH],
+            lod: [lod_eps as f32, meta.error_scale, near as f32, DEPTH_PUSH],
             lens: [
                 (tan_y * aspect) as f32,
                 tan_y as f32,
@@ -91,7 +90,7 @@ impl FrameUniform {
             flags: [
                 mode,
                 settings.cull_back_faces as u32,
-                settings.lod as u32,
+                (lod_eps > 0.0) as u32,
                 settings.lod_eye.is_some() as u32,
             ],
             blend: [

@@ -25,4 +25,4 @@ pub use renderer::{FrameStats, Image, Renderer};
 pub use scene::{LoadReport, Scene, Silent};
 pub use settings::{Culling, Mode, Settings};
 pub use targets::FrameTargets;
-pub use upload::GpuScene;
+pub use upload::{GpuScene, MeshUpload, SliceUpload};

@@ -14,7 +14,7 @@ use winit::window::{Window, WindowId};
 
 use super::ViewArgs;
 use super::input::{Button, Command, Input, Move};
-use super::loader::Loading;
+use super::loader::{Loaded, Loading};
 use super::panel::{self, PanelStatus};
 use super::present::{Presented, Presenter};
 use super::viewer::Viewer;
@@ -178,48 +178,62 @@ impl App {
                 Err(mpsc::TryRecvError::Empty) => {}
             }
         }
-        let Some(loading) = &self.loading else { return };
-        let Some(outcome) = loading.try_finish() else {
+        let Some(loading) = &mut self.loading else {
             return;
         };
-        let loading = self.loading.take().expect("checked above");
+        let messages = loading.poll();
         let seconds = loading.started.elapsed().as_secs_f64();
+        let path = loading.path.clone();
         let Some(w) = &mut self.windowed else { return };
-        match outcome {
-            Ok((scene, gpu_scene)) => {
-                let (width, height) = w.presenter.window_size();
-                let mut camera_args = self.args.render.clone();
-                camera_args.size = (width.max(1), height.max(1));
-                let camera = match camera_args.camera(&scene) {
-                    Ok(c) => c,
-                    Err(e) => {
-                        self.message = Some((format!("{e:#}"), true));
-                        return;
-                    }
-                };
-                eprintln!(
-                    "model     {} ready in {seconds:.2} s ({} nodes)",
-                    loading.path.display(),
-                    count(scene.nodes().len() as u64)
-                );
-                w.viewer
-                    .install(loading.path.clone(), scene, gpu_scene, &camera, seconds);
-                w.window.set_title(&format!(
-                    "spt: {}",
-                    loading
-                        .path
-                        .file_name()
-                        .map_or_else(String::new, |n| n.to_string_lossy().to_string())
-                ));
-            }
-            Err(e) => {
-                let text = format!("{e:#}");
-                eprintln!("error: {text}");
-                if self.args.screenshot.is_some() {
-                    self.failure = Some(e);
+        for message in messages {
+            match message {
+                Ok(Loaded::Scene(scene, gpu_scene)) => {
+                    let (width, height) = w.presenter.window_size();
+                    let mut camera_args = self.args.render.clone();
+                    camera_args.size = (width.max(1), height.max(1));
+                    let camera = match camera_args.camera(&scene) {
+                        Ok(c) => c,
+                        Err(e) => {
+                            self.message = Some((format!("{e:#}"), true));
+                            continue;
+                        }
+                    };
+                    eprintln!(
+                        "model     {} open in {seconds:.2} s ({} nodes)",
+                        path.display(),
+                        count(scene.nodes().len() as u64),
+                    );
+                    w.viewer.install(path.clone(), scene, gpu_scene, &camera);
+                    w.window.set_title(&format!(
+                        "spt: {}",
+                        path.file_name()
+                            .map_or_else(String::new, |n| n.to_string_lossy().to_string())
+                    ));
                 }
-                self.message = Some((text, true));
+                Ok(Loaded::Slice(slice)) => w.viewer.add_slice(slice),
+                Ok(Loaded::Mesh(mesh)) => w.viewer.add_mesh(mesh),
+                Ok(Loaded::Done) => {
+                    w.viewer.upload_finished(seconds);
+                    eprintln!(
+                        "model     {} on the GPU in {seconds:.2} s ({})",
+                        path.display(),
+                        self.loading
+                            .as_ref()
+                            .map_or(String::new(), |l| l.progress.timeline(Instant::now()))
+                    );
+                }
+                Err(e) => {
+                    let text = format!("{e:#}");
+                    eprintln!("error: {text}");
+                    if self.args.screenshot.is_some() {
+                        self.failure = Some(e);
+                    }
+                    self.message = Some((text, true));
+                }
             }
+        }
+        if self.loading.as_ref().is_some_and(Loading::is_finished) {
+            self.loading = None;
         }
     }
 
@@ -347,14 +361,21 @@ impl App {
             self.input(Input::Command(commands));
         }
         let Some(w) = &mut self.windowed else { return };
-        if w.viewer.model.is_some() {
-            if !self.first_frame_logged {
-                self.first_frame_logged = true;
-                eprintln!(
-                    "first frame {:.2} s after launch",
-                    self.launched.elapsed().as_secs_f64()
-                );
-            }
+        if w.viewer.model.is_some() && !self.first_frame_logged {
+            self.first_frame_logged = true;
+            let coarse = w.viewer.stats.frame.as_ref().is_some_and(|f| f.coarsened);
+            eprintln!(
+                "first frame {:.2} s after launch{}",
+                self.launched.elapsed().as_secs_f64(),
+                if coarse {
+                    " (coarser than asked until the model is uploaded)"
+                } else {
+                    ""
+                }
+            );
+        }
+        // The scripted frames start once the whole model is on the GPU.
+        if w.viewer.model.is_some() && self.loading.is_none() {
             self.script.frames += 1;
             if self.script.frames > 1 {
                 self.script.frame_ms.push(seconds * 1e3);
@@ -395,7 +416,7 @@ impl App {
                 "splats    {} drawn of {} nodes, prefix {}",
                 stats.gpu.drawn.map_or("–".into(), count),
                 count(m.scene.nodes().len() as u64),
-                count(stats.prefix_len as u64)
+                count(stats.frame.as_ref().map_or(0, |f| f.prefix_len) as u64)
             );
         }
         for (name, values) in [
@@ -406,7 +427,8 @@ impl App {
                 continue;
             }
             values.sort_by(f64::total_cmp);
-            let p95 = values[((values.len() as f64 * 0.95).ceil() as usize).clamp(1, values.len()) - 1];
+            let p95 =
+                values[((values.len() as f64 * 0.95).ceil() as usize).clamp(1, values.len()) - 1];
             println!(
                 "{name:<9} {:.2} ms median of {}, p95 {:.2} ms",
                 values[values.len() / 2],

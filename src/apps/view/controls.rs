@@ -161,13 +161,13 @@ mod tests {
             let (f, r, u) = o.axes();
             let v = p - cam.eye;
             let t = (o.fov_y * 0.5).tan() * v.dot(f);
-            (
-                400.0 + v.dot(r) / t * 300.0,
-                300.0 - v.dot(u) / t * 300.0,
-            )
+            (400.0 + v.dot(r) / t * 300.0, 300.0 - v.dot(u) / t * 300.0)
         };
         let (x, y) = project(&after);
-        assert!((x - at.0).abs() < 1e-6 && (y - at.1).abs() < 1e-6, "{x} {y}");
+        assert!(
+            (x - at.0).abs() < 1e-6 && (y - at.1).abs() < 1e-6,
+            "{x} {y}"
+        );
     }
 
     #[test]

@@ -63,7 +63,11 @@ pub enum Input {
     },
     /// Wheel notches (positive: toward the screen, zoom in) with the pointer at (x, y)
     /// pixels from the top left.
-    Wheel { notches: f64, x: f64, y: f64 },
+    Wheel {
+        notches: f64,
+        x: f64,
+        y: f64,
+    },
     /// A motion key pressed or released.
     Hold(Move, bool),
     Command(Command),

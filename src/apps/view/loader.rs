@@ -7,19 +7,24 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, mpsc};
 use std::time::Instant;
 
-use crate::render::{GpuScene, LoadReport, Renderer, Scene};
+use crate::render::{GpuScene, LoadReport, MeshUpload, Renderer, Scene, SliceUpload};
 
-/// The stage a load is in and how far along it is.
+/// The stage a load is in, how far along it is, and when each stage started.
 #[derive(Default)]
 pub struct Progress {
     stage: Mutex<&'static str>,
     total: AtomicU64,
     done: AtomicU64,
+    started: Mutex<Vec<(&'static str, Instant)>>,
 }
 
 impl LoadReport for Progress {
     fn stage(&self, name: &'static str, total: u64) {
         *self.stage.lock().unwrap_or_else(|e| e.into_inner()) = name;
+        self.started
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push((name, Instant::now()));
         self.done.store(0, Ordering::Relaxed);
         self.total.store(total, Ordering::Relaxed);
     }
@@ -30,6 +35,19 @@ impl LoadReport for Progress {
 }
 
 impl Progress {
+    /// Each stage so far and its seconds (the last one until `end`), e.g.
+    /// "checking 0.08 s, indexing 0.31 s, uploading 0.92 s".
+    pub fn timeline(&self, end: Instant) -> String {
+        let started = self.started.lock().unwrap_or_else(|e| e.into_inner());
+        let ends = started.iter().skip(1).map(|s| s.1).chain([end]);
+        started
+            .iter()
+            .zip(ends)
+            .map(|((name, t0), t1)| format!("{name} {:.2} s", t1.duration_since(*t0).as_secs_f64()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
     /// The current stage and its fraction done (None when its size is unknown).
     pub fn snapshot(&self) -> (&'static str, Option<f32>) {
         let stage = *self.stage.lock().unwrap_or_else(|e| e.into_inner());
@@ -42,20 +60,68 @@ impl Progress {
     }
 }
 
+/// What the loader hands over, in order: the scene with an empty GPU list, the list's
+/// slices front (coarse) first, the mesh if any, then `Done`. The viewer draws from the
+/// first message on.
+pub enum Loaded {
+    Scene(Arc<Scene>, GpuScene),
+    Slice(SliceUpload),
+    Mesh(MeshUpload),
+    Done,
+}
+
 /// A model being opened.
 pub struct Loading {
     pub path: PathBuf,
     pub progress: Arc<Progress>,
     pub started: Instant,
-    result: mpsc::Receiver<anyhow::Result<(Scene, GpuScene)>>,
+    result: mpsc::Receiver<anyhow::Result<Loaded>>,
+    finished: bool,
+}
+
+/// Opens the scene and uploads it, message by message; `wake` after each.
+fn load(
+    path: &Path,
+    renderer: &Renderer,
+    report: &Progress,
+    send: &dyn Fn(Loaded) -> bool,
+) -> anyhow::Result<()> {
+    let scene = Arc::new(Scene::open_reporting(path, report)?);
+    let total = scene.nodes().len();
+    let mut gpu_scene = Some(renderer.empty_gpu_scene(total));
+    report.stage("uploading", total as u64);
+    for range in renderer.slice_plan(total) {
+        report.advance(range.len() as u64);
+        let slice = renderer.upload_slice(&scene.nodes()[range]);
+        // The first slice goes with the scene, so that the first frame has something.
+        let message = match gpu_scene.take() {
+            Some(mut g) => {
+                g.push(slice);
+                Loaded::Scene(scene.clone(), g)
+            }
+            None => Loaded::Slice(slice),
+        };
+        if !send(message) {
+            return Ok(()); // nobody waits any more
+        }
+    }
+    if let Some(g) = gpu_scene {
+        send(Loaded::Scene(scene.clone(), g)); // an empty list
+    }
+    if let Some(mesh) = renderer.upload_mesh(&scene) {
+        report.stage("mesh", 0);
+        send(Loaded::Mesh(mesh));
+    }
+    send(Loaded::Done);
+    Ok(())
 }
 
 impl Loading {
-    /// Starts opening `path` on its own thread; `wake` is called once it is done.
+    /// Starts opening `path` on its own thread; `wake` is called after each message.
     pub fn start(
         path: &Path,
         renderer: Arc<Renderer>,
-        wake: impl FnOnce() + Send + 'static,
+        wake: impl Fn() + Send + 'static,
     ) -> Loading {
         let progress = Arc::new(Progress::default());
         let (send, result) = mpsc::channel();
@@ -63,10 +129,13 @@ impl Loading {
         let spawned = std::thread::Builder::new()
             .name("loader".into())
             .spawn(move || {
+                let deliver = |message: anyhow::Result<Loaded>| {
+                    let delivered = send.send(message).is_ok();
+                    wake();
+                    delivered
+                };
                 let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    let scene = Scene::open_reporting(&owned_path, &*report)?;
-                    let gpu_scene = renderer.upload_reporting(&scene, &*report);
-                    Ok((scene, gpu_scene))
+                    load(&owned_path, &renderer, &report, &|m| deliver(Ok(m)))
                 }))
                 .unwrap_or_else(|panic| {
                     let what = panic
@@ -79,8 +148,9 @@ impl Loading {
                         owned_path.display()
                     ))
                 });
-                let _ = send.send(outcome);
-                wake();
+                if let Err(e) = outcome {
+                    deliver(Err(e));
+                }
             });
         let result = match spawned {
             Ok(_) => result,
@@ -95,25 +165,51 @@ impl Loading {
             progress,
             started: Instant::now(),
             result,
+            finished: false,
         }
     }
 
-    /// The outcome, once the loader is done.
-    pub fn try_finish(&self) -> Option<anyhow::Result<(Scene, GpuScene)>> {
-        match self.result.try_recv() {
-            Ok(outcome) => Some(outcome),
-            Err(mpsc::TryRecvError::Empty) => None,
-            Err(mpsc::TryRecvError::Disconnected) => Some(Err(anyhow::anyhow!(
-                "{}: the loader stopped without an answer",
-                self.path.display()
-            ))),
+    /// The messages that arrived since the last call. After `Done` or an error, the
+    /// load is finished.
+    pub fn poll(&mut self) -> Vec<anyhow::Result<Loaded>> {
+        let mut messages = Vec::new();
+        loop {
+            match self.result.try_recv() {
+                Ok(m) => {
+                    self.finished |= matches!(m, Ok(Loaded::Done) | Err(_));
+                    messages.push(m);
+                }
+                Err(mpsc::TryRecvError::Empty) => break,
+                Err(mpsc::TryRecvError::Disconnected) => {
+                    if !self.finished {
+                        self.finished = true;
+                        messages.push(Err(anyhow::anyhow!(
+                            "{}: the loader stopped without an answer",
+                            self.path.display()
+                        )));
+                    }
+                    break;
+                }
+            }
         }
+        messages
     }
 
-    /// Blocks until the load ends (for scripts and tests).
-    pub fn wait(self) -> anyhow::Result<(Scene, GpuScene)> {
-        self.result
-            .recv()
-            .map_err(|_| anyhow::anyhow!("{}: the loader stopped", self.path.display()))?
+    pub fn is_finished(&self) -> bool {
+        self.finished
+    }
+
+    /// Blocks until the load ends and returns the whole scene (for scripts and tests).
+    pub fn wait(self) -> anyhow::Result<(Arc<Scene>, GpuScene)> {
+        let mut scene = None;
+        for message in self.result.iter() {
+            match message? {
+                Loaded::Scene(s, g) => scene = Some((s, g)),
+                Loaded::Slice(slice) => scene.as_mut().expect("scene first").1.push(slice),
+                Loaded::Mesh(mesh) => scene.as_mut().expect("scene first").1.set_mesh(mesh),
+                Loaded::Done => break,
+            }
+        }
+        scene.ok_or_else(|| anyhow::anyhow!("{}: the loader stopped", self.path.display()))
     }
 }

@@ -182,15 +182,16 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
                     None => format!("– / {} (vertex culling)", count(total)),
                 },
             );
-            row("prefix", count(st.prefix_len as u64));
+            if let Some(f) = &st.frame {
+                row("prefix", count(f.prefix_len as u64));
+                if f.coarsened {
+                    row("", "coarser until uploaded".into());
+                }
+            }
             let meta = m.scene.meta();
             row(
                 "model",
-                format!(
-                    "{} leaves, depth {}",
-                    count(meta.leaf_count),
-                    meta.depth
-                ),
+                format!("{} leaves, depth {}", count(meta.leaf_count), meta.depth),
             );
             let size = glam::DVec3::from(meta.bounds.max) - glam::DVec3::from(meta.bounds.min);
             row(
@@ -199,7 +200,9 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
             );
             let o = meta.origin;
             row("origin", format!("{} {} {}", o[0], o[1], o[2]));
-            row("opened in", format!("{:.2} s", m.load_seconds));
+            if let Some(s) = m.load_seconds {
+                row("opened in", format!("{s:.2} s"));
+            }
         }
     });
     ui.add(egui::Label::new(RichText::new(status.adapter).small()).wrap());

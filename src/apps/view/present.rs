@@ -78,7 +78,11 @@ impl Presenter {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("present"),
             source: wgpu::ShaderSource::Wgsl(
-                format!("{FULLSCREEN}\n{}", include_str!("../../../shaders/present.wgsl")).into(),
+                format!(
+                    "{FULLSCREEN}\n{}",
+                    include_str!("../../../shaders/present.wgsl")
+                )
+                .into(),
             ),
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

@@ -12,16 +12,18 @@ use super::controls::OrbitCamera;
 use super::input::{Button, Command, Input, Move};
 use crate::render::camera::bounding_sphere;
 use crate::render::{
-    Camera, CounterReadback, FrameTargets, GpuCounters, GpuScene, Mode, Renderer, Scene, Settings,
+    Camera, CounterReadback, EncodedFrame, FrameTargets, GpuCounters, GpuScene, MeshUpload, Mode,
+    Renderer, Scene, Settings, SliceUpload,
 };
 
 /// A model ready to draw.
 pub struct Model {
     pub path: PathBuf,
-    pub scene: Scene,
+    pub scene: Arc<Scene>,
+    /// The list on the GPU: a prefix of it while the model uploads.
     pub gpu_scene: GpuScene,
-    /// Seconds from the request to open it to ready on the GPU.
-    pub load_seconds: f64,
+    /// Seconds from the request to open it to all of it on the GPU (None while uploading).
+    pub load_seconds: Option<f64>,
     counters: CounterReadback,
     pub camera: OrbitCamera,
     home: OrbitCamera,
@@ -37,8 +39,8 @@ pub struct Stats {
     /// The newest GPU measurement (a few frames late), and its frame's prefix.
     pub gpu: GpuCounters,
     pub measured_prefix: usize,
-    /// Prefix of the frame just recorded.
-    pub prefix_len: usize,
+    /// The frame just recorded (prefix, ε, whether it was coarsened while uploading).
+    pub frame: Option<EncodedFrame>,
     recent: VecDeque<Instant>,
 }
 
@@ -87,14 +89,14 @@ impl Viewer {
         }
     }
 
-    /// Makes `scene` (already on the GPU) the model shown, seen by `camera`.
+    /// Makes `scene` the model shown, seen by `camera`. Its list may be on the GPU only
+    /// in part: more comes with [`Viewer::add_slice`].
     pub fn install(
         &mut self,
         path: PathBuf,
-        scene: Scene,
+        scene: Arc<Scene>,
         gpu_scene: GpuScene,
         camera: &Camera,
-        load_seconds: f64,
     ) {
         let radius = bounding_sphere(scene.meta()).1;
         let orbit = OrbitCamera::from_camera(camera, radius);
@@ -108,11 +110,31 @@ impl Viewer {
             path,
             scene,
             gpu_scene,
-            load_seconds,
+            load_seconds: None,
             counters,
             camera: orbit,
             home: orbit,
         });
+    }
+
+    /// The next slice of the model's list, uploaded.
+    pub fn add_slice(&mut self, slice: SliceUpload) {
+        if let Some(m) = &mut self.model {
+            m.gpu_scene.push(slice);
+        }
+    }
+
+    pub fn add_mesh(&mut self, mesh: MeshUpload) {
+        if let Some(m) = &mut self.model {
+            m.gpu_scene.set_mesh(mesh);
+        }
+    }
+
+    /// The whole model is on the GPU, `seconds` after it was asked for.
+    pub fn upload_finished(&mut self, seconds: f64) {
+        if let Some(m) = &mut self.model {
+            m.load_seconds = Some(seconds);
+        }
     }
 
     pub fn camera(&self) -> Option<Camera> {
@@ -274,9 +296,9 @@ impl Viewer {
                     &camera,
                     &self.settings,
                 )?;
-                self.stats.prefix_len = frame.prefix_len;
                 m.counters
                     .record(&self.renderer, encoder, targets, &m.gpu_scene, &frame);
+                self.stats.frame = Some(frame);
             }
             None => self
                 .renderer
