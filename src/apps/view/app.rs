@@ -252,6 +252,11 @@ impl App {
 
     fn redraw(&mut self, event_loop: &ActiveEventLoop) {
         self.poll_background();
+        if self.failure.is_some() {
+            // A scripted run whose model failed to open.
+            event_loop.exit();
+            return;
+        }
         let now = Instant::now();
         let seconds = self
             .last_frame
