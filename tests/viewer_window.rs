@@ -160,7 +160,10 @@ fn screenshot_matches_render(model: &Path, camera: &[&str]) {
 #[test]
 fn default_model_screenshot_matches_spt_render() {
     screenshot_matches_render(&common::default_model(), &[]);
-    screenshot_matches_render(&common::default_model(), &["--orbit", "120,-10,3", "--mode", "levels"]);
+    screenshot_matches_render(
+        &common::default_model(),
+        &["--orbit", "120,-10,3", "--mode", "levels"],
+    );
 }
 
 #[test]
@@ -198,7 +201,10 @@ fn screenshot_shows_the_panel() {
         .flat_map(|y| (20..200).map(move |x| (x, y)))
         .filter(|&(x, y)| img.get_pixel(x, y).0.iter().all(|c| *c < 80))
         .count();
-    assert!(dark > 20_000, "no panel at the top left ({dark} dark pixels)");
+    assert!(
+        dark > 20_000,
+        "no panel at the top left ({dark} dark pixels)"
+    );
 }
 
 #[test]
@@ -210,16 +216,30 @@ fn bad_models_end_with_a_clear_error() {
     let missing = dir.path().join("missing.ply");
     let (code, _, err) = view(&display, &[missing.to_str().unwrap()]);
     assert_eq!(code, Some(1), "{err}");
-    assert!(err.contains("missing.ply") && err.contains("no such file"), "{err}");
+    assert!(
+        err.contains("missing.ply") && err.contains("no such file"),
+        "{err}"
+    );
 
     let broken = dir.path().join("broken.ply");
-    std::fs::write(&broken, b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n").unwrap();
+    std::fs::write(
+        &broken,
+        b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n",
+    )
+    .unwrap();
     let shot = dir.path().join("never.png");
     let (code, _, err) = view(
         &display,
-        &[broken.to_str().unwrap(), "--screenshot", shot.to_str().unwrap()],
+        &[
+            broken.to_str().unwrap(),
+            "--screenshot",
+            shot.to_str().unwrap(),
+        ],
     );
     assert_eq!(code, Some(1), "{err}");
-    assert!(err.contains("broken.ply") && !err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("broken.ply") && !err.contains("panicked"),
+        "{err}"
+    );
     assert!(!shot.exists());
 }

@@ -444,24 +444,34 @@ impl App {
         println!("wrote     {}", path.display());
     }
 
-    /// Keeps drawing while something moves or loads; otherwise waits for input.
+    /// Keeps drawing while something moves; while a model loads, redraws only to show
+    /// the progress (ten times a second, four once a model is on screen) so that the
+    /// loader keeps the processor; otherwise waits for input.
     fn schedule(&self, event_loop: &ActiveEventLoop) {
         let Some(w) = &self.windowed else { return };
+        let shown = w.viewer.model.is_some();
         let busy = w.viewer.is_animating()
-            || self.args.spin != 0.0
-            || self.args.screenshot.is_some()
-            || self.screenshot_requested;
+            || self.screenshot_requested
+            || (shown
+                && self.loading.is_none()
+                && (self.args.spin != 0.0 || self.args.screenshot.is_some()));
         if busy {
             w.window.request_redraw();
             event_loop.set_control_flow(ControlFlow::Poll);
-        } else if self.loading.is_some() {
-            // Progress, ten times a second.
+        } else if self.loading.is_some() || self.args.screenshot.is_some() {
+            let period = if shown { 250 } else { 100 };
             event_loop.set_control_flow(ControlFlow::WaitUntil(
-                Instant::now() + Duration::from_millis(100),
+                Instant::now() + Duration::from_millis(period),
             ));
-            w.window.request_redraw();
         } else {
             event_loop.set_control_flow(ControlFlow::Wait);
+        }
+    }
+
+    /// A timed wake-up (see [`App::schedule`]) redraws.
+    fn woke(&self) {
+        if let Some(w) = &self.windowed {
+            w.window.request_redraw();
         }
     }
 }
@@ -533,7 +543,8 @@ impl ApplicationHandler<Wake> for App {
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         let Some(w) = &mut self.windowed else { return };
         let response = w.egui_state.on_window_event(&w.window, &event);
-        if response.repaint {
+        // egui asks for a repaint after every redraw too; that would never idle.
+        if response.repaint && !matches!(event, WindowEvent::RedrawRequested) {
             w.window.request_redraw();
         }
         let over_panel = self.egui_ctx.egui_wants_pointer_input();
@@ -597,6 +608,12 @@ impl ApplicationHandler<Wake> for App {
                 });
             }
             _ => {}
+        }
+    }
+
+    fn new_events(&mut self, _: &ActiveEventLoop, cause: winit::event::StartCause) {
+        if matches!(cause, winit::event::StartCause::ResumeTimeReached { .. }) {
+            self.woke();
         }
     }
 
