@@ -243,3 +243,58 @@ fn bad_models_end_with_a_clear_error() {
     );
     assert!(!shot.exists());
 }
+
+#[test]
+fn the_window_can_be_resized_while_drawing() {
+    let Some(display) = require_display() else {
+        return;
+    };
+    if Command::new("xdotool").arg("version").output().is_err() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must run the resize test: install xdotool"
+        );
+        eprintln!("SKIPPED: no xdotool (apt-get install xdotool)");
+        return;
+    }
+    let dir = common::temp_dir();
+    let shot = dir.path().join("resized.png");
+    let mut viewer = Command::new(env!("CARGO_BIN_EXE_spt"))
+        .args(["view", common::default_model().to_str().unwrap()])
+        .args([
+            "--size",
+            "640x480",
+            "--spin",
+            "3",
+            "--frames",
+            "30",
+            "--hide-panel",
+        ])
+        .arg("--screenshot")
+        .arg(&shot)
+        .env("DISPLAY", &display)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("start spt view");
+    let xdotool = |args: &[&str]| {
+        Command::new("xdotool")
+            .args(args)
+            .env("DISPLAY", &display)
+            .output()
+            .expect("xdotool")
+    };
+    let found = xdotool(&["search", "--sync", "--name", "^spt"]);
+    let window = String::from_utf8_lossy(&found.stdout)
+        .lines()
+        .next()
+        .expect("the viewer's window")
+        .to_string();
+    xdotool(&["windowsize", &window, "400", "300"]);
+    let out = viewer.wait_with_output().expect("spt view ends");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let img = rgb(&shot);
+    assert_eq!(img.dimensions(), (400, 300), "{err}");
+    assert!(drawn_share(&img) > 0.02, "blank after resizing");
+}

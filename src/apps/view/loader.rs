@@ -108,8 +108,10 @@ fn load(
     if let Some(g) = gpu_scene {
         send(Loaded::Scene(scene.clone(), g)); // an empty list
     }
-    if let Some(mesh) = renderer.upload_mesh(&scene) {
+    if scene.mesh.is_some() {
         report.stage("mesh", 0);
+    }
+    if let Some(mesh) = renderer.upload_mesh(&scene) {
         send(Loaded::Mesh(mesh));
     }
     send(Loaded::Done);

@@ -170,7 +170,14 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
             ui.label(value);
             ui.end_row();
         };
-        row("fps", format!("{:.1}", st.fps));
+        row(
+            "fps",
+            if st.fps > 0.0 {
+                format!("{:.1}", st.fps)
+            } else {
+                "idle (draws on change)".into()
+            },
+        );
         row("CPU", ms(Some(st.cpu_ms)));
         row("GPU", ms(st.gpu.gpu_ms));
         if let Some(m) = &viewer.model {
