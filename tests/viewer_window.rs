@@ -259,7 +259,7 @@ fn the_window_can_be_resized_while_drawing() {
     }
     let dir = common::temp_dir();
     let shot = dir.path().join("resized.png");
-    let mut viewer = Command::new(env!("CARGO_BIN_EXE_spt"))
+    let viewer = Command::new(env!("CARGO_BIN_EXE_spt"))
         .args(["view", common::default_model().to_str().unwrap()])
         .args([
             "--size",
