@@ -20,7 +20,7 @@ pub use camera::Camera;
 pub use counters::{CounterReadback, GpuCounters};
 pub use encode::EncodedFrame;
 pub use gpu::Gpu;
-pub use pipelines::{FULLSCREEN, OUTPUT_GAMMA};
+pub use pipelines::{FULLSCREEN, OUTPUT_GAMMA, fullscreen_pipeline};
 pub use renderer::{FrameStats, Image, Renderer};
 pub use scene::{LoadReport, Scene, Silent};
 pub use settings::{Culling, Mode, Settings};

@@ -18,6 +18,38 @@ fn module(device: &wgpu::Device, name: &str, source: &str) -> wgpu::ShaderModule
     })
 }
 
+/// A full-screen pass: `vs_fullscreen` (shaders/fullscreen.wgsl, which `module` must
+/// include) and the fragment stage `fragment` writing one target of `format`.
+pub fn fullscreen_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    fragment: &str,
+    format: wgpu::TextureFormat,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(fragment),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_fullscreen"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(fragment),
+            compilation_options: Default::default(),
+            targets: &[Some(format.into())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 fn depth_state(compare: wgpu::CompareFunction, write: bool) -> Option<wgpu::DepthStencilState> {
     Some(wgpu::DepthStencilState {
         format: DEPTH,
@@ -264,27 +296,7 @@ impl Pipelines {
             multiview_mask: None,
             cache: None,
         });
-        let shade = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shade"),
-            layout: Some(&shade_layout),
-            vertex: wgpu::VertexState {
-                module: &shade_module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &shade_module,
-                entry_point: Some("fs_shade"),
-                compilation_options: Default::default(),
-                targets: &[Some(OUTPUT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let shade = fullscreen_pipeline(device, &shade_layout, &shade_module, "fs_shade", OUTPUT);
         Pipelines {
             frame_layout,
             nodes_layout,

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use winit::window::Window;
 
-use crate::render::{FULLSCREEN, FrameTargets, OUTPUT_GAMMA, Renderer};
+use crate::render::{FULLSCREEN, FrameTargets, OUTPUT_GAMMA, Renderer, fullscreen_pipeline};
 
 pub struct Presenter {
     window: Arc<Window>,
@@ -90,27 +90,8 @@ impl Presenter {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("present"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_present"),
-                compilation_options: Default::default(),
-                targets: &[Some(view_format.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline =
+            fullscreen_pipeline(device, &pipeline_layout, &module, "fs_present", view_format);
         let presenter = Presenter {
             window,
             surface,
