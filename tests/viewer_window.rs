@@ -284,7 +284,9 @@ fn the_window_can_be_resized_while_drawing() {
             .output()
             .expect("xdotool")
     };
-    let found = xdotool(&["search", "--sync", "--name", "^spt"]);
+    // This viewer's window, not another test's.
+    let pid = viewer.id().to_string();
+    let found = xdotool(&["search", "--sync", "--pid", &pid]);
     let window = String::from_utf8_lossy(&found.stdout)
         .lines()
         .next()

@@ -46,7 +46,7 @@ rm -f spt-screenshot-*.png
 ./target/release/spt view data/large/lucy_knot.ply --size 1024x768 --frames 1 --screenshot "$shot" > /dev/null 2> "$log" &
 viewer=$!
 sleep 4
-window=$(xdotool search --sync --name '^spt' | head -1)
+window=$(xdotool search --sync --pid "$viewer" | head -1)
 xdotool windowfocus --sync "$window" 2> /dev/null || true
 xdotool key F12
 wait $viewer
