@@ -59,6 +59,13 @@ enum Command {
     /// Ctrl+O to open another. `--screenshot out.png` draws --frames frames, saves the
     /// picture and exits.
     View(Box<spt::apps::view::ViewArgs>),
+    /// Measures speed against error: orbits near, mid and far and a fly-through, a sweep
+    /// of ε, SPT with both culling strategies, a random subset of leaves at equal splat
+    /// counts, and leaves only; GPU and wall ms, splats, prefix, PSNR, holes and spill
+    /// against the mesh (or the leaves-only image for point clouds). Writes results.csv,
+    /// summary.md and speed_vs_error.png to --out, and checks that a repeated
+    /// configuration gives the same numbers.
+    Bench(Box<spt::apps::bench::BenchArgs>),
     /// Builds the sequential point tree of a PLY model and writes it as an .spt file,
     /// which opens instantly (memory-mapped). Shows each stage (load, surfels, tree,
     /// errors, sort, write) with its time, then a summary. The output is written to a
@@ -78,6 +85,7 @@ fn main() -> ExitCode {
         .unwrap_or_else(|| Command::View(Box::new(ViewOnly::parse_from(["spt"]).args)));
     let result = match command {
         Command::View(args) => spt::apps::view::run(*args),
+        Command::Bench(args) => spt::apps::bench::run(&args),
         Command::Info { file, json } => spt::apps::info::run(&file, json),
         Command::Convert { input, output } => spt::apps::convert::run(&input, &output),
         Command::Render {

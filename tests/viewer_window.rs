@@ -38,10 +38,14 @@ impl XServer {
     fn start() -> Option<XServer> {
         let n = (90..200).find(|n| !Path::new(&format!("/tmp/.X{n}-lock")).exists())?;
         let display = format!(":{n}");
-        let child = Command::new("Xvfb")
-            .args([&display, "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
-            .stdout(std::process::Stdio::null())
-            .stderr(std::process::Stdio::null())
+        // Statics are never dropped: a shell keeps Xvfb only while this process lives.
+        let child = Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "Xvfb {display} -screen 0 1280x1024x24 -nolisten tcp > /dev/null 2>&1 & x=$!; \
+                 while kill -0 {} 2> /dev/null; do sleep 0.5; done; kill $x",
+                std::process::id()
+            ))
             .spawn()
             .ok()?;
         let socket = PathBuf::from(format!("/tmp/.X11-unix/X{n}"));

@@ -1,5 +1,6 @@
 //! The command-line applications built on the library.
 
+pub mod bench;
 pub mod convert;
 pub mod info;
 pub mod progress;

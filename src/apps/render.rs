@@ -61,7 +61,8 @@ pub struct RenderArgs {
     pub backend: Option<String>,
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
+/// Parses WIDTHxHEIGHT (1–16384 each).
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or("expected WIDTHxHEIGHT, e.g. 1024x768")?;

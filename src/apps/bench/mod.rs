@@ -1,0 +1,443 @@
+//! `spt bench MODEL --out DIR`: speed against error (DESIGN.md §9). For each camera path
+//! (orbits near, mid and far, and a fly-through into the model) and each ε of the sweep,
+//! SPT with both culling strategies; at the orbits, a random subset of leaves with as
+//! many splats drawn as SPT drew; leaves only (no LOD) at ε = 0. Each configuration:
+//! warm-up frames, timed frames (GPU timestamps, wall), splats, prefix, and PSNR, hole
+//! and spill rates against the mesh (models with faces) or the leaves-only image (point
+//! clouds). Then one configuration again, to check that the numbers are stable.
+//! Writes `results.csv`, `summary.md` and `speed_vs_error.png`.
+
+mod measure;
+mod plan;
+mod plot;
+mod random_subset;
+mod report;
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use crate::render::{
+    Camera, Culling, FrameTargets, Gpu, GpuScene, Image, Mode, Renderer, Scene, Settings,
+};
+use measure::{Frames, Measured, measure};
+use report::{Environment, Row};
+
+/// Frames per camera of the stability check's runs, at least.
+/// The stability check's runs: warm-up frames per camera, and timed frames in all at
+/// least. Frame times on a software rasterizer vary by about 20 % from frame to frame,
+/// so a median within a few % takes about a hundred frames.
+const STABILITY_WARMUP: u32 = 3;
+const STABILITY_SAMPLES: u32 = 120;
+
+/// The options of `spt bench`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct BenchArgs {
+    /// The model: a PLY file (mesh or point cloud) or an .spt file.
+    pub model: PathBuf,
+    /// Folder for results.csv, summary.md and speed_vs_error.png (made if missing).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Frame size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "512x512", value_parser = crate::apps::render::parse_size)]
+    pub size: (u32, u32),
+    /// Cameras per orbit (evenly spaced azimuths, elevation 20°).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub views: u32,
+    /// Cameras along the fly-through.
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(2..=64))]
+    pub fly_steps: u32,
+    /// Untimed frames per camera before the timed ones.
+    #[arg(long, default_value_t = 2)]
+    pub warmup: u32,
+    /// Timed frames per camera.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub frames: u32,
+    /// The ε sweep in pixels, comma-separated (0: leaves only).
+    #[arg(long, value_delimiter = ',', default_value = "0,0.25,0.5,1,2,4,8")]
+    pub eps: Vec<f64>,
+    /// A short run (2 views, 3 fly-through steps, 1 + 2 frames, ε 0, 1, 4), for checks.
+    #[arg(long)]
+    pub quick: bool,
+    /// GPU backend: vulkan, gl, metal, dx12 or all (default: $SPT_BACKEND, else any).
+    #[arg(long)]
+    pub backend: Option<String>,
+}
+
+/// Runs one configuration per call, with the state every run shares.
+struct Bench<'a> {
+    renderer: &'a Renderer,
+    targets: FrameTargets,
+    frames: Frames<'a>,
+}
+
+impl Bench<'_> {
+    /// The reference image of each camera: the mesh, or the leaves.
+    fn references(
+        &self,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        cameras: &[Camera],
+    ) -> anyhow::Result<Vec<Image>> {
+        let settings = Settings {
+            mode: if gpu_scene.mesh_triangles() > 0 {
+                Mode::Mesh
+            } else {
+                Mode::Shaded
+            },
+            lod: false,
+            ..Settings::default()
+        };
+        cameras
+            .iter()
+            .map(|c| {
+                let image = self
+                    .renderer
+                    .render_into(&self.targets, scene, gpu_scene, c, &settings)
+                    .map(|f| f.0);
+                self.frames.progress.inc(1);
+                image
+            })
+            .collect()
+    }
+
+    fn run(
+        &self,
+        scene: (&Scene, &GpuScene),
+        cameras: &[Camera],
+        references: &[Image],
+        eps_px: f64,
+        culling: Culling,
+    ) -> anyhow::Result<Measured> {
+        let settings = Settings {
+            error_px: eps_px,
+            lod: eps_px > 0.0,
+            culling,
+            ..Settings::default()
+        };
+        measure(
+            self.renderer,
+            &self.targets,
+            scene,
+            cameras,
+            &settings,
+            references,
+            &self.frames,
+        )
+    }
+}
+
+fn culling_name(c: Culling) -> &'static str {
+    match c {
+        Culling::Compute => "compute",
+        Culling::Vertex => "vertex",
+    }
+}
+
+/// Today's date (UTC), YYYY-MM-DD, from the system clock.
+fn today() -> String {
+    let days = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs() / 86_400) as i64;
+    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + (m <= 2) as i64;
+    format!("{y:04}-{m:02}-{d:02}")
+}
+
+pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    let mut args = args.clone();
+    if args.quick {
+        (args.views, args.fly_steps, args.warmup, args.frames) = (2, 3, 1, 2);
+        args.eps = vec![0.0, 1.0, 4.0];
+    }
+    if args.eps.iter().any(|e| !e.is_finite() || *e < 0.0) {
+        anyhow::bail!("--eps: every ε must be a finite number ≥ 0");
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot make the folder", args.out.display()))?;
+    let scene = Scene::open(&args.model)?;
+    let gpu = Gpu::new(args.backend.as_deref())?;
+    let env = Environment {
+        model: args.model.file_name().map_or_else(
+            || args.model.display().to_string(),
+            |n| n.to_string_lossy().to_string(),
+        ),
+        reference: if scene.mesh.is_some() {
+            "mesh"
+        } else {
+            "leaves-only image"
+        },
+        adapter: gpu.info.name.clone(),
+        backend: format!("{:?}", gpu.info.backend),
+        driver: format!("{} {}", gpu.info.driver, gpu.info.driver_info),
+        machine: report::machine(),
+        date: today(),
+        size: args.size,
+    };
+    println!("adapter   {}", env.label());
+    let renderer = Renderer::new(gpu);
+    let gpu_scene = renderer.upload(&scene);
+    let meta = scene.meta();
+    let fov = 45f64.to_radians();
+    let mut paths: Vec<(String, Vec<Camera>)> = plan::ORBITS
+        .iter()
+        .map(|(name, fill)| {
+            (
+                format!("orbit-{name}"),
+                plan::orbit(meta, *fill, args.views as usize, fov),
+            )
+        })
+        .collect();
+    paths.push((
+        "fly-through".into(),
+        plan::fly_through(meta, args.fly_steps as usize, fov),
+    ));
+
+    // Frames: references, SPT (two cullings), random subsets (orbits, ε > 0), stability.
+    let per_camera = (args.warmup + args.frames) as u64;
+    let cams: u64 = paths.iter().map(|p| p.1.len() as u64).sum();
+    let orbit_cams = args.views as u64 * 3;
+    let positive = args.eps.iter().filter(|e| **e > 0.0).count() as u64;
+    let total = cams
+        + cams * args.eps.len() as u64 * 2 * per_camera
+        + orbit_cams * positive * per_camera
+        + 2 * args.views as u64
+            * (args.warmup.max(STABILITY_WARMUP)
+                + args.frames.max(STABILITY_SAMPLES.div_ceil(args.views))) as u64;
+    let progress = ProgressBar::with_draw_target(
+        Some(total),
+        if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        },
+    );
+    progress.set_style(
+        ProgressStyle::with_template("{msg:>28} [{bar:40}] {pos}/{len} frames {elapsed} ETA {eta}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    let bench = Bench {
+        renderer: &renderer,
+        targets: renderer.targets(args.size)?,
+        frames: Frames {
+            warmup: args.warmup,
+            timed: args.frames,
+            progress: &progress,
+        },
+    };
+    let leaves = random_subset::leaves(&scene);
+    let mut rows: Vec<Row> = Vec::new();
+    let mut mid_refs = Vec::new();
+    for (path, cameras) in &paths {
+        progress.set_message(format!("{path}: references"));
+        let references = bench.references(&scene, &gpu_scene, cameras)?;
+        let mut leaves_drawn = None;
+        for &eps_px in &args.eps {
+            for culling in [Culling::Compute, Culling::Vertex] {
+                progress.set_message(format!("{path}: spt ε {eps_px} {}", culling_name(culling)));
+                let mut m =
+                    bench.run((&scene, &gpu_scene), cameras, &references, eps_px, culling)?;
+                if culling == Culling::Compute {
+                    if eps_px == 0.0 {
+                        leaves_drawn = Some(m.splats);
+                    }
+                } else if let Some(compute) = rows.last() {
+                    // Vertex culling drops the same splats by the same test
+                    // (`splat_visible`), but only compute culling counts them.
+                    m.splats = compute.m.splats;
+                }
+                rows.push(Row {
+                    path: path.clone(),
+                    strategy: if eps_px == 0.0 { "no-lod" } else { "spt" },
+                    culling: culling_name(culling),
+                    eps_px,
+                    cameras: cameras.len(),
+                    m,
+                });
+                print_row(rows.last().expect("just pushed"));
+            }
+            if eps_px == 0.0 || !path.starts_with("orbit") {
+                continue;
+            }
+            // As many leaves drawn as SPT drew: the subset is drawn from all leaves, of
+            // which a share `visible` passes the frustum at these cameras.
+            let spt_drawn = rows
+                .iter()
+                .rev()
+                .find(|r| r.path == *path && r.culling == "compute")
+                .map_or(0.0, |r| r.m.splats);
+            let visible = leaves_drawn
+                .map_or(1.0, |d| d / leaves.len().max(1) as f64)
+                .clamp(1e-6, 1.0);
+            let n = (spt_drawn / visible).round() as usize;
+            let subset = random_subset::random_subset(meta, &leaves, n, 0x5EED ^ n as u64);
+            let subset_gpu = renderer.upload(&subset);
+            progress.set_message(format!("{path}: random ε {eps_px}"));
+            let m = bench.run(
+                (&subset, &subset_gpu),
+                cameras,
+                &references,
+                0.0,
+                Culling::Compute,
+            )?;
+            rows.push(Row {
+                path: path.clone(),
+                strategy: "random",
+                culling: "compute",
+                eps_px,
+                cameras: cameras.len(),
+                m,
+            });
+            print_row(rows.last().expect("just pushed"));
+        }
+        if path == "orbit-mid" {
+            mid_refs = references;
+        }
+    }
+
+    // Stability: the mid orbit at ε = 1 px (or the sweep's nearest), compute culling,
+    // twice more, their frames interleaved; their splat counts must also equal the
+    // sweep's.
+    let eps_check = args
+        .eps
+        .iter()
+        .copied()
+        .min_by(|a, b| (a - 1.0).abs().total_cmp(&(b - 1.0).abs()))
+        .unwrap_or(1.0);
+    progress.set_message("stability: twice again".to_string());
+    let mid = &paths[1].1;
+    // Enough frames for a steady median, even in a --quick run.
+    let frames = Frames {
+        warmup: args.warmup.max(STABILITY_WARMUP),
+        timed: args.frames.max(STABILITY_SAMPLES.div_ceil(args.views)),
+        progress: &progress,
+    };
+    let settings = Settings {
+        error_px: eps_check,
+        lod: eps_check > 0.0,
+        culling: Culling::Compute,
+        ..Settings::default()
+    };
+    let mut again = measure::measure_runs(
+        &renderer,
+        &bench.targets,
+        (&scene, &gpu_scene),
+        mid,
+        &settings,
+        &mid_refs,
+        &frames,
+        2,
+    )?;
+    let (twice, once) = (
+        again.pop().expect("two runs"),
+        again.pop().expect("two runs"),
+    );
+    progress.finish_and_clear();
+    let swept = rows
+        .iter()
+        .find(|r| r.path == "orbit-mid" && r.culling == "compute" && r.eps_px == eps_check)
+        .expect("measured in the sweep");
+    let (checks, stable) = stability(swept, &once, &twice);
+    for c in &checks {
+        println!("stability {c}");
+    }
+
+    let out = &args.out;
+    report::write_csv(&out.join("results.csv"), &env, &rows)?;
+    report::write_text(
+        &out.join("summary.md"),
+        &report::summary(&env, &rows, &checks),
+    )?;
+    plot::write(&out.join("speed_vs_error.png"), &env, &rows)?;
+    for pair in report::equal_budget_pairs(&rows) {
+        if pair.0.m.psnr_db < pair.1.m.psnr_db {
+            println!(
+                "note      {} ε {}: random subset {:.2} dB > SPT {:.2} dB at {:.0} / {:.0} splats",
+                pair.0.path,
+                pair.0.eps_px,
+                pair.1.m.psnr_db,
+                pair.0.m.psnr_db,
+                pair.1.m.splats,
+                pair.0.m.splats
+            );
+        }
+    }
+    println!(
+        "wrote     {}",
+        Path::new(out)
+            .join("{results.csv, summary.md, speed_vs_error.png}")
+            .display()
+    );
+    if !stable {
+        anyhow::bail!(
+            "the numbers are not stable between two runs of the same configuration (see summary.md)"
+        );
+    }
+    Ok(())
+}
+
+/// Two runs of one configuration, frames interleaved: identical splat counts and prefix (also
+/// equal to the sweep's), and median GPU times within 10 %. Returns the findings and
+/// whether they hold.
+fn stability(swept: &Row, once: &Measured, twice: &Measured) -> (Vec<String>, bool) {
+    let same = |a: &Measured, b: &Measured| a.splats == b.splats && a.prefix == b.prefix;
+    let counts = same(&swept.m, once) && same(once, twice);
+    let mut checks = vec![format!(
+        "{} ε {} px, compute culling, run twice more: splats {:.1} and {:.1} (sweep {:.1}), \
+         prefix {:.1} and {:.1} (sweep {:.1}): {}",
+        swept.path,
+        swept.eps_px,
+        once.splats,
+        twice.splats,
+        swept.m.splats,
+        once.prefix,
+        twice.prefix,
+        swept.m.prefix,
+        if counts { "identical" } else { "DIFFERENT" }
+    )];
+    let timing = match (once.gpu_ms_median, twice.gpu_ms_median) {
+        (Some(a), Some(b)) => {
+            let change = (b - a).abs() / a.min(b).max(1e-9);
+            checks.push(format!(
+                "median GPU ms {a:.3} and {b:.3}: {:.1} % apart ({})",
+                change * 100.0,
+                if change <= 0.10 {
+                    "within 10 %"
+                } else {
+                    "MORE THAN 10 %"
+                }
+            ));
+            change <= 0.10
+        }
+        _ => {
+            checks.push("no GPU times (no timestamp queries): timing not checked".into());
+            true
+        }
+    };
+    (checks, counts && timing)
+}
+
+fn print_row(r: &Row) {
+    println!(
+        "{:<12} {:<7} {:<8} ε {:<5} splats {:>10.0} prefix {:>10.0} gpu {:>9} ms  psnr {:>6.2} dB  holes {:.3} %",
+        r.path,
+        r.strategy,
+        r.culling,
+        r.eps_px,
+        r.m.splats,
+        r.m.prefix,
+        r.m.gpu_ms_median.map_or("–".into(), |v| format!("{v:.2}")),
+        r.m.psnr_db,
+        r.m.hole_rate * 100.0
+    );
+}

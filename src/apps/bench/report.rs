@@ -1,0 +1,222 @@
+//! `spt bench`'s results: one row per configuration, written as `results.csv` and
+//! `summary.md`, each labelled with the adapter and the machine.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::measure::{Measured, PSNR_CAP_DB};
+use crate::io::atomic::write_atomically;
+
+/// One measured configuration.
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// "orbit-near", "orbit-mid", "orbit-far" or "fly-through".
+    pub path: String,
+    /// "spt", "random" (random subset of leaves) or "no-lod" (leaves only).
+    pub strategy: &'static str,
+    /// "compute" or "vertex".
+    pub culling: &'static str,
+    pub eps_px: f64,
+    pub cameras: usize,
+    pub m: Measured,
+}
+
+/// Where the numbers come from: the adapter (name, backend, driver) and the machine.
+#[derive(Debug, Clone)]
+pub struct Environment {
+    pub model: String,
+    pub reference: &'static str,
+    pub adapter: String,
+    pub backend: String,
+    pub driver: String,
+    pub machine: String,
+    pub date: String,
+    pub size: (u32, u32),
+}
+
+impl Environment {
+    /// "adapter (backend, driver) on machine, date".
+    pub fn label(&self) -> String {
+        format!(
+            "{} ({}, {}) on {}, {}",
+            self.adapter, self.backend, self.driver, self.machine, self.date
+        )
+    }
+}
+
+/// "N cores (CPU model), OS kernel", read from /proc where there is one.
+pub fn machine() -> String {
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    format!("{cores} cores ({cpu}), {}", std::env::consts::OS)
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or(String::new(), |v| format!("{v:.3}"))
+}
+
+fn psnr(v: f64) -> String {
+    if v >= PSNR_CAP_DB {
+        "inf".into()
+    } else {
+        format!("{v:.2}")
+    }
+}
+
+/// Quotes a CSV field when it needs it.
+fn field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+pub fn write_csv(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result<()> {
+    let mut out = String::from(
+        "model,path,strategy,culling,eps_px,cameras,splats,prefix,gpu_ms_median,gpu_ms_p95,\
+         wall_ms_median,psnr_db,hole_rate,spill_rate,reference,width,height,adapter,backend,driver,machine,date\n",
+    );
+    for r in rows {
+        let m = &r.m;
+        writeln!(
+            out,
+            "{},{},{},{},{},{},{:.1},{:.1},{},{},{:.3},{},{:.6},{:.6},{},{},{},{},{},{},{},{}",
+            field(&env.model),
+            r.path,
+            r.strategy,
+            r.culling,
+            r.eps_px,
+            r.cameras,
+            m.splats,
+            m.prefix,
+            opt(m.gpu_ms_median),
+            opt(m.gpu_ms_p95),
+            m.wall_ms_median,
+            psnr(m.psnr_db),
+            m.hole_rate,
+            m.spill_rate,
+            env.reference,
+            env.size.0,
+            env.size.1,
+            field(&env.adapter),
+            field(&env.backend),
+            field(&env.driver),
+            field(&env.machine),
+            env.date
+        )?;
+    }
+    write_text(path, &out)
+}
+
+pub fn write_text(path: &Path, text: &str) -> anyhow::Result<()> {
+    write_atomically(path, |w| w.write_all(text.as_bytes()))
+        .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))
+}
+
+/// The Markdown summary: one table per camera path, then the random-subset comparison
+/// and the stability check.
+pub fn summary(env: &Environment, rows: &[Row], checks: &[String]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "## `spt bench` on {}\n", env.model);
+    let _ = writeln!(
+        s,
+        "{}×{}, error against the {}. Adapter: {}.\n",
+        env.size.0,
+        env.size.1,
+        env.reference,
+        env.label()
+    );
+    let mut paths: Vec<&str> = rows.iter().map(|r| r.path.as_str()).collect();
+    paths.dedup();
+    for path in paths {
+        let _ = writeln!(s, "### {path}\n");
+        let _ = writeln!(
+            s,
+            "| strategy | culling | ε px | splats | prefix | GPU ms median | GPU ms p95 | wall ms | PSNR dB | holes | spill |"
+        );
+        let _ = writeln!(
+            s,
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+        );
+        for r in rows.iter().filter(|r| r.path == path) {
+            let m = &r.m;
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {:.0} | {:.0} | {} | {} | {:.1} | {} | {:.3} % | {:.3} % |",
+                r.strategy,
+                r.culling,
+                r.eps_px,
+                m.splats,
+                m.prefix,
+                opt(m.gpu_ms_median),
+                opt(m.gpu_ms_p95),
+                m.wall_ms_median,
+                psnr(m.psnr_db),
+                m.hole_rate * 100.0,
+                m.spill_rate * 100.0
+            );
+        }
+        let _ = writeln!(s);
+    }
+    let _ = writeln!(
+        s,
+        "### SPT against a random subset of leaves at equal splat counts\n"
+    );
+    let _ = writeln!(
+        s,
+        "| path | ε px | SPT splats | SPT PSNR dB | random splats | random PSNR dB | SPT ≥ random |"
+    );
+    let _ = writeln!(s, "| --- | --- | --- | --- | --- | --- | --- |");
+    for (spt, random) in equal_budget_pairs(rows) {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.0} | {} | {:.0} | {} | {} |",
+            spt.path,
+            spt.eps_px,
+            spt.m.splats,
+            psnr(spt.m.psnr_db),
+            random.m.splats,
+            psnr(random.m.psnr_db),
+            if spt.m.psnr_db >= random.m.psnr_db {
+                "yes"
+            } else {
+                "**no**"
+            }
+        );
+    }
+    let _ = writeln!(s);
+    if !checks.is_empty() {
+        let _ = writeln!(s, "### Stability\n");
+        for c in checks {
+            let _ = writeln!(s, "- {c}");
+        }
+        let _ = writeln!(s);
+    }
+    s
+}
+
+/// Each random-subset row with the SPT row (compute culling) whose budget it matched.
+pub fn equal_budget_pairs(rows: &[Row]) -> Vec<(&Row, &Row)> {
+    rows.iter()
+        .filter(|r| r.strategy == "random")
+        .filter_map(|random| {
+            rows.iter()
+                .find(|r| {
+                    r.strategy == "spt"
+                        && r.culling == "compute"
+                        && r.path == random.path
+                        && r.eps_px == random.eps_px
+                })
+                .map(|spt| (spt, random))
+        })
+        .collect()
+}
