@@ -360,7 +360,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     )?;
     plot::write(&out.join("speed_vs_error.png"), &env, &rows)?;
     for pair in report::equal_budget_pairs(&rows) {
-        if pair.0.m.psnr_db < pair.1.m.psnr_db {
+        if report::verdict(pair.0, pair.1) == "**no**" {
             println!(
                 "note      {} ε {}: random subset {:.2} dB > SPT {:.2} dB at {:.0} / {:.0} splats",
                 pair.0.path,

@@ -186,11 +186,7 @@ pub fn summary(env: &Environment, rows: &[Row], checks: &[String]) -> String {
             psnr(spt.m.psnr_db),
             random.m.splats,
             psnr(random.m.psnr_db),
-            if spt.m.psnr_db >= random.m.psnr_db {
-                "yes"
-            } else {
-                "**no**"
-            }
+            verdict(spt, random)
         );
     }
     let _ = writeln!(s);
@@ -202,6 +198,22 @@ pub fn summary(env: &Environment, rows: &[Row], checks: &[String]) -> String {
         let _ = writeln!(s);
     }
     s
+}
+
+/// PSNR differences below this are reported as equal (when SPT draws every leaf, the
+/// "subset" is all leaves and the images are the same but for blending order).
+pub const EQUAL_DB: f64 = 0.05;
+
+/// "yes", "equal" or "**no**": SPT's PSNR against the random subset's.
+pub fn verdict(spt: &Row, random: &Row) -> &'static str {
+    let d = spt.m.psnr_db - random.m.psnr_db;
+    if d.abs() < EQUAL_DB {
+        "equal"
+    } else if d > 0.0 {
+        "yes"
+    } else {
+        "**no**"
+    }
 }
 
 /// Each random-subset row with the SPT row (compute culling) whose budget it matched.
