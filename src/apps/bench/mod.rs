@@ -110,12 +110,7 @@ impl Bench<'_> {
         eps_px: f64,
         culling: Culling,
     ) -> anyhow::Result<Measured> {
-        let settings = Settings {
-            error_px: eps_px,
-            lod: eps_px > 0.0,
-            culling,
-            ..Settings::default()
-        };
+        let settings = sweep_settings(eps_px, culling);
         measure(
             self.renderer,
             &self.targets,
@@ -125,6 +120,16 @@ impl Bench<'_> {
             references,
             &self.frames,
         )
+    }
+}
+
+/// The settings of one point of the sweep: ε in pixels (0: leaves only) and culling.
+fn sweep_settings(eps_px: f64, culling: Culling) -> Settings {
+    Settings {
+        error_px: eps_px,
+        lod: eps_px > 0.0,
+        culling,
+        ..Settings::default()
     }
 }
 
@@ -322,12 +327,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         timed: args.frames.max(STABILITY_SAMPLES.div_ceil(args.views)),
         progress: &progress,
     };
-    let settings = Settings {
-        error_px: eps_check,
-        lod: eps_check > 0.0,
-        culling: Culling::Compute,
-        ..Settings::default()
-    };
+    let settings = sweep_settings(eps_check, Culling::Compute);
     let mut again = measure::measure_runs(
         &renderer,
         &bench.targets,
