@@ -41,10 +41,19 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
     let stage = Stage::start("load", 0, "");
     let model = read_ply(input)?;
     let points = model.geometry.positions.len() as u64;
-    let dropped = match model.stats.vertices_dropped_nonfinite {
-        0 => String::new(),
-        n => format!(", {} non-finite vertices dropped", count(n)),
-    };
+    let st = &model.stats;
+    let dropped: String = [
+        (st.vertices_dropped_nonfinite, "non-finite vertices dropped"),
+        (
+            st.vertices_dropped_out_of_range,
+            "vertices out of range dropped",
+        ),
+        (st.outliers, "outliers kept"),
+    ]
+    .iter()
+    .filter(|(n, _)| *n > 0)
+    .map(|(n, what)| format!(", {} {what}", count(*n)))
+    .collect();
     stage.finish(&format!(
         "{} vertices, {} triangles, {:.0} MB/s{dropped}",
         count(points),

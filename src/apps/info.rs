@@ -7,6 +7,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::io::ply::{PlyModel, read_ply};
+use crate::io::rebase::MAX_OFFSET;
 use crate::io::spt_file::{SptFile, is_spt};
 use crate::io::{Bounds, GeometryStats};
 use crate::surfel::{LeafSurfels, SurfelStats, leaf_surfels};
@@ -56,7 +57,9 @@ pub struct PlyInfo {
     pub elements: Vec<ElementInfo>,
     /// Bounding box of the finite vertices, in the file's coordinates (exact f64).
     pub bounds: Bounds,
-    /// Centre of `bounds`: every position is stored relative to it.
+    /// Bounding box of the vertices that are not outliers (`bounds` when none is).
+    pub core: Bounds,
+    /// Centre of `core`: every position is stored relative to it.
     pub origin: [f64; 3],
     pub present: Present,
     pub geometry: GeometryStats,
@@ -100,6 +103,7 @@ impl PlyInfo {
                 })
                 .collect(),
             bounds: g.bounds,
+            core: g.core,
             origin: g.origin.to_array(),
             present: Present {
                 faces: !g.triangles.is_empty(),
@@ -149,9 +153,13 @@ impl PlyInfo {
         line(
             "vertices",
             format!(
-                "{} read, {} dropped (NaN or infinite coordinates)",
+                "{} read, {} dropped (NaN or infinite coordinates), {} dropped (beyond ±{:e} \
+                 of the origin), {} outliers (far outside the core box)",
                 count(g.vertices_in_file),
-                count(g.vertices_dropped_nonfinite)
+                count(g.vertices_dropped_nonfinite),
+                count(g.vertices_dropped_out_of_range),
+                MAX_OFFSET,
+                count(g.outliers)
             ),
         );
         if self.present.faces || g.faces_in_file > 0 {
@@ -167,6 +175,10 @@ impl PlyInfo {
             );
         }
         place_fields(&mut out, &self.bounds, self.origin);
+        if self.core != self.bounds {
+            field(&mut out, "core min", xyz(self.core.min));
+            field(&mut out, "core max", xyz(self.core.max));
+        }
         let mut line = |k: &str, v: String| field(&mut out, k, v);
         line(
             "present",
@@ -241,8 +253,19 @@ fn place_fields(out: &mut String, bounds: &Bounds, origin: [f64; 3]) {
 }
 
 fn xyz(p: [f64; 3]) -> String {
-    // `{}` on f64 prints the shortest decimal that reads back to the same double.
-    format!("{} {} {}", p[0], p[1], p[2])
+    format!("{} {} {}", readable(p[0]), readable(p[1]), readable(p[2]))
+}
+
+/// The shortest decimal that reads back to the same double (`{}`), in scientific
+/// notation (`{:e}`, also shortest) when the plain form is longer than 20 characters:
+/// 1e300 is printed as such, not as 301 digits.
+pub fn readable(x: f64) -> String {
+    let plain = format!("{x}");
+    if plain.len() <= 20 {
+        plain
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// 1234567 → "1,234,567".
@@ -276,6 +299,8 @@ pub struct SptInfo {
     /// Whether the stored checksum matches the header and sections.
     pub checksum_ok: bool,
     pub checksum: String,
+    /// What makes the tree invalid (a value no reader can use), when the checksum holds.
+    pub invalid: Option<String>,
     #[serde(flatten)]
     pub meta: TreeMeta,
     pub record_bytes: usize,
@@ -293,6 +318,11 @@ impl SptInfo {
         let start = Instant::now();
         let checksum_ok = file.verify().is_ok();
         let verify_seconds = start.elapsed().as_secs_f64();
+        let invalid = if checksum_ok {
+            file.validate().err().map(|e| e.to_string())
+        } else {
+            None
+        };
         let scale = file.meta.error_scale;
         let root_error = file
             .nodes()
@@ -305,6 +335,7 @@ impl SptInfo {
             format_version: file.version,
             checksum_ok,
             checksum: format!("{:016x}", file.checksum),
+            invalid,
             meta: file.meta.clone(),
             record_bytes: std::mem::size_of::<NodeRecord>(),
             root_error,
@@ -331,6 +362,9 @@ impl SptInfo {
                 }
             ),
         );
+        if let Some(why) = &self.invalid {
+            line("tree", format!("INVALID: {why}"));
+        }
         line(
             "nodes",
             format!(
@@ -387,6 +421,9 @@ pub fn run(path: &Path, json: bool) -> anyhow::Result<()> {
         }
         if !info.checksum_ok {
             anyhow::bail!("{}: checksum mismatch: the file is corrupt", path.display());
+        }
+        if let Some(why) = info.invalid {
+            anyhow::bail!("{why}");
         }
         return Ok(());
     }

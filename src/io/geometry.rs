@@ -1,9 +1,11 @@
 //! Geometry: what the surfel builder needs from a model file, rebased around its centre.
 //!
 //! Coordinates are read as f64. `origin` is the centre of the bounding box of the
-//! finite vertices, in f64; positions are stored as f32 *relative to origin*, so a LiDAR
-//! tile at x ≈ 5·10⁵ m keeps sub-millimetre precision. Vertices with a NaN or infinite
-//! coordinate are dropped together with every triangle that uses them.
+//! model's core (its vertices but the outliers, [`super::rebase`]), in f64; positions
+//! are stored as f32 *relative to origin*, so a LiDAR tile at x ≈ 5·10⁵ m keeps
+//! sub-millimetre precision, and a stray sample 10¹⁰ m away does not take it. Vertices
+//! with a NaN or infinite coordinate, or too far from the origin for f32 offsets to
+//! hold, are dropped together with every triangle that uses them, and counted.
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -12,6 +14,7 @@ use serde::Serialize;
 use crate::io::ply::faces::Faces;
 use crate::io::ply::fields::{VertexFields, VertexRows};
 use crate::io::ply::scalar::Scalar;
+use crate::io::rebase;
 
 /// Axis-aligned box in the file's own coordinates, at full f64 precision.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -21,28 +24,34 @@ pub struct Bounds {
 }
 
 impl Bounds {
+    /// Centre, as min/2 + max/2: finite for any finite box (min + max may overflow).
     pub fn center(&self) -> DVec3 {
-        (DVec3::from(self.min) + DVec3::from(self.max)) * 0.5
+        DVec3::from(self.min) * 0.5 + DVec3::from(self.max) * 0.5
     }
 
     pub fn extent(&self) -> DVec3 {
         DVec3::from(self.max) - DVec3::from(self.min)
     }
 
-    fn empty() -> Self {
+    /// Whether `p` lies in the box (faces included).
+    pub fn contains(&self, p: [f64; 3]) -> bool {
+        (0..3).all(|k| self.min[k] <= p[k] && p[k] <= self.max[k])
+    }
+
+    pub(crate) fn empty() -> Self {
         Bounds {
             min: [f64::INFINITY; 3],
             max: [f64::NEG_INFINITY; 3],
         }
     }
 
-    fn grow(mut self, p: [f64; 3]) -> Self {
+    pub(crate) fn grow(mut self, p: [f64; 3]) -> Self {
         self.min = std::array::from_fn(|a| self.min[a].min(p[a]));
         self.max = std::array::from_fn(|a| self.max[a].max(p[a]));
         self
     }
 
-    fn union(self, o: Self) -> Self {
+    pub(crate) fn union(self, o: Self) -> Self {
         self.grow(o.min).grow(o.max)
     }
 }
@@ -50,9 +59,13 @@ impl Bounds {
 /// A model ready for the surfel builder.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Geometry {
-    /// Centre of `bounds`; every position below is relative to it.
+    /// Centre of `core`; every position below is relative to it.
     pub origin: DVec3,
+    /// Bounding box of the kept vertices.
     pub bounds: Bounds,
+    /// Bounding box of the kept vertices that are not outliers (`bounds` when none is):
+    /// the size of the model, for its unit scale.
+    pub core: Bounds,
     pub positions: Vec<Vec3>,
     /// Normals given by the file, unit length; zero where the file's normal was zero or
     /// not finite (the surfel builder recomputes those).
@@ -62,16 +75,77 @@ pub struct Geometry {
     pub triangles: Vec<[u32; 3]>,
 }
 
+impl Geometry {
+    /// The invariants every reader guarantees: finite origin and boxes, every position
+    /// finite and within [`rebase::MAX_OFFSET`] of the origin, given normals unit or
+    /// zero, colours one per vertex, triangle indices in range.
+    pub fn check(&self) -> Result<(), String> {
+        let finite_box = |b: &Bounds| {
+            (0..3).all(|k| b.min[k].is_finite() && b.max[k].is_finite() && b.min[k] <= b.max[k])
+        };
+        if !self.origin.is_finite() || !finite_box(&self.bounds) || !finite_box(&self.core) {
+            return Err(format!(
+                "origin {} bounds {:?} core {:?} not finite",
+                self.origin, self.bounds, self.core
+            ));
+        }
+        let n = self.positions.len();
+        let limit = rebase::MAX_OFFSET as f32;
+        if let Some(i) = self
+            .positions
+            .iter()
+            .position(|p| !p.is_finite() || p.abs().max_element() > limit)
+        {
+            return Err(format!("position {i} is {}", self.positions[i]));
+        }
+        if let Some(normals) = &self.normals {
+            let bad = |v: &Vec3| *v != Vec3::ZERO && (v.length() - 1.0).abs() > 1e-5;
+            if normals.len() != n || normals.iter().any(bad) {
+                return Err("given normals not one unit (or zero) vector per vertex".to_owned());
+            }
+        }
+        if self.colors.as_ref().is_some_and(|c| c.len() != n) {
+            return Err("not one colour per vertex".to_owned());
+        }
+        if let Some(t) = self
+            .triangles
+            .iter()
+            .find(|t| t.iter().any(|&v| v as usize >= n))
+        {
+            return Err(format!("triangle {t:?} beyond the {n} vertices"));
+        }
+        Ok(())
+    }
+}
+
 /// What was read and what was dropped, and why.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
 pub struct GeometryStats {
     pub vertices_in_file: u64,
     pub vertices_dropped_nonfinite: u64,
+    /// Finite vertices further from the origin than f32 offsets can hold
+    /// ([`super::rebase::MAX_OFFSET`]).
+    pub vertices_dropped_out_of_range: u64,
+    /// Kept vertices far outside the model's core (stray samples).
+    pub outliers: u64,
     pub faces_in_file: u64,
     pub faces_with_fewer_than_3_vertices: u64,
     pub triangles: u64,
+    /// Triangles that use a dropped vertex (non-finite or out of range).
     pub triangles_dropped_nonfinite: u64,
     pub normals_given_invalid: u64,
+}
+
+/// `v` at unit length, in f32: divided by its largest component first and normalized
+/// in f64, so that neither tiny nor huge vectors (whose squared length under- or
+/// overflows) lose their direction or their unit length. `None` for a zero or
+/// non-finite vector.
+pub fn unit_vector(v: DVec3) -> Option<Vec3> {
+    let m = v.abs().max_element();
+    if !(m > 0.0 && m.is_finite()) {
+        return None;
+    }
+    (v / m).try_normalize().map(|u| u.as_vec3())
 }
 
 /// A colour channel of type `s` as 8 bits: integers are taken as 0–255 (ushort as
@@ -91,49 +165,17 @@ fn channel(v: f64, s: Scalar) -> u8 {
 
 const CHUNK: usize = 1 << 15;
 
-fn is_finite(p: [f64; 3]) -> bool {
-    p.iter().all(|c| c.is_finite())
-}
-
 /// Builds the geometry from decoded vertex rows and faces.
-/// Fails only when no vertex has finite coordinates.
+/// Fails only when no vertex can be kept.
 pub(crate) fn assemble<R: VertexRows>(
     rows: &R,
     fields: &VertexFields,
     faces: Option<Faces>,
 ) -> Result<(Geometry, GeometryStats), String> {
     let n = rows.len();
-    // Pass 1: bounds of the finite vertices, and how many are not finite.
-    let (bounds, nonfinite) = (0..n)
-        .into_par_iter()
-        .with_min_len(CHUNK)
-        .fold(
-            || (Bounds::empty(), 0u64),
-            |(b, bad), i| {
-                let p = rows.position(i);
-                if is_finite(p) {
-                    (b.grow(p), bad)
-                } else {
-                    (b, bad + 1)
-                }
-            },
-        )
-        .reduce(|| (Bounds::empty(), 0), |a, b| (a.0.union(b.0), a.1 + b.1));
-    if nonfinite == n as u64 {
-        return Err(if n == 0 {
-            "the model has no vertex".to_owned()
-        } else {
-            format!("none of the {n} vertices has finite coordinates")
-        });
-    }
-    let origin = bounds.center();
-    // Rows kept, in order (all of them in the common case).
-    let kept: Option<Vec<u32>> = (nonfinite > 0).then(|| {
-        (0..n as u32)
-            .filter(|&i| is_finite(rows.position(i as usize)))
-            .collect()
-    });
-    let kept_rows = kept.as_deref();
+    let frame = rebase::frame(rows)?;
+    let origin = frame.origin;
+    let kept_rows = frame.kept.as_deref();
     let map_rows = |f: &(dyn Fn(usize) -> Vec3 + Sync)| -> Vec<Vec3> {
         match kept_rows {
             None => (0..n).into_par_iter().with_min_len(CHUNK).map(f).collect(),
@@ -148,18 +190,16 @@ pub(crate) fn assemble<R: VertexRows>(
     let positions = map_rows(&|i| (DVec3::from(rows.position(i)) - origin).as_vec3());
     let mut stats = GeometryStats {
         vertices_in_file: n as u64,
-        vertices_dropped_nonfinite: nonfinite,
+        vertices_dropped_nonfinite: frame.nonfinite,
+        vertices_dropped_out_of_range: frame.out_of_range,
+        outliers: frame.outliers,
         ..GeometryStats::default()
     };
     let normals = fields.has_normals.then(|| {
         let k = VertexFields::NORMAL;
         map_rows(&|i| {
-            let v = Vec3::new(
-                rows.get(i, k) as f32,
-                rows.get(i, k + 1) as f32,
-                rows.get(i, k + 2) as f32,
-            );
-            v.try_normalize().unwrap_or(Vec3::ZERO)
+            let v = DVec3::new(rows.get(i, k), rows.get(i, k + 1), rows.get(i, k + 2));
+            unit_vector(v).unwrap_or(Vec3::ZERO)
         })
     });
     if let Some(ns) = &normals {
@@ -212,7 +252,8 @@ pub(crate) fn assemble<R: VertexRows>(
     Ok((
         Geometry {
             origin,
-            bounds,
+            bounds: frame.bounds,
+            core: frame.core,
             positions,
             normals,
             colors,

@@ -4,6 +4,7 @@
 pub mod atomic;
 pub mod geometry;
 pub mod ply;
+pub mod rebase;
 pub mod spt_file;
 
 pub use geometry::{Bounds, Geometry, GeometryStats};

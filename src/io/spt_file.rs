@@ -31,6 +31,7 @@ use xxhash_rust::xxh3::Xxh3;
 use crate::io::Bounds;
 use crate::io::atomic::write_atomically;
 use crate::tree::select::TreeView;
+use crate::tree::validate;
 use crate::tree::{NodeRecord, SequentialList, TreeMeta};
 
 pub const MAGIC: &[u8; 8] = b"spt-tree";
@@ -60,6 +61,8 @@ pub enum SptError {
     },
     #[error("{path}: corrupt header: {what}")]
     BadHeader { path: PathBuf, what: String },
+    #[error("{path}: invalid tree: {what}")]
+    Invalid { path: PathBuf, what: String },
     #[error("{path}: corrupt: checksum mismatch (stored {stored:016x}, computed {computed:016x})")]
     Checksum {
         path: PathBuf,
@@ -115,6 +118,19 @@ fn payload_checksum(header: &[u8], nodes: &[u8], parents: &[u8]) -> u64 {
     hasher.digest()
 }
 
+/// Stores in an `.spt` image held in memory the checksum of its bytes, whatever they
+/// hold; false when `bytes` is shorter than a header. For tools that edit files on
+/// purpose (the fuzzer), so that their edits reach past the checksum.
+pub fn reseal(bytes: &mut [u8]) -> bool {
+    if bytes.len() < HEADER_BYTES {
+        return false;
+    }
+    let (header, rest) = bytes.split_at(HEADER_BYTES);
+    let checksum = payload_checksum(header, rest, &[]);
+    bytes[CHECKSUM_AT..CHECKSUM_AT + 8].copy_from_slice(&checksum.to_le_bytes());
+    true
+}
+
 /// Writes the list in `.spt` form to `w` (little-endian hosts write their memory as is).
 pub fn write_to(w: &mut dyn Write, list: &SequentialList) -> std::io::Result<()> {
     let nodes: &[u8] = bytemuck::cast_slice(&list.nodes);
@@ -158,11 +174,24 @@ fn f32_at(b: &[u8], at: usize) -> f32 {
 }
 
 impl SptFile {
-    /// Opens and checks the file, checksum included.
+    /// Opens and checks the file: its checksum, then every value a reader relies on
+    /// ([`validate::check_meta`], [`validate::check_nodes`]): a file whose checksum
+    /// holds may still come from another writer.
     pub fn open(path: &Path) -> Result<SptFile, SptError> {
         let file = Self::open_unverified(path)?;
         file.verify()?;
+        file.validate()?;
         Ok(file)
+    }
+
+    /// Checks the header's values and every node on its own ([`validate`]).
+    pub fn validate(&self) -> Result<(), SptError> {
+        validate::check_meta(&self.meta)
+            .and_then(|_| validate::check_nodes(&self.meta, self.nodes(), self.parents()))
+            .map_err(|what| SptError::Invalid {
+                path: self.path.clone(),
+                what,
+            })
     }
 
     /// Opens the file and checks its header and size, not its checksum.

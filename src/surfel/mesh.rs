@@ -17,6 +17,7 @@ use glam::{DVec3, Vec3};
 
 use super::cloud::neighbour_disks;
 use super::{Surfel, SurfelStats};
+use crate::io::geometry::unit_vector;
 use rayon::prelude::*;
 
 /// Relative growth of every radius, above f32 rounding (2⁻²⁴).
@@ -166,7 +167,10 @@ pub fn vertex_disks(
             } else if sum.length() <= CANCELLED * area {
                 (Vec3::ZERO, Source::Cancelled)
             } else {
-                (sum.normalize(), Source::Faces)
+                (
+                    unit_vector(sum.as_dvec3()).unwrap_or(Vec3::Z),
+                    Source::Faces,
+                )
             };
             surfel.normal = normal;
             source
@@ -180,8 +184,14 @@ pub fn vertex_disks(
             .collect()
     };
     let cancelled = with(Source::Cancelled);
-    let without_faces = with(Source::NoFaces);
-    stats.isolated_vertices = without_faces
+    // Vertices without a normal from faces (only degenerate triangles, or none), and
+    // those no triangle reaches (radius 0) even when the file gives them a normal:
+    // radius and normal (unless given) from their neighbours, like a cloud.
+    let from_neighbours: Vec<u32> = (0..surfels.len() as u32)
+        .into_par_iter()
+        .filter(|&v| sources[v as usize] == Source::NoFaces || surfels[v as usize].radius == 0.0)
+        .collect();
+    stats.isolated_vertices = from_neighbours
         .iter()
         .filter(|&&v| surfels[v as usize].radius == 0.0)
         .count() as u64;
@@ -205,10 +215,9 @@ pub fn vertex_disks(
             }
         }
         for (v, (_, nrm)) in best {
-            surfels[v as usize].normal = nrm.as_vec3().normalize_or(Vec3::Z);
+            surfels[v as usize].normal = unit_vector(nrm).unwrap_or(Vec3::Z);
         }
         stats.cancelled_normals = cancelled.len() as u64;
     }
-    // Vertices no (non-degenerate) triangle uses: from their neighbours, like a cloud.
-    neighbour_disks(points, scale, &without_faces, given, surfels, stats);
+    neighbour_disks(points, scale, &from_neighbours, given, surfels, stats);
 }

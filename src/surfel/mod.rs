@@ -2,9 +2,10 @@
 //!
 //! Every surfel leaving this module has a finite position, a unit normal and a finite
 //! radius > 0, on any input. All geometric work is done on positions multiplied by a
-//! power of two that brings the model's extent into [0.5, 1): the scaling is exact, so a
-//! model scaled by 10⁻⁷ or 10⁷ gets the same surfels up to that scale, and no threshold
-//! depends on the model's units.
+//! power of two that brings the extent of the model's core (its box without the
+//! outliers, [`crate::io::rebase`]) into [0.5, 1): the scaling is exact, so a model
+//! scaled by 10⁻⁷ or 10⁷ gets the same surfels up to that scale, no threshold depends
+//! on the model's units, and a stray sample far away changes neither.
 
 pub mod cloud;
 pub mod mesh;
@@ -63,6 +64,23 @@ pub struct LeafSurfels {
 }
 
 impl LeafSurfels {
+    /// The promise of this module: every surfel has a finite position, a finite
+    /// radius > 0 and a unit normal. The first surfel that breaks it is named.
+    pub fn check(&self) -> Result<(), String> {
+        let good = |s: &Surfel| {
+            s.position.is_finite()
+                && s.radius.is_finite()
+                && s.radius > 0.0
+                && s.normal.is_finite()
+                && (s.normal.length() - 1.0).abs() <= 1e-5
+        };
+        let bad = |s: &Surfel| !good(s);
+        match self.surfels.par_iter().position_first(bad) {
+            None => Ok(()),
+            Some(i) => Err(format!("surfel {i}: {:?}", self.surfels[i])),
+        }
+    }
+
     /// (min, median, max) of the radii, in model units.
     pub fn radius_range(&self) -> Option<(f32, f32, f32)> {
         let mut r: Vec<f32> = self.surfels.par_iter().map(|s| s.radius).collect();
@@ -90,7 +108,7 @@ pub fn unit_scale(extent: f64) -> f32 {
 /// Builds the leaf surfels of a model: per vertex from its faces for a mesh, from its
 /// nearest neighbours for a point cloud (or a mesh's isolated vertices).
 pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
-    let scale = unit_scale(g.bounds.extent().max_element());
+    let scale = unit_scale(g.core.extent().max_element());
     let given = g.normals.as_deref();
     let mut stats = SurfelStats {
         given_normals: given.map_or(0, |n| {

@@ -98,6 +98,7 @@ pub fn geometry_of(points: &[[f64; 3]]) -> Geometry {
     Geometry {
         origin,
         bounds,
+        core: bounds,
         positions: points
             .iter()
             .map(|p| (DVec3::from(*p) - origin).as_vec3())

@@ -127,6 +127,11 @@ pub fn decode(
         .faces
         .map_or(plan.vertex_element, |(f, _)| f.max(plan.vertex_element));
     for (ei, e) in header.elements.iter().enumerate().take(needed + 1) {
+        // A row of an element without properties holds no token: its rows cost
+        // nothing to skip, whatever count the header declares.
+        if e.properties.is_empty() {
+            continue;
+        }
         let face_list = plan.faces.filter(|(f, _)| *f == ei).map(|(_, l)| l);
         let mut element_faces = face_list.map(|_| Faces::with_capacity(bound(e.count)));
         let mut indices = Vec::new();

@@ -1,0 +1,135 @@
+//! What every sequential list satisfies, checked on lists read from files (a file whose
+//! checksum holds may still have been written by something else) and by the tests and
+//! the fuzzer on lists just built.
+//!
+//! * [`check_meta`]: origin, bounds and the node-centre box finite, boxes not inverted,
+//!   error scale finite and > 0.
+//! * [`check_nodes`], per node: finite position inside the node-centre box, finite
+//!   radius > 0, errors (e, e_parent, δ) not NaN and ≥ 0, e finite, e ≤ e_parent, parent
+//!   index in range. Local checks only: O(n), in parallel, no random access.
+//! * [`check_structure`]: the list as a tree: one root, first, with e_parent = +∞ and
+//!   δ = 0; each node's e_parent a bit copy of its parent's e and its level one more;
+//!   δ ≥ the distance to the parent; sorted by e_parent, descending.
+
+use rayon::prelude::*;
+
+use super::record::half_value;
+use super::{NodeRecord, TreeMeta};
+
+fn finite3_f64(v: &[f64; 3]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+/// The header fields of a list.
+pub fn check_meta(meta: &TreeMeta) -> Result<(), String> {
+    let b = &meta.bounds;
+    if !finite3_f64(&meta.origin) {
+        return Err(format!("origin {:?} is not finite", meta.origin));
+    }
+    if !finite3_f64(&b.min) || !finite3_f64(&b.max) || (0..3).any(|k| b.min[k] > b.max[k]) {
+        return Err(format!(
+            "bounds {:?} … {:?} are not a finite box",
+            b.min, b.max
+        ));
+    }
+    let (lo, hi) = (meta.centre_min, meta.centre_max);
+    if !(0..3).all(|k| lo[k].is_finite() && hi[k].is_finite() && lo[k] <= hi[k]) {
+        return Err(format!(
+            "node-centre box {lo:?} … {hi:?} is not a finite box"
+        ));
+    }
+    let s = meta.error_scale;
+    if !(s.is_finite() && s > 0.0) {
+        return Err(format!("error scale {s} is not finite and > 0"));
+    }
+    Ok(())
+}
+
+/// What is wrong with node `r` on its own, if anything.
+fn node_problem(meta: &TreeMeta, r: &NodeRecord, parent: u32, count: usize) -> Option<String> {
+    let p = r.position();
+    let (lo, hi) = (meta.centre_min, meta.centre_max);
+    if !p.is_finite() || (0..3).any(|k| p[k] < lo[k] || p[k] > hi[k]) {
+        return Some(format!(
+            "position {p} is not finite or outside the node-centre box"
+        ));
+    }
+    let radius = r.radius();
+    if !(radius.is_finite() && radius > 0.0) {
+        return Some(format!("radius {radius} is not finite and > 0"));
+    }
+    let (e, ep, d) = (
+        half_value(r.error),
+        half_value(r.parent_error),
+        half_value(r.delta),
+    );
+    if !(e.is_finite() && e >= 0.0 && ep >= 0.0 && d >= 0.0 && !d.is_infinite()) {
+        return Some(format!("errors e {e}, e_parent {ep}, δ {d} out of range"));
+    }
+    if e > ep {
+        return Some(format!("error {e} above its parent's {ep}"));
+    }
+    if parent != u32::MAX && parent as usize >= count {
+        return Some(format!("parent index {parent} beyond the {count} nodes"));
+    }
+    None
+}
+
+/// Per-node checks of `nodes` (with their `parents`); the first failing node is named.
+pub fn check_nodes(meta: &TreeMeta, nodes: &[NodeRecord], parents: &[u32]) -> Result<(), String> {
+    if nodes.len() != parents.len() {
+        return Err(format!(
+            "{} nodes but {} parent indices",
+            nodes.len(),
+            parents.len()
+        ));
+    }
+    let bad = nodes
+        .par_iter()
+        .zip(parents)
+        .enumerate()
+        .find_first(|(_, (r, p))| node_problem(meta, r, **p, nodes.len()).is_some());
+    match bad {
+        None => Ok(()),
+        Some((i, (r, p))) => Err(format!(
+            "node {i}: {}",
+            node_problem(meta, r, *p, nodes.len()).unwrap_or_default()
+        )),
+    }
+}
+
+/// The list as a tree (module doc). Assumes [`check_nodes`] passed.
+pub fn check_structure(
+    meta: &TreeMeta,
+    nodes: &[NodeRecord],
+    parents: &[u32],
+) -> Result<(), String> {
+    let roots = parents.iter().filter(|&&p| p == u32::MAX).count();
+    if roots != 1 || parents.first() != Some(&u32::MAX) {
+        return Err(format!("{roots} roots; the root must be alone and first"));
+    }
+    let root = &nodes[0];
+    if !half_value(root.parent_error).is_infinite() || root.delta != 0 {
+        return Err("the root's parent error is not +∞ or its δ is not 0".to_owned());
+    }
+    let scale = meta.error_scale;
+    for (i, (r, &p)) in nodes.iter().zip(parents).enumerate().skip(1) {
+        if r.parent_error > nodes[i - 1].parent_error {
+            return Err(format!("node {i}: the list is not sorted by parent error"));
+        }
+        let parent = &nodes[p as usize];
+        if r.parent_error != parent.error || r.level != parent.level.wrapping_add(1) {
+            return Err(format!(
+                "node {i}: parent error or level does not match its parent {p}"
+            ));
+        }
+        let d = (r.position().as_dvec3() - parent.position().as_dvec3()).length();
+        if r.delta(scale) < d {
+            return Err(format!(
+                "node {i}: δ {} below the distance {d} to its parent",
+                r.delta(scale)
+            ));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,276 @@
+//! A mutation fuzzer for spt's readers (PLY and `.spt`), on the stable toolchain.
+//!
+//! ```text
+//! cargo run --release --example fuzz -- --seconds 60
+//! ```
+//!
+//! Seeds are made by the project's own writers ([`seeds`]); each input is a seed with
+//! one to four stacked mutations ([`mutate`]) and runs through load, surfels, tree,
+//! `.spt` write and reopen with every invariant checked ([`target`]). Counted as
+//! failures, and saved under `--out` with a note: panics, violated invariants, inputs
+//! that take longer than `--slow` seconds, and single allocations larger than
+//! [`justified`] bytes for the input's size. A watchdog ends the run when one input
+//! hangs (the input is left in `--out/current.*`). Exit code 0 when nothing failed.
+
+mod mutate;
+mod seeds;
+mod target;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+use clap::Parser;
+
+use mutate::{Rng, mutate};
+use seeds::{Kind, Seed};
+use target::Outcome;
+
+/// The largest single allocation since the last reset, in bytes.
+struct Largest;
+static LARGEST: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards every call to the system allocator; only records sizes.
+unsafe impl GlobalAlloc for Largest {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        LARGEST.fetch_max(l.size(), Ordering::Relaxed);
+        unsafe { System.alloc(l) }
+    }
+    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
+        LARGEST.fetch_max(l.size(), Ordering::Relaxed);
+        unsafe { System.alloc_zeroed(l) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        unsafe { System.dealloc(p, l) }
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
+        LARGEST.fetch_max(n, Ordering::Relaxed);
+        unsafe { System.realloc(p, l, n) }
+    }
+}
+
+#[global_allocator]
+static ALLOC: Largest = Largest;
+
+/// The largest single allocation an input of `len` bytes justifies: 64 bytes per input
+/// byte (a vertex of three `char`s becomes a 32-byte surfel and about 1.3 node records;
+/// a face of `char` indices, 12 bytes per triangle; vectors grow by doubling) and 1 MiB
+/// of fixed buffers.
+pub fn justified(len: usize) -> usize {
+    64 * len + (1 << 20)
+}
+
+#[derive(Parser)]
+#[command(about = "Mutation fuzzer for spt's PLY and .spt readers")]
+struct Args {
+    /// How long to run, in seconds.
+    #[arg(long, default_value_t = 60.0)]
+    seconds: f64,
+    /// Seed of the random mutations (runs with the same seed make the same inputs).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Folder for failing inputs and the input in progress.
+    #[arg(long, default_value = "target/fuzz")]
+    out: PathBuf,
+    /// An input that takes longer than this (seconds) counts as a failure.
+    #[arg(long, default_value_t = 2.0)]
+    slow: f64,
+    /// Run one saved input (a .ply or .spt file) instead, and print what happens.
+    #[arg(long)]
+    replay: Option<PathBuf>,
+}
+
+#[derive(Default)]
+struct Tally {
+    executions: u64,
+    /// Per reader (PLY, .spt): inputs accepted and refused.
+    accepted: [u64; 2],
+    refused: [u64; 2],
+    panics: u64,
+    violations: u64,
+    slow: u64,
+    oversized: u64,
+    slowest: Duration,
+    /// The largest allocation as a fraction of what its input justified, the
+    /// allocation and the input's size.
+    worst: (f64, usize, usize),
+}
+
+impl Tally {
+    fn failures(&self) -> u64 {
+        self.panics + self.violations + self.slow + self.oversized
+    }
+}
+
+/// Runs one input; panics are caught and returned as text.
+fn execute(kind: Kind, path: &Path) -> Result<Outcome, String> {
+    catch_unwind(AssertUnwindSafe(|| target::run(kind, path))).map_err(|p| {
+        p.downcast_ref::<String>()
+            .cloned()
+            .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_else(|| "a panic".into())
+    })
+}
+
+fn save(out: &Path, n: u64, what: &str, kind: Kind, bytes: &[u8], note: &str) {
+    let stem = out.join(format!("{what}-{n}"));
+    let _ = std::fs::write(stem.with_extension(kind.extension()), bytes);
+    let _ = std::fs::write(stem.with_extension("txt"), note);
+    eprintln!(
+        "{what}: {note} (saved as {}.{})",
+        stem.display(),
+        kind.extension()
+    );
+}
+
+/// Ends the process when one input runs for over 60 s: a hang cannot be caught.
+fn watchdog(started_ms: &'static AtomicU64, origin: Instant, out: PathBuf) {
+    std::thread::spawn(move || {
+        loop {
+            std::thread::sleep(Duration::from_secs(1));
+            let since = started_ms.load(Ordering::Relaxed);
+            let now = origin.elapsed().as_millis() as u64;
+            if since != u64::MAX && now.saturating_sub(since) > 60_000 {
+                eprintln!(
+                    "hang: an input runs for over 60 s; it is {}/current.*",
+                    out.display()
+                );
+                std::process::exit(3);
+            }
+        }
+    });
+}
+
+fn replay(path: &Path) -> i32 {
+    let kind = if path.extension().is_some_and(|e| e == "spt") {
+        Kind::Spt
+    } else {
+        Kind::Ply
+    };
+    let start = Instant::now();
+    let result = execute(kind, path);
+    let took = start.elapsed();
+    match result {
+        Ok(Outcome::Accepted) => println!("accepted in {took:?}"),
+        Ok(Outcome::Refused) => println!("refused in {took:?}"),
+        Ok(Outcome::Violation(why)) => {
+            println!("invariant violated: {why}");
+            return 1;
+        }
+        Err(panic) => {
+            println!("panic: {panic}");
+            return 1;
+        }
+    }
+    0
+}
+
+fn main() {
+    let args = Args::parse();
+    std::panic::set_hook(Box::new(|_| {}));
+    if let Some(path) = &args.replay {
+        std::process::exit(replay(path));
+    }
+    std::fs::create_dir_all(&args.out).expect("create the output folder");
+    let work = tempfile::tempdir_in(std::env::temp_dir()).expect("a temporary folder");
+    let seeds: Vec<Seed> = seeds::all(work.path());
+    static STARTED: AtomicU64 = AtomicU64::new(u64::MAX);
+    let origin = Instant::now();
+    watchdog(&STARTED, origin, args.out.clone());
+
+    let mut rng = Rng::new(args.seed);
+    let mut tally = Tally::default();
+    let deadline = Duration::from_secs_f64(args.seconds);
+    let slow = Duration::from_secs_f64(args.slow);
+    let mut last_report = Instant::now();
+    while origin.elapsed() < deadline {
+        // Every seed once as it is, then mutants.
+        let (seed, bytes) = match seeds.get(tally.executions as usize) {
+            Some(s) => (s, s.bytes.clone()),
+            None => {
+                let s = rng.pick(&seeds);
+                (s, mutate(&mut rng, s, &seeds))
+            }
+        };
+        let path = args.out.join(format!("current.{}", seed.kind.extension()));
+        std::fs::write(&path, &bytes).expect("write the input");
+        LARGEST.store(0, Ordering::Relaxed);
+        STARTED.store(origin.elapsed().as_millis() as u64, Ordering::Relaxed);
+        let start = Instant::now();
+        let result = execute(seed.kind, &path);
+        let took = start.elapsed();
+        STARTED.store(u64::MAX, Ordering::Relaxed);
+        let largest = LARGEST.load(Ordering::Relaxed);
+        tally.executions += 1;
+        let n = tally.executions;
+        let note = |what: &str| format!("{what} (mutant of {}, {} bytes)", seed.name, bytes.len());
+        match result {
+            Ok(Outcome::Accepted) => tally.accepted[seed.kind as usize] += 1,
+            Ok(Outcome::Refused) => tally.refused[seed.kind as usize] += 1,
+            Ok(Outcome::Violation(why)) => {
+                tally.violations += 1;
+                save(&args.out, n, "violation", seed.kind, &bytes, &note(&why));
+            }
+            Err(panic) => {
+                tally.panics += 1;
+                save(&args.out, n, "panic", seed.kind, &bytes, &note(&panic));
+            }
+        }
+        tally.slowest = tally.slowest.max(took);
+        if took > slow {
+            tally.slow += 1;
+            save(
+                &args.out,
+                n,
+                "slow",
+                seed.kind,
+                &bytes,
+                &note(&format!("{took:?}")),
+            );
+        }
+        let fraction = largest as f64 / justified(bytes.len()) as f64;
+        if fraction > tally.worst.0 {
+            tally.worst = (fraction, largest, bytes.len());
+        }
+        if largest > justified(bytes.len()) {
+            tally.oversized += 1;
+            let what = format!("one allocation of {largest} bytes");
+            save(&args.out, n, "allocation", seed.kind, &bytes, &note(&what));
+        }
+        if last_report.elapsed() > Duration::from_secs(30) {
+            last_report = Instant::now();
+            report(&tally, origin.elapsed(), false);
+        }
+    }
+    let _ = std::fs::remove_file(args.out.join("current.ply"));
+    let _ = std::fs::remove_file(args.out.join("current.spt"));
+    report(&tally, origin.elapsed(), true);
+    std::process::exit(if tally.failures() == 0 { 0 } else { 1 });
+}
+
+fn report(t: &Tally, elapsed: Duration, last: bool) {
+    let s = elapsed.as_secs_f64();
+    println!(
+        "{}executions {} in {s:.0} s ({:.0}/s): PLY accepted {} refused {}, .spt accepted {} \
+         refused {}; panics {}, invariant violations {}, slower than the limit {}, oversized \
+         allocations {}; slowest input {:.1} ms; largest allocation {:.0} % of what its input \
+         justified ({} bytes for {} input bytes)",
+        if last { "fuzz: " } else { "      " },
+        t.executions,
+        t.executions as f64 / s.max(1e-9),
+        t.accepted[0],
+        t.refused[0],
+        t.accepted[1],
+        t.refused[1],
+        t.panics,
+        t.violations,
+        t.slow,
+        t.oversized,
+        t.slowest.as_secs_f64() * 1e3,
+        t.worst.0 * 100.0,
+        t.worst.1,
+        t.worst.2,
+    );
+}

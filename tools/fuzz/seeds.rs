@@ -1,0 +1,219 @@
+//! The fuzzer's seeds, made by the project's own writers: small meshes and clouds in
+//! every encoding, the inputs of issue 10's defects, and `.spt` files built from them.
+
+use std::path::Path;
+
+use spt::io::ply::{Encoding, PlyLayout, PolyMesh, Scalar, read_ply, write_ply};
+use spt::io::spt_file::write_to;
+use spt::surfel::leaf_surfels;
+use spt::tree::build_sequential_list;
+
+/// Which reader an input is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Ply = 0,
+    Spt = 1,
+}
+
+impl Kind {
+    pub fn extension(self) -> &'static str {
+        match self {
+            Kind::Ply => "ply",
+            Kind::Spt => "spt",
+        }
+    }
+}
+
+pub struct Seed {
+    pub name: String,
+    pub kind: Kind,
+    pub bytes: Vec<u8>,
+}
+
+fn grid(n: u32, quads: bool) -> PolyMesh {
+    let mut m = PolyMesh::default();
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = (i as f64, j as f64);
+            m.positions
+                .push([x, y, 0.1 * (x * 0.7).sin() * (y * 0.5).cos()]);
+        }
+    }
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let v = j * n + i;
+            let quad = [v, v + 1, v + n + 1, v + n];
+            if quads {
+                m.faces.push(&quad);
+            } else {
+                m.faces.push(&[quad[0], quad[1], quad[2]]);
+                m.faces.push(&[quad[0], quad[2], quad[3]]);
+            }
+        }
+    }
+    m
+}
+
+fn cloud(n: usize) -> PolyMesh {
+    let positions: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let t = i as f64 * 0.61803;
+            let (u, v) = (t.fract() * 4.0, (i as f64 / n as f64) * 4.0);
+            [u, v, 0.2 * (u * 1.3).sin()]
+        })
+        .collect();
+    let colors = (0..n)
+        .map(|i| [(i * 7) as u8, (i * 13) as u8, 200])
+        .collect();
+    PolyMesh {
+        positions,
+        colors: Some(colors),
+        ..PolyMesh::default()
+    }
+}
+
+fn with_normals(mut m: PolyMesh) -> PolyMesh {
+    let n = m.positions.len();
+    m.normals = Some(
+        (0..n)
+            .map(|i| {
+                if i % 5 == 0 {
+                    [0.0; 3]
+                } else {
+                    [0.0, 0.0, 1.0]
+                }
+            })
+            .collect(),
+    );
+    m
+}
+
+fn ply_bytes(dir: &Path, m: &PolyMesh, layout: &PlyLayout) -> Vec<u8> {
+    let path = dir.join("seed.ply");
+    write_ply(&path, m, layout).expect("write a seed");
+    std::fs::read(&path).expect("read a seed back")
+}
+
+fn standard(dir: &Path, m: &PolyMesh, e: Encoding) -> Vec<u8> {
+    ply_bytes(dir, m, &PlyLayout::standard(e, m))
+}
+
+fn doubles(dir: &Path, m: &PolyMesh, e: Encoding) -> Vec<u8> {
+    let mut layout = PlyLayout::standard(e, m);
+    for p in layout.vertex_properties.iter_mut().take(3) {
+        p.1 = Scalar::F64;
+    }
+    ply_bytes(dir, m, &layout)
+}
+
+fn ascii_points(header_extra: &str, rows: &[&str]) -> Vec<u8> {
+    let mut s = format!(
+        "ply\nformat ascii 1.0\ncomment made by the spt fuzzer\n{header_extra}element vertex {}\n\
+         property float x\nproperty float y\nproperty float z\nend_header\n",
+        rows.len()
+    );
+    for r in rows {
+        s.push_str(r);
+        s.push('\n');
+    }
+    s.into_bytes()
+}
+
+/// Every seed, PLY first, then `.spt` files built from some of them.
+pub fn all(dir: &Path) -> Vec<Seed> {
+    let square = {
+        let mut m = grid(2, false);
+        m.colors = Some(vec![[255, 0, 0], [0, 255, 0], [0, 0, 255], [9, 9, 9]]);
+        with_normals(m)
+    };
+    let mut isolated = grid(3, false);
+    isolated.positions.push([1.0, 1.0, 0.5]);
+    let isolated = with_normals(isolated);
+    let mut outlier = grid(5, false);
+    outlier.positions[7][0] = 1e10;
+    let unknown = {
+        let mut layout = PlyLayout::standard(Encoding::BinaryLittleEndian, &square);
+        layout
+            .vertex_properties
+            .insert(1, ("confidence".into(), Scalar::U16));
+        layout.extra_element = Some(("camera".into(), 2));
+        layout.face_extra = Some(("flags".into(), Scalar::I16));
+        layout.comments = vec!["a comment".into()];
+        ply_bytes(dir, &square, &layout)
+    };
+    let ply: Vec<(&str, Vec<u8>)> = vec![
+        (
+            "square_le",
+            standard(dir, &square, Encoding::BinaryLittleEndian),
+        ),
+        ("square_ascii", standard(dir, &square, Encoding::Ascii)),
+        (
+            "square_be_double",
+            doubles(dir, &square, Encoding::BinaryBigEndian),
+        ),
+        (
+            "grid_quads",
+            standard(dir, &grid(6, true), Encoding::BinaryLittleEndian),
+        ),
+        (
+            "grid_ascii_quads",
+            standard(dir, &grid(4, true), Encoding::Ascii),
+        ),
+        ("cloud_ascii", standard(dir, &cloud(64), Encoding::Ascii)),
+        (
+            "cloud_normals_le",
+            standard(dir, &with_normals(cloud(48)), Encoding::BinaryLittleEndian),
+        ),
+        ("unknown_property", unknown),
+        (
+            "isolated_with_normal",
+            standard(dir, &isolated, Encoding::Ascii),
+        ),
+        (
+            "outlier_1e10",
+            doubles(dir, &outlier, Encoding::BinaryLittleEndian),
+        ),
+        (
+            "propertyless_element",
+            ascii_points("element e 9999999999\n", &["1 2 3"]),
+        ),
+        (
+            "ascii_float_1e300",
+            ascii_points("", &["0 0 0", "1 0 0", "0 1 0", "1e300 0 0"]),
+        ),
+        ("single_-1e308", ascii_points("", &["-1e308 -1e308 -1e308"])),
+        (
+            "obj_info",
+            ascii_points("obj_info scanner 1\n", &["0 0 0", "0 0 1", "0 1 0"]),
+        ),
+    ];
+    let mut seeds: Vec<Seed> = ply
+        .into_iter()
+        .map(|(name, bytes)| Seed {
+            name: name.into(),
+            kind: Kind::Ply,
+            bytes,
+        })
+        .collect();
+    for from in [
+        "square_le",
+        "grid_quads",
+        "cloud_ascii",
+        "cloud_normals_le",
+        "outlier_1e10",
+    ] {
+        let bytes = &seeds.iter().find(|s| s.name == from).expect("a seed").bytes;
+        let path = dir.join("from.ply");
+        std::fs::write(&path, bytes).expect("write a seed");
+        let model = read_ply(&path).expect("seeds are valid");
+        let list = build_sequential_list(leaf_surfels(&model.geometry));
+        let mut spt = Vec::new();
+        write_to(&mut spt, &list).expect("write to memory");
+        seeds.push(Seed {
+            name: format!("{from}_tree"),
+            kind: Kind::Spt,
+            bytes: spt,
+        });
+    }
+    seeds
+}

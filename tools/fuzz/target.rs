@@ -1,0 +1,102 @@
+//! One input through everything a reader feeds, with the invariants checked at every
+//! stage of a success:
+//!
+//! * PLY: read → [`Geometry::check`] → leaf surfels → [`LeafSurfels::check`] → tree →
+//!   meta, node and structure checks → `.spt` written and reopened (which validates it
+//!   again) → the same list back → a prefix search from a few eyes.
+//! * `.spt`: open (checksum, header, nodes) → meta and node checks → a prefix search →
+//!   written again and reopened → the same list back.
+//!
+//! A refusal (an error) is a fine outcome; a violated invariant is not.
+//!
+//! [`Geometry::check`]: spt::io::Geometry::check
+//! [`LeafSurfels::check`]: spt::surfel::LeafSurfels::check
+
+use std::path::Path;
+
+use glam::DVec3;
+use spt::io::ply::read_ply;
+use spt::io::spt_file::{SptFile, write_to};
+use spt::surfel::leaf_surfels;
+use spt::tree::select::PrefixIndex;
+use spt::tree::validate::{check_meta, check_nodes, check_structure};
+use spt::tree::{SequentialList, build_sequential_list};
+
+use crate::seeds::Kind;
+
+/// How a run ended, when it did not panic.
+pub enum Outcome {
+    Accepted,
+    Refused,
+    Violation(String),
+}
+
+fn violation(stage: &str) -> impl Fn(String) -> Outcome + '_ {
+    move |why| Outcome::Violation(format!("{stage}: {why}"))
+}
+
+/// Writes `list` next to `at` (as `.spt`) and opens it again: the same list, valid.
+fn round_trip(list: &SequentialList, at: &Path) -> Result<(), Outcome> {
+    let path = at.with_extension("out.spt");
+    let mut bytes = Vec::with_capacity(256 + 36 * list.nodes.len());
+    write_to(&mut bytes, list).map_err(|e| Outcome::Violation(format!("write: {e}")))?;
+    std::fs::write(&path, &bytes).map_err(|e| Outcome::Violation(format!("write: {e}")))?;
+    let back = SptFile::open(&path).map_err(|e| Outcome::Violation(format!("reopen: {e}")))?;
+    if back.to_list() != *list {
+        return Err(Outcome::Violation("reopened list differs".into()));
+    }
+    Ok(())
+}
+
+/// The prefix search from the centre, a corner and far away, at a few budgets.
+fn select(list: &SequentialList) -> Result<(), Outcome> {
+    let index = PrefixIndex::new(&list.meta, &list.nodes);
+    let lo = DVec3::from(list.meta.centre_min.map(f64::from));
+    let hi = DVec3::from(list.meta.centre_max.map(f64::from));
+    for eye in [(lo + hi) * 0.5, lo, hi * 10.0 + DVec3::ONE] {
+        for eps in [0.0, 1e-3, 1.0] {
+            let n = index.prefix_len(&list.nodes, eye, eps);
+            if n > list.nodes.len() {
+                return Err(Outcome::Violation(format!("prefix {n} beyond the list")));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn ply(path: &Path) -> Result<Outcome, Outcome> {
+    let Ok(model) = read_ply(path) else {
+        return Ok(Outcome::Refused);
+    };
+    model.geometry.check().map_err(violation("geometry"))?;
+    let leaves = leaf_surfels(&model.geometry);
+    leaves.check().map_err(violation("surfels"))?;
+    let list = build_sequential_list(leaves);
+    check_meta(&list.meta).map_err(violation("tree meta"))?;
+    check_nodes(&list.meta, &list.nodes, &list.parents).map_err(violation("tree nodes"))?;
+    check_structure(&list.meta, &list.nodes, &list.parents).map_err(violation("tree"))?;
+    select(&list)?;
+    round_trip(&list, path)?;
+    Ok(Outcome::Accepted)
+}
+
+fn spt(path: &Path) -> Result<Outcome, Outcome> {
+    let Ok(file) = SptFile::open(path) else {
+        return Ok(Outcome::Refused);
+    };
+    let list = file.to_list();
+    check_meta(&list.meta).map_err(violation("meta"))?;
+    check_nodes(&list.meta, &list.nodes, &list.parents).map_err(violation("nodes"))?;
+    select(&list)?;
+    round_trip(&list, path)?;
+    Ok(Outcome::Accepted)
+}
+
+/// Runs the input stored at `path`.
+pub fn run(kind: Kind, path: &Path) -> Outcome {
+    let result = match kind {
+        Kind::Ply => ply(path),
+        Kind::Spt => spt(path),
+    };
+    result.unwrap_or_else(|o| o)
+}
