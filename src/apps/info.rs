@@ -150,18 +150,24 @@ impl PlyInfo {
                 line("", format!("property {p}"));
             }
         }
-        line(
-            "vertices",
-            format!(
-                "{} read, {} dropped (NaN or infinite coordinates), {} dropped (beyond ±{:e} \
-                 of the origin), {} outliers (far outside the core box)",
-                count(g.vertices_in_file),
-                count(g.vertices_dropped_nonfinite),
-                count(g.vertices_dropped_out_of_range),
-                MAX_OFFSET,
-                count(g.outliers)
-            ),
+        let mut vertices = format!(
+            "{} read, {} dropped (NaN or infinite coordinates)",
+            count(g.vertices_in_file),
+            count(g.vertices_dropped_nonfinite)
         );
+        if g.vertices_dropped_out_of_range > 0 {
+            vertices += &format!(
+                ", {} dropped (beyond ±{MAX_OFFSET:.3e} of the origin)",
+                count(g.vertices_dropped_out_of_range)
+            );
+        }
+        if g.outliers > 0 {
+            vertices += &format!(
+                ", {} outliers (far outside the core box)",
+                count(g.outliers)
+            );
+        }
+        line("vertices", vertices);
         if self.present.faces || g.faces_in_file > 0 {
             line(
                 "faces",
@@ -257,11 +263,11 @@ fn xyz(p: [f64; 3]) -> String {
 }
 
 /// The shortest decimal that reads back to the same double (`{}`), in scientific
-/// notation (`{:e}`, also shortest) when the plain form is longer than 20 characters:
+/// notation (`{:e}`, also shortest) when the plain form is longer than 24 characters:
 /// 1e300 is printed as such, not as 301 digits.
 pub fn readable(x: f64) -> String {
     let plain = format!("{x}");
-    if plain.len() <= 20 {
+    if plain.len() <= 24 {
         plain
     } else {
         format!("{x:e}")

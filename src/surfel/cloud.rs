@@ -37,26 +37,13 @@ pub fn fallback_radius(radii: &[f32], scale: f32) -> f32 {
     *measured.select_nth_unstable_by(mid, f32::total_cmp).1
 }
 
-/// Largest search coordinate: unit-scaled positions saturate at ±2⁶¹, so that squared
-/// distances between any two stay finite in f32. Only outliers far outside the model's
-/// core reach it (the core is within ±1 after scaling).
-const SEARCH_LIMIT: f32 = (1u64 << 61) as f32;
-
-/// A position as the k-d search sees it: unit-scaled, saturated at [`SEARCH_LIMIT`].
-#[inline]
-fn search_point(p: Vec3, scale: f32) -> Vec3 {
-    (p * scale).clamp(Vec3::splat(-SEARCH_LIMIT), Vec3::splat(SEARCH_LIMIT))
-}
-
 /// The distinct positions among `points`, unit-scaled. Searching among distinct
 /// positions keeps each query O(log n) however many samples coincide (10⁵ copies of
 /// one point would otherwise make the search quadratic), and coinciding samples add
 /// nothing to a neighbourhood's shape.
 fn distinct_positions(points: &[Vec3], scale: f32) -> Vec<[f32; 3]> {
-    let mut coords: Vec<[f32; 3]> = points
-        .par_iter()
-        .map(|p| search_point(*p, scale).to_array())
-        .collect();
+    // Scaled coordinates stay within ±2⁶⁰ (`super::unit_scale`): squared distances fit f32.
+    let mut coords: Vec<[f32; 3]> = points.par_iter().map(|p| (*p * scale).to_array()).collect();
     let key = |c: &[f32; 3]| c.map(|x| if x == 0.0 { 0 } else { x.to_bits() });
     coords.par_sort_unstable_by_key(key);
     coords.dedup_by_key(|c| key(c));
@@ -86,7 +73,7 @@ pub fn neighbour_disks(
             .par_iter()
             .with_min_len(1024)
             .map(|&i| {
-                let p = search_point(points[i as usize], scale);
+                let p = points[i as usize] * scale;
                 let found = tree
                     .query(&p.to_array())
                     .nearest_n::<SquaredEuclidean<f32>>(k)

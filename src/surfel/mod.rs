@@ -95,20 +95,34 @@ impl LeafSurfels {
     }
 }
 
-/// The power of two `s` with `extent · s` in [0.5, 1) (1 for a model without extent).
-pub fn unit_scale(extent: f64) -> f32 {
-    if extent > 0.0 && extent.is_finite() {
-        let e = -extent.log2().floor() - 1.0;
-        (e.clamp(-120.0, 120.0) as f32).exp2()
+/// Largest scaled coordinate: squares and cross products of scaled coordinates (about
+/// 2¹²⁰) then fit an f32, with room for sums.
+pub const SCALED_REACH: f64 = (1u64 << 60) as f64;
+
+/// The power of two `s` with `extent · s` in [0.5, 1) (1 for a model without extent),
+/// lowered where needed so that `reach · s` ≤ [`SCALED_REACH`]: `extent` is the size of
+/// the model's core, `reach` the largest offset of any of its positions (outliers
+/// included) from the origin.
+pub fn unit_scale(extent: f64, reach: f64) -> f32 {
+    let mut e = if extent > 0.0 && extent.is_finite() {
+        -extent.log2().floor() - 1.0
     } else {
-        1.0
+        0.0
+    };
+    if reach > 0.0 && reach.is_finite() {
+        e = e.min((SCALED_REACH / reach).log2().floor());
     }
+    (e.clamp(-120.0, 120.0) as f32).exp2()
 }
 
 /// Builds the leaf surfels of a model: per vertex from its faces for a mesh, from its
 /// nearest neighbours for a point cloud (or a mesh's isolated vertices).
 pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
-    let scale = unit_scale(g.core.extent().max_element());
+    let reach = (DVec3::from(g.bounds.min) - g.origin)
+        .abs()
+        .max((DVec3::from(g.bounds.max) - g.origin).abs())
+        .max_element();
+    let scale = unit_scale(g.core.extent().max_element(), reach);
     let given = g.normals.as_deref();
     let mut stats = SurfelStats {
         given_normals: given.map_or(0, |n| {

@@ -19,7 +19,7 @@ mod target;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use clap::Parser;
@@ -104,9 +104,15 @@ impl Tally {
     }
 }
 
+/// Whether an input is running (its panics are caught and need no message).
+static IN_INPUT: AtomicBool = AtomicBool::new(false);
+
 /// Runs one input; panics are caught and returned as text.
 fn execute(kind: Kind, path: &Path) -> Result<Outcome, String> {
-    catch_unwind(AssertUnwindSafe(|| target::run(kind, path))).map_err(|p| {
+    IN_INPUT.store(true, Ordering::Relaxed);
+    let result = catch_unwind(AssertUnwindSafe(|| target::run(kind, path)));
+    IN_INPUT.store(false, Ordering::Relaxed);
+    result.map_err(|p| {
         p.downcast_ref::<String>()
             .cloned()
             .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
@@ -169,7 +175,13 @@ fn replay(path: &Path) -> i32 {
 
 fn main() {
     let args = Args::parse();
-    std::panic::set_hook(Box::new(|_| {}));
+    // Panics of the inputs are expected and reported; any other is printed as usual.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if !IN_INPUT.load(Ordering::Relaxed) {
+            default_hook(info)
+        }
+    }));
     if let Some(path) = &args.replay {
         std::process::exit(replay(path));
     }

@@ -200,7 +200,11 @@ fn header_once(rng: &mut Rng, b: &mut Vec<u8>) {
         return;
     };
     let n = lines.len();
-    let i = 1 + rng.below(n.saturating_sub(2).max(1));
+    if n < 3 {
+        return;
+    }
+    // A line between `ply` and `end_header`.
+    let i = 1 + rng.below(n - 2);
     match rng.below(7) {
         0 => {
             // A new count on an element line.
@@ -242,7 +246,7 @@ fn header_once(rng: &mut Rng, b: &mut Vec<u8>) {
             let line = lines[i].clone();
             lines.insert(i, line);
         }
-        4 if n > 3 => {
+        4 => {
             let j = 1 + rng.below(n - 2);
             lines.swap(i, j);
         }
