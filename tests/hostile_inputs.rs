@@ -276,3 +276,33 @@ fn one_outlier_changes_neither_the_rest_of_the_bunny_nor_its_scale() {
         assert_eq!(leaves.stats.fallback_radii, 0, "x = {x:e}");
     }
 }
+
+#[test]
+fn an_spt_whose_checksum_holds_but_whose_values_are_unusable_is_refused() {
+    let dir = common::temp_dir();
+    let ply = dir.path().join("square.ply");
+    common::write_standard(
+        &ply,
+        &common::bad_files::square(),
+        Encoding::BinaryLittleEndian,
+    );
+    through_everything(&ply);
+    let good = std::fs::read(ply.with_extension("spt")).unwrap();
+    // (what, byte offset, bytes): bounds min x = −∞; first node's radius = −1.
+    let edits: [(&str, usize, Vec<u8>); 2] = [
+        ("bounds", 64, f64::NEG_INFINITY.to_le_bytes().to_vec()),
+        ("radius", 256 + 12, (-1.0f32).to_le_bytes().to_vec()),
+    ];
+    for (what, at, bytes) in edits {
+        let mut b = good.clone();
+        b[at..at + bytes.len()].copy_from_slice(&bytes);
+        assert!(spt::io::spt_file::reseal(&mut b));
+        let path = dir.path().join(format!("bad_{what}.spt"));
+        std::fs::write(&path, &b).unwrap();
+        let err = SptFile::open(&path).err().expect(what).to_string();
+        assert!(err.contains("invalid tree") && err.contains(what), "{err}");
+        let (code, out, stderr) = common::run_spt(&["info".as_ref(), path.as_os_str()]);
+        assert_eq!(code, Some(1), "{what}: {out}");
+        assert!(stderr.contains(what) && out.contains("INVALID"), "{stderr}");
+    }
+}

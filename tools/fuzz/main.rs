@@ -16,10 +16,9 @@ mod mutate;
 mod seeds;
 mod target;
 
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use clap::Parser;
@@ -28,31 +27,11 @@ use mutate::{Rng, mutate};
 use seeds::{Kind, Seed};
 use target::Outcome;
 
-/// The largest single allocation since the last reset, in bytes.
-struct Largest;
-static LARGEST: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards every call to the system allocator; only records sizes.
-unsafe impl GlobalAlloc for Largest {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        LARGEST.fetch_max(l.size(), Ordering::Relaxed);
-        unsafe { System.alloc(l) }
-    }
-    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
-        LARGEST.fetch_max(l.size(), Ordering::Relaxed);
-        unsafe { System.alloc_zeroed(l) }
-    }
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        unsafe { System.dealloc(p, l) }
-    }
-    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
-        LARGEST.fetch_max(n, Ordering::Relaxed);
-        unsafe { System.realloc(p, l, n) }
-    }
-}
+#[path = "../largest_allocation.rs"]
+mod largest_allocation;
 
 #[global_allocator]
-static ALLOC: Largest = Largest;
+static ALLOC: largest_allocation::Largest = largest_allocation::Largest;
 
 /// The largest single allocation an input of `len` bytes justifies: 64 bytes per input
 /// byte (a vertex of three `char`s becomes a 32-byte surfel and about 1.3 node records;
@@ -208,13 +187,13 @@ fn main() {
         };
         let path = args.out.join(format!("current.{}", seed.kind.extension()));
         std::fs::write(&path, &bytes).expect("write the input");
-        LARGEST.store(0, Ordering::Relaxed);
+        largest_allocation::reset();
         STARTED.store(origin.elapsed().as_millis() as u64, Ordering::Relaxed);
         let start = Instant::now();
         let result = execute(seed.kind, &path);
         let took = start.elapsed();
         STARTED.store(u64::MAX, Ordering::Relaxed);
-        let largest = LARGEST.load(Ordering::Relaxed);
+        let largest = largest_allocation::largest();
         tally.executions += 1;
         let n = tally.executions;
         let note = |what: &str| format!("{what} (mutant of {}, {} bytes)", seed.name, bytes.len());
