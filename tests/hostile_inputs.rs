@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use spt::io::ply::{Encoding, read_ply};
 use spt::io::rebase::MAX_OFFSET;
-use spt::io::spt_file::{SptFile, write_spt};
+use spt::tree::spt_file::{SptFile, write_spt};
 use spt::surfel::{LeafSurfels, leaf_surfels};
 use spt::tree::build_sequential_list;
 use spt::tree::validate::{check_meta, check_nodes, check_structure};
@@ -296,7 +296,7 @@ fn an_spt_whose_checksum_holds_but_whose_values_are_unusable_is_refused() {
     for (what, at, bytes) in edits {
         let mut b = good.clone();
         b[at..at + bytes.len()].copy_from_slice(&bytes);
-        assert!(spt::io::spt_file::reseal(&mut b));
+        assert!(spt::tree::spt_file::reseal(&mut b));
         let path = dir.path().join(format!("bad_{what}.spt"));
         std::fs::write(&path, &b).unwrap();
         let err = SptFile::open(&path).err().expect(what).to_string();

@@ -136,8 +136,8 @@ fn every_shared_file_converts_and_reopens_with_the_same_nodes() {
         let list = spt::tree::build_sequential_list(leaf_surfels(&model.geometry));
         common::assert_tree_invariants(&list, name);
         let out = tmp.path().join(name).with_extension("spt");
-        spt::io::spt_file::write_spt(&out, &list).unwrap();
-        let file = spt::io::spt_file::SptFile::open(&out).unwrap();
+        spt::tree::spt_file::write_spt(&out, &list).unwrap();
+        let file = spt::tree::spt_file::SptFile::open(&out).unwrap();
         assert_eq!(file.to_list(), list, "{name}");
         assert_eq!(file.meta.origin, model.geometry.origin.to_array(), "{name}");
     }

@@ -8,7 +8,7 @@ use std::io::Write;
 
 use spt::io::atomic::{temporary_path, write_atomically};
 use spt::io::ply::read_ply;
-use spt::io::spt_file::{SptError, SptFile, write_spt, write_to};
+use spt::tree::spt_file::{SptError, SptFile, write_spt, write_to};
 use spt::surfel::leaf_surfels;
 use spt::tree::{NodeRecord, SequentialList, build_sequential_list};
 

@@ -11,7 +11,7 @@ use crate::apps::info::{count, peak_memory_bytes};
 use crate::apps::progress::Stage;
 use crate::io::atomic::write_atomically;
 use crate::io::ply::read_ply;
-use crate::io::spt_file::{HEADER_BYTES, write_to};
+use crate::tree::spt_file::{HEADER_BYTES, write_to};
 use crate::surfel::leaf_surfels;
 use crate::tree::{NodeRecord, build_hierarchy, build_records, sort_list};
 

@@ -1,10 +1,10 @@
-//! Model files: PLY reading and writing, the rebased [`Geometry`] they produce, and
-//! `.spt` files (sequential point trees).
+//! Model files in: PLY reading and writing, and the rebased [`Geometry`] they produce.
+//! This layer imports no other module of the crate (`.spt` files, which hold trees,
+//! live in [`crate::tree::spt_file`]).
 
 pub mod atomic;
 pub mod geometry;
 pub mod ply;
 pub mod rebase;
-pub mod spt_file;
 
 pub use geometry::{Bounds, Geometry, GeometryStats};

@@ -7,7 +7,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use crate::io::ply::read_ply;
-use crate::io::spt_file::{SptFile, is_spt};
+use crate::tree::spt_file::{SptFile, is_spt};
 use crate::surfel::leaf_surfels;
 use crate::tree::select::PrefixIndex;
 use crate::tree::{

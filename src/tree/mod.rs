@@ -10,6 +10,7 @@ pub mod errors;
 pub mod hierarchy;
 pub mod record;
 pub mod select;
+pub mod spt_file;
 pub mod validate;
 
 use glam::{DVec3, Vec3};

@@ -2,7 +2,7 @@
 //! header and record field edits. A few are stacked per input; `.spt` inputs are
 //! usually resealed afterwards so that the edits reach past the checksum.
 
-use spt::io::spt_file::{HEADER_BYTES, reseal};
+use spt::tree::spt_file::{HEADER_BYTES, reseal};
 
 use crate::seeds::{Kind, Seed};
 

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use spt::io::ply::{Encoding, PlyLayout, PolyMesh, Scalar, read_ply, write_ply};
-use spt::io::spt_file::write_to;
+use spt::tree::spt_file::write_to;
 use spt::surfel::leaf_surfels;
 use spt::tree::build_sequential_list;
 

@@ -30,9 +30,9 @@ use xxhash_rust::xxh3::Xxh3;
 
 use crate::io::Bounds;
 use crate::io::atomic::write_atomically;
-use crate::tree::select::TreeView;
-use crate::tree::validate;
-use crate::tree::{NodeRecord, SequentialList, TreeMeta};
+use super::select::TreeView;
+use super::validate;
+use super::{NodeRecord, SequentialList, TreeMeta};
 
 pub const MAGIC: &[u8; 8] = b"spt-tree";
 pub const VERSION: u32 = 1;
