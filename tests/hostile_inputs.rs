@@ -12,9 +12,9 @@ use std::time::{Duration, Instant};
 
 use spt::io::ply::{Encoding, read_ply};
 use spt::io::rebase::MAX_OFFSET;
-use spt::tree::spt_file::{SptFile, write_spt};
 use spt::surfel::{LeafSurfels, leaf_surfels};
 use spt::tree::build_sequential_list;
+use spt::tree::spt_file::{SptFile, write_spt};
 use spt::tree::validate::{check_meta, check_nodes, check_structure};
 
 /// Surfels, tree, `.spt` and reopened file of the PLY at `path`, every invariant checked.

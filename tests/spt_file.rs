@@ -8,8 +8,8 @@ use std::io::Write;
 
 use spt::io::atomic::{temporary_path, write_atomically};
 use spt::io::ply::read_ply;
-use spt::tree::spt_file::{SptError, SptFile, write_spt, write_to};
 use spt::surfel::leaf_surfels;
+use spt::tree::spt_file::{SptError, SptFile, write_spt, write_to};
 use spt::tree::{NodeRecord, SequentialList, build_sequential_list};
 
 fn default_list() -> SequentialList {

@@ -7,13 +7,16 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use std::sync::Mutex;
+
 use crate::apps::info::{count, peak_memory_bytes};
 use crate::apps::progress::Stage;
+use crate::io::GeometryStats;
 use crate::io::atomic::write_atomically;
-use crate::io::ply::read_ply;
+use crate::tree::NodeRecord;
+use crate::tree::report::{Finished, Report, Step};
+use crate::tree::scene::build_from_ply;
 use crate::tree::spt_file::{HEADER_BYTES, write_to};
-use crate::surfel::leaf_surfels;
-use crate::tree::{NodeRecord, build_hierarchy, build_records, sort_list};
 
 /// A writer that reports the bytes it passes on to a stage.
 struct Counted<'a> {
@@ -36,13 +39,75 @@ fn rate(n: f64, seconds: f64) -> f64 {
     n / seconds.max(1e-9)
 }
 
-pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
-    let start = Instant::now();
-    let stage = Stage::start("load", 0, "");
-    let model = read_ply(input)?;
-    let points = model.geometry.positions.len() as u64;
-    let st = &model.stats;
-    let dropped: String = [
+/// Prints each step of the build as `spt convert` shows it: a progress bar on a
+/// terminal, then one line with its time and throughput.
+#[derive(Default)]
+struct Steps {
+    current: Mutex<Option<Stage>>,
+}
+
+impl Steps {
+    fn current(&self) -> std::sync::MutexGuard<'_, Option<Stage>> {
+        self.current.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+impl Report for Steps {
+    fn step(&self, step: Step, total: u64) {
+        let (name, unit) = match step {
+            Step::Read => ("load", ""),
+            Step::Surfels => ("surfels", ""),
+            Step::Hierarchy => ("tree", "leaves"),
+            Step::Errors => ("errors", "nodes"),
+            Step::Sort => ("sort", ""),
+            other => (other.name(), ""),
+        };
+        *self.current() = Some(Stage::start(name, total, unit));
+    }
+
+    fn advance(&self, n: u64) {
+        if let Some(stage) = self.current().as_ref() {
+            stage.advance(n);
+        }
+    }
+
+    fn finished(&self, what: Finished) {
+        let Some(stage) = self.current().take() else {
+            return;
+        };
+        let per_s = |n: u64| rate(n as f64 / 1e6, stage.seconds());
+        let summary = match what {
+            Finished::Read(model) => format!(
+                "{} vertices, {} triangles, {:.0} MB/s{}",
+                count(model.geometry.positions.len() as u64),
+                count(model.geometry.triangles.len() as u64),
+                rate(model.file_bytes as f64 / 1e6, stage.seconds()),
+                dropped(&model.stats)
+            ),
+            Finished::Surfels(leaves) => {
+                format!("{:.2} M surfels/s", per_s(leaves.surfels.len() as u64))
+            }
+            Finished::Hierarchy { leaves, internal } => format!(
+                "{} internal nodes, {:.2} M leaves/s",
+                count(internal),
+                per_s(leaves)
+            ),
+            Finished::Errors(meta) => {
+                format!(
+                    "depth {}, {:.2} M nodes/s",
+                    meta.depth,
+                    per_s(meta.node_count)
+                )
+            }
+            Finished::Sort { nodes } => format!("{} nodes", count(nodes)),
+        };
+        stage.finish(&summary);
+    }
+}
+
+/// ", 3 non-finite vertices dropped, …" for what the reader dropped or flagged.
+fn dropped(st: &GeometryStats) -> String {
+    [
         (st.vertices_dropped_nonfinite, "non-finite vertices dropped"),
         (
             st.vertices_dropped_out_of_range,
@@ -53,43 +118,14 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
     .iter()
     .filter(|(n, _)| *n > 0)
     .map(|(n, what)| format!(", {} {what}", count(*n)))
-    .collect();
-    stage.finish(&format!(
-        "{} vertices, {} triangles, {:.0} MB/s{dropped}",
-        count(points),
-        count(model.geometry.triangles.len() as u64),
-        rate(model.file_bytes as f64 / 1e6, stage.seconds()),
-    ));
+    .collect()
+}
 
-    let stage = Stage::start("surfels", 0, "");
-    let mut leaves = leaf_surfels(&model.geometry);
-    drop(model);
-    stage.finish(&format!(
-        "{:.2} M surfels/s",
-        rate(points as f64 / 1e6, stage.seconds())
-    ));
-
-    let stage = Stage::start("tree", points, "leaves");
-    let hierarchy = build_hierarchy(&mut leaves, &|n| stage.advance(n));
-    let internal = hierarchy.internal.len() as u64;
-    stage.finish(&format!(
-        "{} internal nodes, {:.2} M leaves/s",
-        count(internal),
-        rate(points as f64 / 1e6, stage.seconds())
-    ));
-
-    let stage = Stage::start("errors", internal, "nodes");
-    let set = build_records(leaves, hierarchy, &|n| stage.advance(n));
-    let scale = set.meta.error_scale;
-    stage.finish(&format!(
-        "depth {}, {:.2} M nodes/s",
-        set.meta.depth,
-        rate(set.meta.node_count as f64 / 1e6, stage.seconds())
-    ));
-
-    let stage = Stage::start("sort", 0, "");
-    let list = sort_list(set);
-    stage.finish(&format!("{} nodes", count(list.nodes.len() as u64)));
+pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let (list, _) = build_from_ply(input, false, &Steps::default())?;
+    let points = list.meta.leaf_count;
+    let scale = list.meta.error_scale;
 
     let bytes = (HEADER_BYTES + list.nodes.len() * (std::mem::size_of::<NodeRecord>() + 4)) as u64;
     let stage = Stage::start("write", bytes, "bytes");

@@ -8,9 +8,9 @@ use serde::Serialize;
 
 use crate::io::ply::{PlyModel, read_ply};
 use crate::io::rebase::MAX_OFFSET;
-use crate::tree::spt_file::{SptFile, is_spt};
 use crate::io::{Bounds, GeometryStats};
 use crate::surfel::{LeafSurfels, SurfelStats, leaf_surfels};
+use crate::tree::spt_file::{SptFile, is_spt};
 use crate::tree::{NodeRecord, TreeMeta};
 
 #[derive(Debug, Serialize)]

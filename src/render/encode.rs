@@ -15,10 +15,10 @@ use glam::DVec3;
 use super::camera::Camera;
 use super::frame::{FrameUniform, srgb_to_linear};
 use super::renderer::Renderer;
-use super::scene::Scene;
 use super::settings::{Culling, Mode, Settings};
 use super::targets::{FrameTargets, check_size};
 use super::upload::GpuScene;
+use crate::tree::scene::Scene;
 use crate::tree::select::error_per_distance;
 
 /// What the CPU decided for one recorded frame.

@@ -8,10 +8,10 @@ use super::camera::Camera;
 use super::gpu::Gpu;
 use super::pipelines::Pipelines;
 use super::readback;
-use super::scene::Scene;
 use super::settings::{Mode, Settings};
 use super::targets::FrameTargets;
 use super::upload::GpuScene;
+use crate::tree::scene::Scene;
 use crate::tree::select::is_drawn;
 
 /// A frame read back: sRGB pixels and which pixels something covered.

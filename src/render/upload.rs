@@ -4,8 +4,9 @@
 use wgpu::util::DeviceExt;
 
 use super::renderer::Renderer;
-use super::scene::{LoadReport, Scene, Silent};
 use crate::tree::NodeRecord;
+use crate::tree::report::{Report, Silent, Step};
+use crate::tree::scene::Scene;
 
 /// Nodes per slice at most: one dispatch of 65,535 workgroups of 256 covers a slice.
 const MAX_SLICE_NODES: u64 = 65_535 * 256;
@@ -70,9 +71,9 @@ impl Renderer {
     }
 
     /// [`Renderer::upload`], telling `report` the nodes uploaded, slice by slice.
-    pub fn upload_reporting(&self, scene: &Scene, report: &dyn LoadReport) -> GpuScene {
+    pub fn upload_reporting(&self, scene: &Scene, report: &dyn Report) -> GpuScene {
         let nodes = scene.nodes();
-        report.stage("uploading", nodes.len() as u64);
+        report.step(Step::Upload, nodes.len() as u64);
         let mut gpu_scene = self.empty_gpu_scene(nodes.len());
         for range in self.slice_plan(nodes.len()) {
             report.advance(range.len() as u64);

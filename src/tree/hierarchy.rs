@@ -13,7 +13,7 @@
 
 use rayon::prelude::*;
 
-use super::Progress;
+use super::report::Report;
 
 use crate::surfel::Surfel;
 
@@ -159,12 +159,12 @@ fn build_par(
     s: &mut [Surfel],
     offset: usize,
     leaf_count: u32,
-    progress: Progress,
+    report: &dyn Report,
 ) -> (Vec<Internal>, u32) {
     if s.len() <= PARALLEL_RANGE {
         let mut out = Vec::new();
         let root = build_seq(s, offset, leaf_count, &mut out);
-        progress(s.len() as u64);
+        report.advance(s.len() as u64);
         return (out, root);
     }
     let ranges = child_ranges(s);
@@ -180,7 +180,7 @@ fn build_par(
     }
     let built: Vec<(Vec<Internal>, u32)> = pieces
         .into_par_iter()
-        .map(|(piece, off)| build_par(piece, off, leaf_count, progress))
+        .map(|(piece, off)| build_par(piece, off, leaf_count, report))
         .collect();
     let total = built.iter().map(|b| b.0.len()).sum::<usize>() + 1;
     let mut out = Vec::with_capacity(total);
@@ -212,8 +212,8 @@ fn build_par(
 }
 
 /// Builds the hierarchy, reordering `surfels` so that every node covers a contiguous
-/// range of them. `progress` is told how many leaves each finished subtree holds.
-pub fn build(surfels: &mut [Surfel], progress: Progress) -> Hierarchy {
+/// range of them. `report` is told how many leaves each finished subtree holds.
+pub fn build(surfels: &mut [Surfel], report: &dyn Report) -> Hierarchy {
     let leaf_count = surfels.len() as u32;
     if surfels.is_empty() {
         return Hierarchy {
@@ -221,7 +221,7 @@ pub fn build(surfels: &mut [Surfel], progress: Progress) -> Hierarchy {
             internal: Vec::new(),
         };
     }
-    let (internal, _) = build_par(surfels, 0, leaf_count, progress);
+    let (internal, _) = build_par(surfels, 0, leaf_count, report);
     Hierarchy {
         leaf_count,
         internal,

@@ -5,10 +5,15 @@
 //! ```text
 //! LeafSurfels ─► hierarchy::build ─► build_records (disks, errors) ─► sort_list ─► SequentialList
 //! ```
+//!
+//! [`scene`] opens a model from a file (a PLY built through these stages, or an `.spt`
+//! file), telling a [`report::Report`] each step.
 
 pub mod errors;
 pub mod hierarchy;
 pub mod record;
+pub mod report;
+pub mod scene;
 pub mod select;
 pub mod spt_file;
 pub mod validate;
@@ -24,6 +29,7 @@ use errors::{Disk, node_error, parent_disk};
 use hierarchy::Hierarchy;
 pub use record::NodeRecord;
 use record::encode_up;
+use report::{Finished, Report, Silent, Step};
 
 /// What a tree holds besides its nodes (the `.spt` header).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -63,15 +69,9 @@ pub struct NodeSet {
     pub meta: TreeMeta,
 }
 
-/// Told how much work is done, in the stage's own unit (leaves, nodes), as it goes.
-pub type Progress<'a> = &'a (dyn Fn(u64) + Sync);
-
-/// A [`Progress`] that ignores everything.
-pub fn no_progress(_: u64) {}
-
-/// Stage 1: the hierarchy. Reorders the surfels; progress in leaves.
-pub fn build_hierarchy(leaves: &mut LeafSurfels, progress: Progress) -> Hierarchy {
-    hierarchy::build(&mut leaves.surfels, progress)
+/// Stage 1: the hierarchy. Reorders the surfels; `report` hears leaves done.
+pub fn build_hierarchy(leaves: &mut LeafSurfels, report: &dyn Report) -> Hierarchy {
+    hierarchy::build(&mut leaves.surfels, report)
 }
 
 /// The size errors are stored relative to: the largest extent of the box holding every
@@ -94,9 +94,9 @@ fn error_scale(surfels: &[Surfel]) -> f32 {
 }
 
 /// Stage 2: node disks and errors bottom-up, one level at a time (nodes of a level are
-/// independent), then each node's parent error, δ and level top-down. Progress in
-/// internal nodes.
-pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, progress: Progress) -> NodeSet {
+/// independent), then each node's parent error, δ and level top-down. `report` hears
+/// internal nodes done.
+pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Report) -> NodeSet {
     let n = leaves.surfels.len();
     let scale = error_scale(&leaves.surfels);
     let oriented = leaves.oriented_normals;
@@ -152,7 +152,7 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, progress: Progre
         for (id, rec) in done {
             records[id as usize] = rec;
         }
-        progress(ids.len() as u64);
+        report.advance(ids.len() as u64);
     }
     // Top-down: parent error (bit copy), δ rounded up, level; parents read from a
     // snapshot of the internal nodes so that every node is written in parallel.
@@ -262,8 +262,28 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
     }
 }
 
-/// All three stages.
-pub fn build_sequential_list(mut leaves: LeafSurfels) -> SequentialList {
-    let hierarchy = build_hierarchy(&mut leaves, &no_progress);
-    sort_list(build_records(leaves, hierarchy, &no_progress))
+/// All three stages, each told to `report` as a [`Step`] with what it made.
+pub fn build_list(mut leaves: LeafSurfels, report: &dyn Report) -> SequentialList {
+    let n = leaves.surfels.len() as u64;
+    report.step(Step::Hierarchy, n);
+    let hierarchy = build_hierarchy(&mut leaves, report);
+    let internal = hierarchy.internal.len() as u64;
+    report.finished(Finished::Hierarchy {
+        leaves: n,
+        internal,
+    });
+    report.step(Step::Errors, internal);
+    let set = build_records(leaves, hierarchy, report);
+    report.finished(Finished::Errors(&set.meta));
+    report.step(Step::Sort, 0);
+    let list = sort_list(set);
+    report.finished(Finished::Sort {
+        nodes: list.nodes.len() as u64,
+    });
+    list
+}
+
+/// All three stages, silently.
+pub fn build_sequential_list(leaves: LeafSurfels) -> SequentialList {
+    build_list(leaves, &Silent)
 }

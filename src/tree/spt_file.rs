@@ -28,11 +28,11 @@ use memmap2::Mmap;
 use thiserror::Error;
 use xxhash_rust::xxh3::Xxh3;
 
-use crate::io::Bounds;
-use crate::io::atomic::write_atomically;
 use super::select::TreeView;
 use super::validate;
 use super::{NodeRecord, SequentialList, TreeMeta};
+use crate::io::Bounds;
+use crate::io::atomic::write_atomically;
 
 pub const MAGIC: &[u8; 8] = b"spt-tree";
 pub const VERSION: u32 = 1;

@@ -4,9 +4,9 @@
 use std::path::Path;
 
 use spt::io::ply::{Encoding, PlyLayout, PolyMesh, Scalar, read_ply, write_ply};
-use spt::tree::spt_file::write_to;
 use spt::surfel::leaf_surfels;
 use spt::tree::build_sequential_list;
+use spt::tree::spt_file::write_to;
 
 /// Which reader an input is for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -16,9 +16,9 @@ use std::path::Path;
 
 use glam::DVec3;
 use spt::io::ply::read_ply;
-use spt::tree::spt_file::{SptFile, write_to};
 use spt::surfel::leaf_surfels;
 use spt::tree::select::PrefixIndex;
+use spt::tree::spt_file::{SptFile, write_to};
 use spt::tree::validate::{check_meta, check_nodes, check_structure};
 use spt::tree::{SequentialList, build_sequential_list};
 

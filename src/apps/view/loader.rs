@@ -7,7 +7,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, mpsc};
 use std::time::Instant;
 
-use crate::render::{GpuScene, LoadReport, MeshUpload, Renderer, Scene, SliceUpload};
+use crate::render::{GpuScene, MeshUpload, Renderer, Scene, SliceUpload};
+use crate::tree::report::{Report, Step};
 
 /// The stage a load is in, how far along it is, and when each stage started.
 #[derive(Default)]
@@ -18,8 +19,9 @@ pub struct Progress {
     started: Mutex<Vec<(&'static str, Instant)>>,
 }
 
-impl LoadReport for Progress {
-    fn stage(&self, name: &'static str, total: u64) {
+impl Report for Progress {
+    fn step(&self, step: Step, total: u64) {
+        let name = step.name();
         *self.stage.lock().unwrap_or_else(|e| e.into_inner()) = name;
         self.started
             .lock()
@@ -89,7 +91,7 @@ fn load(
     let scene = Arc::new(Scene::open_reporting(path, report)?);
     let total = scene.nodes().len();
     let mut gpu_scene = Some(renderer.empty_gpu_scene(total));
-    report.stage("uploading", total as u64);
+    report.step(Step::Upload, total as u64);
     for range in renderer.slice_plan(total) {
         report.advance(range.len() as u64);
         let slice = renderer.upload_slice(&scene.nodes()[range]);
@@ -109,7 +111,7 @@ fn load(
         send(Loaded::Scene(scene.clone(), g)); // an empty list
     }
     if scene.mesh.is_some() {
-        report.stage("mesh", 0);
+        report.step(Step::Mesh, 0);
     }
     if let Some(mesh) = renderer.upload_mesh(&scene) {
         send(Loaded::Mesh(mesh));

@@ -1,0 +1,112 @@
+//! A model ready to draw: its sequential list (built from a PLY file in memory, or a
+//! memory-mapped `.spt`), its prefix index, and for meshes the triangles of the
+//! reference pass. Opening one is the one place the stages run from a file:
+//!
+//! ```text
+//! PLY ─► read ─► leaf surfels ─► build_list (hierarchy, errors, sort) ─┐
+//! .spt ─► map and check ───────────────────────────────────────────────┴─► prefix index
+//! ```
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use super::report::{Finished, Report, Silent, Step};
+use super::select::PrefixIndex;
+use super::spt_file::{SptFile, is_spt};
+use super::{NodeRecord, SequentialList, TreeMeta, build_list};
+use crate::io::ply::read_ply;
+use crate::surfel::leaf_surfels;
+
+/// The mesh a model came from, for the reference pass: per-vertex position (relative to
+/// the same origin as the tree), unit normal (the leaf surfel's) and colour.
+#[derive(Debug, Clone)]
+pub struct MeshData {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub colors: Vec<[u8; 4]>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+pub enum TreeSource {
+    Memory(SequentialList),
+    File(SptFile),
+}
+
+pub struct Scene {
+    pub tree: TreeSource,
+    pub index: PrefixIndex,
+    pub mesh: Option<MeshData>,
+}
+
+impl Scene {
+    pub fn from_list(list: SequentialList, mesh: Option<MeshData>) -> Scene {
+        let index = PrefixIndex::new(&list.meta, &list.nodes);
+        Scene {
+            tree: TreeSource::Memory(list),
+            index,
+            mesh,
+        }
+    }
+
+    /// Opens a PLY (built into a tree in memory, mesh kept) or an `.spt` file.
+    pub fn open(path: &Path) -> anyhow::Result<Scene> {
+        Scene::open_reporting(path, &Silent)
+    }
+
+    /// [`Scene::open`], telling `report` each step: for an `.spt` file, its check and
+    /// prefix index; for a PLY file, reading, surfels, tree, errors, sort and index.
+    pub fn open_reporting(path: &Path, report: &dyn Report) -> anyhow::Result<Scene> {
+        if is_spt(path) {
+            report.step(Step::Check, 0);
+            let file = SptFile::open(path)?;
+            report.step(Step::Index, 0);
+            let index = PrefixIndex::new(&file.meta, file.nodes());
+            return Ok(Scene {
+                tree: TreeSource::File(file),
+                index,
+                mesh: None,
+            });
+        }
+        let (list, mesh) = build_from_ply(path, true, report)?;
+        report.step(Step::Index, 0);
+        Ok(Scene::from_list(list, mesh))
+    }
+
+    pub fn meta(&self) -> &TreeMeta {
+        match &self.tree {
+            TreeSource::Memory(l) => &l.meta,
+            TreeSource::File(f) => &f.meta,
+        }
+    }
+
+    pub fn nodes(&self) -> &[NodeRecord] {
+        match &self.tree {
+            TreeSource::Memory(l) => &l.nodes,
+            TreeSource::File(f) => f.nodes(),
+        }
+    }
+}
+
+/// Reads a PLY file and builds its sequential list, telling `report` each step; with
+/// `keep_mesh`, also the mesh of the reference pass (for a model with triangles).
+pub fn build_from_ply(
+    path: &Path,
+    keep_mesh: bool,
+    report: &dyn Report,
+) -> anyhow::Result<(SequentialList, Option<MeshData>)> {
+    report.step(Step::Read, 0);
+    let model = read_ply(path)?;
+    report.finished(Finished::Read(&model));
+    report.step(Step::Surfels, 0);
+    let leaves = leaf_surfels(&model.geometry);
+    report.finished(Finished::Surfels(&leaves));
+    let mesh = (keep_mesh && !model.geometry.triangles.is_empty()).then(|| MeshData {
+        positions: leaves.surfels.iter().map(|s| s.position).collect(),
+        normals: leaves.surfels.iter().map(|s| s.normal).collect(),
+        colors: leaves.surfels.iter().map(|s| s.color).collect(),
+        triangles: model.geometry.triangles.clone(),
+    });
+    drop(model);
+    Ok((build_list(leaves, report), mesh))
+}
