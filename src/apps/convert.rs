@@ -9,8 +9,9 @@ use rayon::prelude::*;
 
 use std::sync::Mutex;
 
-use crate::apps::info::{count, peak_memory_bytes};
 use crate::apps::progress::Stage;
+use crate::apps::stats::peak_memory_bytes;
+use crate::apps::text::count;
 use crate::io::GeometryStats;
 use crate::io::atomic::write_atomically;
 use crate::tree::NodeRecord;

@@ -6,6 +6,8 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::apps::stats::peak_memory_bytes;
+use crate::apps::text::{bytes, count, readable};
 use crate::io::ply::{PlyModel, read_ply};
 use crate::io::rebase::MAX_OFFSET;
 use crate::io::{Bounds, GeometryStats};
@@ -67,14 +69,6 @@ pub struct PlyInfo {
     pub timing: Timing,
     /// Peak resident memory of the process (Linux), bytes.
     pub peak_memory_bytes: Option<u64>,
-}
-
-/// Peak resident set size of this process, from /proc (Linux only).
-pub fn peak_memory_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
 }
 
 impl PlyInfo {
@@ -260,40 +254,6 @@ fn place_fields(out: &mut String, bounds: &Bounds, origin: [f64; 3]) {
 
 fn xyz(p: [f64; 3]) -> String {
     format!("{} {} {}", readable(p[0]), readable(p[1]), readable(p[2]))
-}
-
-/// The shortest decimal that reads back to the same double (`{}`), in scientific
-/// notation (`{:e}`, also shortest) when the plain form is longer than 24 characters:
-/// 1e300 is printed as such, not as 301 digits.
-pub fn readable(x: f64) -> String {
-    let plain = format!("{x}");
-    if plain.len() <= 24 {
-        plain
-    } else {
-        format!("{x:e}")
-    }
-}
-
-/// 1234567 → "1,234,567".
-pub fn count(n: u64) -> String {
-    let s = n.to_string();
-    let mut out = String::new();
-    for (i, c) in s.chars().enumerate() {
-        if i > 0 && (s.len() - i).is_multiple_of(3) {
-            out.push(',');
-        }
-        out.push(c);
-    }
-    out
-}
-
-fn bytes(n: u64) -> String {
-    match n {
-        n if n >= 1 << 30 => format!("{:.2} GiB", n as f64 / (1u64 << 30) as f64),
-        n if n >= 1 << 20 => format!("{:.1} MiB", n as f64 / (1u64 << 20) as f64),
-        n if n >= 1 << 10 => format!("{:.1} KiB", n as f64 / 1024.0),
-        n => format!("{n} B"),
-    }
 }
 
 /// What `spt info` reports on an `.spt` file.

@@ -5,4 +5,6 @@ pub mod convert;
 pub mod info;
 pub mod progress;
 pub mod render;
+pub mod stats;
+pub mod text;
 pub mod view;

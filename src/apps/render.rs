@@ -6,7 +6,8 @@ use std::path::Path;
 use anyhow::{Context, bail};
 use glam::{DVec3, Vec3};
 
-use crate::apps::info::count;
+use crate::apps::stats::Summary;
+use crate::apps::text::count;
 use crate::render::{Camera, Culling, Gpu, Mode, Renderer, Scene, Settings};
 
 /// The options `spt render` (and the viewer's screenshots) take.
@@ -169,32 +170,22 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     if let Some(n) = stats.gpu_drawn {
         println!("culled    {} splats survived the compute culling", count(n));
     }
-    let summary = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        if v.len() == 1 {
-            return format!("{:.3} ms", v[0]);
-        }
-        let p95 = v[((v.len() as f64 * 0.95).ceil() as usize).clamp(1, v.len()) - 1];
-        format!(
+    let summary = |v: &mut Vec<f64>| match Summary::of(v) {
+        Some(s) if s.count > 1 => format!(
             "{:.3} ms (median of {}), p95 {:.3} ms",
-            v[v.len() / 2],
-            v.len(),
-            p95
-        )
+            s.median, s.count, s.p95
+        ),
+        _ => format!("{:.3} ms", v.first().copied().unwrap_or(0.0)),
     };
-    if gpu_ms.is_empty() {
-        println!("gpu time  not measured (the adapter has no timestamp queries)");
-    } else {
-        let median = {
-            let mut v = gpu_ms.clone();
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2]
-        };
-        println!("gpu time  {}", summary(&mut gpu_ms));
-        println!(
-            "rate      {:.3} M splats/s (GPU)",
-            stats.selected as f64 / median / 1e3
-        );
+    match Summary::of(&mut gpu_ms) {
+        None => println!("gpu time  not measured (the adapter has no timestamp queries)"),
+        Some(s) => {
+            println!("gpu time  {}", summary(&mut gpu_ms));
+            println!(
+                "rate      {:.3} M splats/s (GPU)",
+                stats.selected as f64 / s.median / 1e3
+            );
+        }
     }
     println!(
         "wall time {} per frame (read-back included)",

@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use indicatif::ProgressBar;
 
+use crate::apps::stats::quantile;
 use crate::render::metrics::compare;
 use crate::render::{Camera, FrameTargets, GpuScene, Image, Renderer, Scene, Settings};
 
@@ -32,16 +33,6 @@ pub struct Measured {
     pub psnr_db: f64,
     pub hole_rate: f64,
     pub spill_rate: f64,
-}
-
-/// The value at quantile `q` (0–1) of `values` (sorted here), nearest rank.
-pub fn quantile(values: &mut [f64], q: f64) -> Option<f64> {
-    if values.is_empty() {
-        return None;
-    }
-    values.sort_by(f64::total_cmp);
-    let rank = ((values.len() as f64 * q).ceil() as usize).clamp(1, values.len());
-    Some(values[rank - 1])
 }
 
 /// Draws `frames` of each camera with `settings` and measures them against

@@ -18,7 +18,8 @@ use super::loader::{Loaded, Loading};
 use super::panel::{self, PanelStatus};
 use super::present::{Presented, Presenter};
 use super::viewer::Viewer;
-use crate::apps::info::count;
+use crate::apps::stats::Summary;
+use crate::apps::text::count;
 use crate::render::metrics::save_png;
 use crate::render::{Gpu, OUTPUT_GAMMA, Renderer};
 
@@ -428,18 +429,12 @@ impl App {
             ("frame", &mut self.script.frame_ms),
             ("gpu", &mut self.script.gpu_ms),
         ] {
-            if values.is_empty() {
-                continue;
+            if let Some(s) = Summary::of(values) {
+                println!(
+                    "{name:<9} {:.2} ms median of {}, p95 {:.2} ms",
+                    s.median, s.count, s.p95
+                );
             }
-            values.sort_by(f64::total_cmp);
-            let p95 =
-                values[((values.len() as f64 * 0.95).ceil() as usize).clamp(1, values.len()) - 1];
-            println!(
-                "{name:<9} {:.2} ms median of {}, p95 {:.2} ms",
-                values[values.len() / 2],
-                values.len(),
-                p95
-            );
         }
         println!("wrote     {}", path.display());
     }

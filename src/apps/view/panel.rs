@@ -6,7 +6,7 @@ use egui::{Color32, RichText};
 
 use super::input::Command;
 use super::viewer::{ERROR_PX_RANGE, Viewer};
-use crate::apps::info::count;
+use crate::apps::text::count;
 use crate::render::{Culling, Mode};
 
 /// What the panel shows besides the viewer itself.
