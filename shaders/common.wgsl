@@ -1,5 +1,5 @@
 // Shared by every pass: the per-frame uniforms, node record decoding, the selection
-// test (DESIGN.md §5) and view rays. Each pass's source is appended to this file.
+// test (DESIGN.md §5) and view rays. Passes import it (`#import common`).
 
 struct Frame {
     // World-aligned camera-relative → view space (a rotation).

@@ -1,3 +1,6 @@
+#import constants
+#import common
+
 // Compute culling: each node of the prefix (of the list slice bound here) is tested
 // once; survivors are appended to a list whose length is the instance count of the
 // indirect draw that follows (4 vertices per survivor).
@@ -17,7 +20,7 @@ struct Compaction {
 @group(1) @binding(1) var<storage, read_write> survivors: array<u32>;
 @group(1) @binding(2) var<storage, read_write> compaction: Compaction;
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WORKGROUP_SIZE)
 fn cull(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
     if i >= compaction.count {

@@ -1,3 +1,5 @@
+#import common
+
 // Mesh reference: triangles with interpolated vertex normals into the same G-buffer as
 // the splats (weight 1), shaded by the same pass 3. Ground truth for image errors.
 

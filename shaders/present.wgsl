@@ -1,6 +1,8 @@
+#import fullscreen
+
 // Presentation: copies the finished frame (scene and panel, already sRGB-encoded) to
 // the window's surface texel for texel, so the window shows the bytes a screenshot
-// saves. Appended to fullscreen.wgsl.
+// saves.
 
 @group(0) @binding(0) var finished: texture_2d<f32>;
 

@@ -1,3 +1,6 @@
+#import common
+#import fullscreen
+
 // Pass 3: normalize the blended attributes and shade each pixel (Blinn-Phong with a
 // movable light); background where no splat contributed. Writes an sRGB target.
 

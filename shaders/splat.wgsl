@@ -1,3 +1,5 @@
+#import common
+
 // Splats: pass 1 (visibility, depth only) and pass 2 (attributes, additive blending),
 // one instanced quad of 4 vertices per node of the list slice bound here: every node
 // of the prefix (`vs_splat`, culled here), or the survivors that cull.wgsl compacted

@@ -3,8 +3,10 @@
 //! live in [`crate::tree::spt_file`]).
 
 pub mod atomic;
+pub mod bounds;
 pub mod geometry;
 pub mod ply;
 pub mod rebase;
 
-pub use geometry::{Bounds, Geometry, GeometryStats};
+pub use bounds::Bounds;
+pub use geometry::{Geometry, GeometryStats};

@@ -21,7 +21,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::geometry::Bounds;
+use super::bounds::Bounds;
 use crate::io::ply::fields::VertexRows;
 
 /// Largest offset from the origin, per axis, that a kept vertex may have: 2⁶⁰ ≈ 1.15·10¹⁸

@@ -16,6 +16,7 @@ use super::camera::Camera;
 use super::frame::{FrameUniform, srgb_to_linear};
 use super::renderer::Renderer;
 use super::settings::{Culling, Mode, Settings};
+use super::shaders::WORKGROUP_SIZE;
 use super::targets::{FrameTargets, check_size};
 use super::upload::GpuScene;
 use crate::tree::scene::Scene;
@@ -203,7 +204,7 @@ impl Renderer {
             pass.set_bind_group(0, &targets.frame_bind, &[]);
             for (slice, &n) in drawn_slices() {
                 pass.set_bind_group(1, &slice.cull, &[]);
-                pass.dispatch_workgroups(n.div_ceil(256), 1, 1);
+                pass.dispatch_workgroups(n.div_ceil(WORKGROUP_SIZE), 1, 1);
             }
         }
         gbuffer_pass(encoder, targets, "clear", false, true, Some(0));

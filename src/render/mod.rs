@@ -13,6 +13,7 @@ mod pipelines;
 mod readback;
 pub mod renderer;
 pub mod settings;
+mod shaders;
 mod targets;
 pub mod upload;
 
@@ -21,8 +22,9 @@ pub use camera::Camera;
 pub use counters::{CounterReadback, GpuCounters};
 pub use encode::EncodedFrame;
 pub use gpu::Gpu;
-pub use pipelines::{FULLSCREEN, OUTPUT_GAMMA, fullscreen_pipeline};
+pub use pipelines::{OUTPUT_GAMMA, fullscreen_pipeline};
 pub use renderer::{FrameStats, Image, Renderer};
 pub use settings::{Culling, Mode, Settings};
+pub use shaders::module as shader_module;
 pub use targets::FrameTargets;
 pub use upload::{GpuScene, MeshUpload, SliceUpload};

@@ -1,9 +1,8 @@
-//! The GPU programs of the renderer: bind group layouts, shader modules (each pass's
-//! WGSL appended to `shaders/common.wgsl`) and pipelines, made once per device.
+//! The GPU programs of the renderer: bind group layouts, shader modules (composed from
+//! `shaders/` by [`super::shaders`]) and pipelines, made once per device.
 
-const COMMON: &str = include_str!("../../shaders/common.wgsl");
-/// The full-screen triangle's vertex stage, shared by shading and presentation.
-pub const FULLSCREEN: &str = include_str!("../../shaders/fullscreen.wgsl");
+use super::shaders::module;
+
 pub(super) const GBUFFER: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub(super) const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// The shaded output: written linear, stored sRGB-encoded.
@@ -11,15 +10,8 @@ pub(super) const OUTPUT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSr
 /// The same bytes seen without sRGB decoding (overlays, presentation).
 pub const OUTPUT_GAMMA: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
-fn module(device: &wgpu::Device, name: &str, source: &str) -> wgpu::ShaderModule {
-    device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(name),
-        source: wgpu::ShaderSource::Wgsl(format!("{COMMON}\n{source}").into()),
-    })
-}
-
 /// A full-screen pass: `vs_fullscreen` (shaders/fullscreen.wgsl, which `module` must
-/// include) and the fragment stage `fragment` writing one target of `format`.
+/// import) and the fragment stage `fragment` writing one target of `format`.
 pub fn fullscreen_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
@@ -183,13 +175,9 @@ impl Pipelines {
             bind_group_layouts: &[Some(&frame_layout)],
             immediate_size: 0,
         });
-        let splat = module(device, "splat", include_str!("../../shaders/splat.wgsl"));
-        let mesh_module = module(device, "mesh", include_str!("../../shaders/mesh.wgsl"));
-        let shade_module = module(
-            device,
-            "shade",
-            &format!("{FULLSCREEN}\n{}", include_str!("../../shaders/shade.wgsl")),
-        );
+        let splat = module(device, "splat");
+        let mesh_module = module(device, "mesh");
+        let shade_module = module(device, "shade");
         let strip = wgpu::PrimitiveState {
             topology: wgpu::PrimitiveTopology::TriangleStrip,
             ..Default::default()
@@ -245,7 +233,7 @@ impl Pipelines {
         };
         let direct = pipelines("vs_splat");
         let compacted = pipelines("vs_splat_compacted");
-        let cull_module = module(device, "cull", include_str!("../../shaders/cull.wgsl"));
+        let cull_module = module(device, "cull");
         let cull = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("cull"),
             layout: Some(&cull_pipeline_layout),

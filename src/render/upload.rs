@@ -4,12 +4,13 @@
 use wgpu::util::DeviceExt;
 
 use super::renderer::Renderer;
+use super::shaders::WORKGROUP_SIZE;
 use crate::tree::NodeRecord;
 use crate::tree::report::{Report, Silent, Step};
 use crate::tree::scene::Scene;
 
-/// Nodes per slice at most: one dispatch of 65,535 workgroups of 256 covers a slice.
-const MAX_SLICE_NODES: u64 = 65_535 * 256;
+/// Nodes per slice at most: one dispatch of 65,535 workgroups covers a slice.
+const MAX_SLICE_NODES: u64 = 65_535 * WORKGROUP_SIZE as u64;
 
 /// One slice of the list on the GPU, with what compute culling needs.
 pub(super) struct Slice {

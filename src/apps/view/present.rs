@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use winit::window::Window;
 
-use crate::render::{FULLSCREEN, FrameTargets, OUTPUT_GAMMA, Renderer, fullscreen_pipeline};
+use crate::render::{FrameTargets, OUTPUT_GAMMA, Renderer, fullscreen_pipeline, shader_module};
 
 pub struct Presenter {
     window: Arc<Window>,
@@ -75,16 +75,7 @@ impl Presenter {
                 count: None,
             }],
         });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("present"),
-            source: wgpu::ShaderSource::Wgsl(
-                format!(
-                    "{FULLSCREEN}\n{}",
-                    include_str!("../../../shaders/present.wgsl")
-                )
-                .into(),
-            ),
-        });
+        let module = shader_module(device, "present");
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("present"),
             bind_group_layouts: &[Some(&layout)],

@@ -1,0 +1,132 @@
+//! WGSL modules with explicit imports. A file of `shaders/` names what it uses on lines
+//! `#import NAME` at its top; [`compose`] returns the module's source preceded by those
+//! of its imports (recursively, each once, imports first), the `#import` lines turned
+//! into comments so that line numbers stay those of the file. Constants that Rust and
+//! WGSL share are written once in Rust and given to WGSL as the module `constants`
+//! ([`constants_wgsl`]).
+//!
+//! A preprocessor of this size, rather than `naga_oil`: our shaders import whole files
+//! and need no name mangling, conditional compilation or per-item imports, and
+//! `naga_oil` pins a `naga` version that must match wgpu's, which would hold back wgpu
+//! upgrades. The test below parses and validates every composed module with naga, so a
+//! broken shader fails `cargo test` without a GPU.
+
+/// Threads per workgroup of the compute passes (`@workgroup_size(WORKGROUP_SIZE)`).
+pub const WORKGROUP_SIZE: u32 = 256;
+
+/// Every WGSL file of `shaders/`, by the name `#import` uses.
+const FILES: &[(&str, &str)] = &[
+    ("common", include_str!("../../shaders/common.wgsl")),
+    ("cull", include_str!("../../shaders/cull.wgsl")),
+    ("fullscreen", include_str!("../../shaders/fullscreen.wgsl")),
+    ("mesh", include_str!("../../shaders/mesh.wgsl")),
+    ("present", include_str!("../../shaders/present.wgsl")),
+    ("shade", include_str!("../../shaders/shade.wgsl")),
+    ("splat", include_str!("../../shaders/splat.wgsl")),
+];
+
+/// The WGSL of the shared constants, generated from their Rust definitions.
+pub fn constants_wgsl() -> String {
+    format!(
+        "// Generated from Rust (src/render/shaders.rs): constants shared with the CPU.\n\
+         const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\n"
+    )
+}
+
+fn source(name: &str) -> Option<String> {
+    if name == "constants" {
+        return Some(constants_wgsl());
+    }
+    FILES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, s)| s.to_string())
+}
+
+/// The names a module imports, in order.
+fn imports_of(text: &str) -> impl Iterator<Item = &str> {
+    text.lines()
+        .filter_map(|l| l.trim().strip_prefix("#import "))
+        .map(str::trim)
+}
+
+fn add(name: &str, done: &mut Vec<String>, out: &mut String) {
+    if done.iter().any(|d| d == name) {
+        return;
+    }
+    done.push(name.to_owned());
+    let text = source(name).unwrap_or_else(|| panic!("no WGSL module named '{name}'"));
+    for dep in imports_of(&text) {
+        add(dep, done, out);
+    }
+    for line in text.lines() {
+        match line.trim().strip_prefix("#import ") {
+            Some(dep) => out.push_str(&format!("// (imported above: {dep})\n")),
+            None => {
+                out.push_str(line);
+                out.push('\n');
+            }
+        }
+    }
+}
+
+/// The full source of module `name`: its imports first, then itself.
+pub fn compose(name: &str) -> String {
+    let mut out = String::new();
+    add(name, &mut Vec::new(), &mut out);
+    out
+}
+
+/// The shader module `name`, composed, on `device`.
+pub fn module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(name),
+        source: wgpu::ShaderSource::Wgsl(compose(name).into()),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The modules that pipelines are made of (the others are only imported).
+    const ENTRY_MODULES: &[&str] = &["cull", "mesh", "present", "shade", "splat"];
+
+    /// Parses and validates `source` as naga does inside wgpu, with the capabilities
+    /// wgpu gives a device that has no optional feature and full downlevel support
+    /// (wgpu-naga-bridge's mapping: only `SHADER_F16_IN_F32`, for `unpack2x16float`).
+    fn validate(name: &str, source: &str) -> Result<(), String> {
+        let module = naga::front::wgsl::parse_str(source)
+            .map_err(|e| format!("{name}: {}", e.emit_to_string(source)))?;
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::SHADER_FLOAT16_IN_FLOAT32,
+        )
+        .validate(&module)
+        .map_err(|e| format!("{name}: {}", e.emit_to_string(source)))?;
+        Ok(())
+    }
+
+    #[test]
+    fn every_shader_module_parses_and_validates() {
+        for name in ENTRY_MODULES {
+            validate(name, &compose(name)).unwrap_or_else(|e| panic!("{e}"));
+        }
+    }
+
+    #[test]
+    fn imports_come_first_and_once() {
+        let splat = compose("splat");
+        let common = splat.find("struct Frame").expect("common imported");
+        let own = splat.find("fn vs_splat").expect("splat itself");
+        assert!(common < own);
+        assert_eq!(splat.matches("struct Frame").count(), 1);
+        assert!(compose("cull").contains(&format!("WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u")));
+    }
+
+    #[test]
+    fn a_broken_shader_is_caught() {
+        let broken = compose("cull").replace("atomicAdd", "atomic_add_misspelled");
+        assert!(validate("broken cull", &broken).is_err());
+    }
+}
