@@ -6,25 +6,43 @@ struct Frame {
     view: mat4x4<f32>,
     // Reversed-Z, infinite far plane: depth = near / view distance.
     proj: mat4x4<f32>,
-    // xyz: model origin − eye, computed in f64 on the CPU.
-    model_offset: vec4<f32>,
-    // width, height, 1/width, 1/height (pixels).
-    viewport: vec4<f32>,
-    // x: ε (world error per unit of distance), y: error scale, z: near, w: depth push-back (× radius).
-    lod: vec4<f32>,
-    // x, y: tan of the half field of view; z: prefilter radius (px); w: 1 with the EWA prefilter.
-    lens: vec4<f32>,
-    // xyz: direction toward the light, view space; w: specular strength.
-    light: vec4<f32>,
+    // Model origin − eye, computed in f64 on the CPU.
+    model_offset: vec3<f32>,
+    _pad0: f32,
+    // Target size in pixels, and its inverse.
+    viewport: vec2<f32>,
+    inv_viewport: vec2<f32>,
+    // ε: world error per unit of distance of the selection test.
+    eps: f32,
+    // What stored errors are relative to (model units).
+    error_scale: f32,
+    near: f32,
+    // Pass 1 pushes each splat back by this fraction of its radius.
+    depth_push: f32,
+    // tan of the half field of view, horizontally and vertically.
+    tan_half_fov: vec2<f32>,
+    // Radius of the EWA screen-space prefilter, pixels.
+    prefilter_px: f32,
+    // 1 with the EWA prefilter, 0 without.
+    ewa: f32,
+    // Direction toward the light, view space, and the specular strength.
+    light_dir: vec3<f32>,
+    specular: f32,
     background: vec4<f32>,
-    // x: display mode, y: cull back faces, z: level of detail on, w: LOD frozen at lod_eye.
-    flags: vec4<u32>,
-    // x: splat radius scale (rendered radius / stored radius); y: the accumulated
-    // weight Σw at which a pixel is fully covered (silhouettes fade below it; 0: off).
-    blend: vec4<f32>,
-    // xyz: the eye the level of detail is chosen for, relative to the camera's eye
-    // (world-aligned); used when flags.w is set (frozen LOD).
-    lod_eye: vec4<f32>,
+    // Display mode (MODE_*), back faces culled, level of detail on, LOD frozen at lod_eye.
+    mode: u32,
+    cull_back_faces: u32,
+    lod_on: u32,
+    lod_frozen: u32,
+    // Splat radius scale (rendered radius / stored radius); the accumulated weight Σw at
+    // which a pixel is fully covered (silhouettes fade below it; 0: off).
+    radius_scale: f32,
+    coverage_weight: f32,
+    _pad1: vec2<f32>,
+    // The eye the level of detail is chosen for, relative to the camera's eye
+    // (world-aligned); used when lod_frozen is set.
+    lod_eye: vec3<f32>,
+    _pad2: f32,
 }
 
 const MODE_SHADED: u32 = 0u;
@@ -62,10 +80,10 @@ fn decode_node(a: vec4<u32>, b: vec4<u32>) -> Node {
     n.radius = bitcast<f32>(a.w);
     n.normal = oct_decode(unpack2x16snorm(b.x));
     n.color = unpack4x8unorm(b.y);
-    let errors = unpack2x16float(b.z) * frame.lod.y;
+    let errors = unpack2x16float(b.z) * frame.error_scale;
     n.error = errors.x;
     n.parent_error = errors.y;
-    n.delta = unpack2x16float(b.w).x * frame.lod.y;
+    n.delta = unpack2x16float(b.w).x * frame.error_scale;
     n.level = b.w >> 16u;
     return n;
 }
@@ -73,19 +91,19 @@ fn decode_node(a: vec4<u32>, b: vec4<u32>) -> Node {
 // Drawn iff fine enough (e ≤ ε·d) and its parent is not, seen conservatively
 // (ε·(d − δ) < e_parent). Without level of detail: the leaves (and zero-error nodes).
 fn selected(n: Node, d: f32) -> bool {
-    let eps = select(0.0, frame.lod.x, frame.flags.z != 0u);
+    let eps = select(0.0, frame.eps, frame.lod_on != 0u);
     return n.error <= eps * d && eps * (d - n.delta) < n.parent_error;
 }
 
 // View-space direction of the ray through a framebuffer position (pixel centre).
 fn view_ray(frag: vec2<f32>) -> vec3<f32> {
-    let ndc = vec2<f32>(frag.x * frame.viewport.z * 2.0 - 1.0, 1.0 - frag.y * frame.viewport.w * 2.0);
-    return vec3<f32>(ndc.x * frame.lens.x, ndc.y * frame.lens.y, -1.0);
+    let ndc = vec2<f32>(frag.x * frame.inv_viewport.x * 2.0 - 1.0, 1.0 - frag.y * frame.inv_viewport.y * 2.0);
+    return vec3<f32>(ndc.x * frame.tan_half_fov.x, ndc.y * frame.tan_half_fov.y, -1.0);
 }
 
 // Reversed-Z depth of a point at view distance `z` (> 0) in front of the eye.
 fn depth_of(z: f32) -> f32 {
-    return frame.lod.z / z;
+    return frame.near / z;
 }
 
 // A colour for a tree level (cycles through 8).
@@ -99,7 +117,7 @@ fn level_color(level: u32) -> vec3<f32> {
 
 // Blue (small) to red (large) over log2 of the radius relative to the model size.
 fn radius_color(radius: f32) -> vec3<f32> {
-    let t = clamp((log2(radius / frame.lod.y) + 14.0) / 12.0, 0.0, 1.0);
+    let t = clamp((log2(radius / frame.error_scale) + 14.0) / 12.0, 0.0, 1.0);
     return mix(vec3<f32>(0.15, 0.3, 0.95), vec3<f32>(0.95, 0.25, 0.15), t);
 }
 
@@ -111,10 +129,10 @@ struct ViewDisk {
 }
 
 fn view_disk(n: Node) -> ViewDisk {
-    let world = n.position + frame.model_offset.xyz;
+    let world = n.position + frame.model_offset;
     let center = (frame.view * vec4<f32>(world, 1.0)).xyz;
     let normal = normalize((frame.view * vec4<f32>(n.normal, 0.0)).xyz);
-    return ViewDisk(center, normal, n.radius * frame.blend.x);
+    return ViewDisk(center, normal, n.radius * frame.radius_scale);
 }
 
 // The per-splat culling of both strategies (vertex stage, or compute compaction): the
@@ -122,19 +140,19 @@ fn view_disk(n: Node) -> ViewDisk {
 // plane) and, when asked, back faces.
 fn splat_visible(n: Node, disk: ViewDisk) -> bool {
     var lod_distance = length(disk.center);
-    if frame.flags.w != 0u {
-        lod_distance = length(n.position + frame.model_offset.xyz - frame.lod_eye.xyz);
+    if frame.lod_frozen != 0u {
+        lod_distance = length(n.position + frame.model_offset - frame.lod_eye);
     }
     if !selected(n, lod_distance) {
         return false;
     }
     let r = disk.radius;
     let depth = -disk.center.z;
-    let sx = sqrt(1.0 + frame.lens.x * frame.lens.x);
-    let sy = sqrt(1.0 + frame.lens.y * frame.lens.y);
-    if depth + r < frame.lod.z || abs(disk.center.x) - r * sx > frame.lens.x * depth
-        || abs(disk.center.y) - r * sy > frame.lens.y * depth {
+    let sx = sqrt(1.0 + frame.tan_half_fov.x * frame.tan_half_fov.x);
+    let sy = sqrt(1.0 + frame.tan_half_fov.y * frame.tan_half_fov.y);
+    if depth + r < frame.near || abs(disk.center.x) - r * sx > frame.tan_half_fov.x * depth
+        || abs(disk.center.y) - r * sy > frame.tan_half_fov.y * depth {
         return false;
     }
-    return !(frame.flags.y != 0u && dot(disk.normal, disk.center) > 0.0);
+    return !(frame.cull_back_faces != 0u && dot(disk.normal, disk.center) > 0.0);
 }

@@ -18,7 +18,7 @@ struct MeshVarying {
 
 @vertex
 fn vs_mesh(v: MeshVertex) -> MeshVarying {
-    let view_pos = (frame.view * vec4<f32>(v.position + frame.model_offset.xyz, 1.0)).xyz;
+    let view_pos = (frame.view * vec4<f32>(v.position + frame.model_offset, 1.0)).xyz;
     var out: MeshVarying;
     out.clip = frame.proj * vec4<f32>(view_pos, 1.0);
     out.view_pos = view_pos;

@@ -17,17 +17,17 @@ fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     }
     let color = c.rgb / c.w;
     let n = normalize(nz.xyz);
-    if frame.flags.x == MODE_NORMALS {
+    if frame.mode == MODE_NORMALS {
         return vec4<f32>(n * 0.5 + 0.5, 1.0);
     }
     let q = view_ray(frag.xy) * (nz.w / c.w);
-    let l = normalize(frame.light.xyz);
+    let l = normalize(frame.light_dir);
     let v = normalize(-q);
     let h = normalize(l + v);
     let diffuse = max(dot(n, l), 0.0);
-    let specular = frame.light.w * pow(max(dot(n, h), 0.0), 32.0) * select(0.0, 1.0, diffuse > 0.0);
+    let specular = frame.specular * pow(max(dot(n, h), 0.0), 32.0) * select(0.0, 1.0, diffuse > 0.0);
     let shaded = color * (0.25 + 0.75 * diffuse) + vec3<f32>(specular);
     // Pixels reached only by the fading rims of splats blend into the background.
-    let alpha = select(1.0, clamp(c.w / frame.blend.y, 0.0, 1.0), frame.blend.y > 0.0);
+    let alpha = select(1.0, clamp(c.w / frame.coverage_weight, 0.0, 1.0), frame.coverage_weight > 0.0);
     return vec4<f32>(mix(frame.background.rgb, shaded, alpha), 1.0);
 }

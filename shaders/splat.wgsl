@@ -44,7 +44,7 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     let center = disk.center;
     let normal = disk.normal;
     let r = disk.radius;
-    let near = frame.lod.z;
+    let near = frame.near;
     // Footprint: the screen box of the disk's four tangent corners p ± r u ± r v. A disk
     // crossing the near plane is skipped rather than drawn garbled.
     let u = normalize(select(cross(normal, vec3<f32>(0.0, 0.0, 1.0)), cross(normal, vec3<f32>(1.0, 0.0, 0.0)), abs(normal.z) > 0.9));
@@ -62,7 +62,7 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
         hi = max(hi, p.xy / p.w);
     }
     // Grow by the prefilter radius, so that sub-pixel splats still cover a pixel.
-    let grow = 2.0 * frame.lens.z * frame.viewport.zw * select(0.0, 1.0, frame.lens.w > 0.0);
+    let grow = 2.0 * frame.prefilter_px * frame.inv_viewport * select(0.0, 1.0, frame.ewa > 0.0);
     lo -= grow;
     hi += grow;
     let pick = vec2<f32>(select(lo.x, hi.x, (corner & 1u) != 0u), select(lo.y, hi.y, (corner & 2u) != 0u));
@@ -74,7 +74,7 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     out.normal = normal;
     out.tangent_u = u;
     var color = node.color;
-    switch frame.flags.x {
+    switch frame.mode {
         case MODE_LEVELS: { color = vec4<f32>(level_color(node.level), 1.0); }
         case MODE_RADIUS: { color = vec4<f32>(radius_color(node.radius), 1.0); }
         default: {}
@@ -108,8 +108,8 @@ fn hit(in: SplatVarying) -> Hit {
     let local_u = dot(q - in.center, in.tangent_u) / r;
     let local_v = dot(q - in.center, cross(in.normal, in.tangent_u)) / r;
     var rho2 = local_u * local_u + local_v * local_v;
-    if frame.lens.w > 0.0 {
-        let screen = (in.clip.xy - in.extra.yz) / frame.lens.z;
+    if frame.ewa > 0.0 {
+        let screen = (in.clip.xy - in.extra.yz) / frame.prefilter_px;
         rho2 = min(rho2, dot(screen, screen));
     }
     // Both passes keep the same fragments: beyond the rim, or where the weight is too
@@ -137,9 +137,9 @@ fn fs_visibility(in: SplatVarying) -> DepthOnly {
     let h = hit(in);
     let dir = normalize(view_ray(in.clip.xy));
     let c = max(abs(dot(dir, in.normal)), 0.02);
-    let pixel = h.depth * 2.0 * frame.lens.y * frame.viewport.w;
-    let footprint = frame.lens.z * pixel * sqrt(1.0 - c * c) / c;
-    return DepthOnly(depth_of(h.depth + frame.lod.w * in.extra.x + footprint));
+    let pixel = h.depth * 2.0 * frame.tan_half_fov.y * frame.inv_viewport.y;
+    let footprint = frame.prefilter_px * pixel * sqrt(1.0 - c * c) / c;
+    return DepthOnly(depth_of(h.depth + frame.depth_push * in.extra.x + footprint));
 }
 
 struct Attributes {

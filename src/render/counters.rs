@@ -6,11 +6,12 @@ use std::collections::VecDeque;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use super::encode::EncodedFrame;
+use super::cull::Compaction;
+use super::gpu::Gpu;
+use super::gpu_scene::GpuScene;
+use super::plan::EncodedFrame;
 use super::readback;
-use super::renderer::Renderer;
 use super::targets::FrameTargets;
-use super::upload::GpuScene;
 
 /// What the GPU measured of one frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -28,72 +29,62 @@ fn counters_bytes(gpu_scene: &GpuScene) -> u64 {
     16 + 4 * gpu_scene.planned_slices().max(1) as u64
 }
 
-impl Renderer {
-    /// Records copies of the frame's counters into `into` (at least `counters_bytes`).
-    pub(super) fn copy_counters(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        targets: &FrameTargets,
-        gpu_scene: &GpuScene,
-        into: &wgpu::Buffer,
-    ) {
-        if let Some((_, resolve)) = &targets.queries {
-            encoder.copy_buffer_to_buffer(resolve, 0, into, 0, 16);
-        }
-        for (k, slice) in gpu_scene.slices.iter().enumerate() {
-            // The indirect draw's instance count: the survivors.
-            encoder.copy_buffer_to_buffer(&slice.compaction, 4, into, 16 + 4 * k as u64, 4);
-        }
+/// Records copies of the frame's counters into `into` (at least `counters_bytes`).
+pub(super) fn copy_counters(
+    encoder: &mut wgpu::CommandEncoder,
+    targets: &FrameTargets,
+    gpu_scene: &GpuScene,
+    into: &wgpu::Buffer,
+) {
+    if let Some((_, resolve)) = &targets.queries {
+        encoder.copy_buffer_to_buffer(resolve, 0, into, 0, 16);
     }
+    for (k, slice) in gpu_scene.slices.iter().enumerate() {
+        // The indirect draw's instance count: the survivors.
+        let at = Compaction::SURVIVORS_AT;
+        encoder.copy_buffer_to_buffer(&slice.compaction, at, into, 16 + 4 * k as u64, 4);
+    }
+}
 
-    /// Decodes counters copied by [`Renderer::copy_counters`].
-    pub(super) fn parse_counters(&self, bytes: &[u8], frame: &EncodedFrame) -> GpuCounters {
-        let gpu_ms = self.gpu.timestamps.then(|| {
-            let t: [u64; 2] = bytemuck::pod_read_unaligned(&bytes[..16]);
-            let period_ns = self.gpu.queue.get_timestamp_period() as f64;
-            t[1].saturating_sub(t[0]) as f64 * period_ns / 1e6
-        });
-        let drawn = frame.compute.then(|| {
-            bytes[16..16 + 4 * frame.slices]
-                .chunks_exact(4)
-                .map(|c| u32::from_le_bytes(c.try_into().unwrap()) as u64)
-                .sum()
-        });
-        GpuCounters { gpu_ms, drawn }
-    }
+/// Decodes counters copied by [`copy_counters`].
+pub(super) fn parse_counters(gpu: &Gpu, bytes: &[u8], frame: &EncodedFrame) -> GpuCounters {
+    let gpu_ms = gpu.timestamps.then(|| {
+        let t: [u64; 2] = bytemuck::pod_read_unaligned(&bytes[..16]);
+        let period_ns = gpu.queue.get_timestamp_period() as f64;
+        t[1].saturating_sub(t[0]) as f64 * period_ns / 1e6
+    });
+    let drawn = frame.compute.then(|| {
+        bytes[16..16 + 4 * frame.slices]
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()) as u64)
+            .sum()
+    });
+    GpuCounters { gpu_ms, drawn }
+}
 
-    /// A mappable buffer for one frame's counters.
-    pub(super) fn counters_buffer(&self, gpu_scene: &GpuScene) -> wgpu::Buffer {
-        self.mappable_counters(counters_bytes(gpu_scene))
-    }
+/// A mappable buffer of `size` bytes for one frame's counters.
+fn mappable_counters(gpu: &Gpu, size: u64) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("counters"),
+        size,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    })
+}
 
-    fn counters_buffer_like(&self, buffer: &wgpu::Buffer) -> wgpu::Buffer {
-        self.mappable_counters(buffer.size())
-    }
-
-    fn mappable_counters(&self, size: u64) -> wgpu::Buffer {
-        self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("counters"),
-            size,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        })
-    }
-
-    /// Reads a frame's counters now: records the copy, submits, waits.
-    pub(super) fn read_counters_now(
-        &self,
-        mut encoder: wgpu::CommandEncoder,
-        targets: &FrameTargets,
-        gpu_scene: &GpuScene,
-        frame: &EncodedFrame,
-    ) -> anyhow::Result<GpuCounters> {
-        let buffer = self.counters_buffer(gpu_scene);
-        self.copy_counters(&mut encoder, targets, gpu_scene, &buffer);
-        self.gpu.queue.submit([encoder.finish()]);
-        let bytes = readback::read(&self.gpu.device, &buffer)?;
-        Ok(self.parse_counters(&bytes, frame))
-    }
+/// Reads a frame's counters now: records the copy, submits, waits.
+pub(super) fn read_counters_now(
+    gpu: &Gpu,
+    mut encoder: wgpu::CommandEncoder,
+    targets: &FrameTargets,
+    gpu_scene: &GpuScene,
+    frame: &EncodedFrame,
+) -> anyhow::Result<GpuCounters> {
+    let buffer = mappable_counters(gpu, counters_bytes(gpu_scene));
+    copy_counters(&mut encoder, targets, gpu_scene, &buffer);
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = readback::read(&gpu.device, &buffer)?;
+    Ok(parse_counters(gpu, &bytes, frame))
 }
 
 /// Counters read a few frames late, never waiting for the GPU: a small ring of mappable
@@ -114,10 +105,10 @@ type Mapping = (AtomicBool, AtomicBool);
 const RING: usize = 4;
 
 impl CounterReadback {
-    pub fn new(renderer: &Renderer, gpu_scene: &GpuScene) -> CounterReadback {
+    pub fn new(gpu: &Gpu, gpu_scene: &GpuScene) -> CounterReadback {
         CounterReadback {
             free: (0..RING)
-                .map(|_| renderer.counters_buffer(gpu_scene))
+                .map(|_| mappable_counters(gpu, counters_bytes(gpu_scene)))
                 .collect(),
             recorded: None,
             in_flight: VecDeque::new(),
@@ -127,14 +118,13 @@ impl CounterReadback {
     /// Records the copy of this frame's counters, if a buffer is free.
     pub fn record(
         &mut self,
-        renderer: &Renderer,
         encoder: &mut wgpu::CommandEncoder,
         targets: &FrameTargets,
         gpu_scene: &GpuScene,
         frame: &EncodedFrame,
     ) {
         if let Some(buffer) = self.free.pop() {
-            renderer.copy_counters(encoder, targets, gpu_scene, &buffer);
+            copy_counters(encoder, targets, gpu_scene, &buffer);
             self.recorded = Some((buffer, frame.clone()));
         }
     }
@@ -153,9 +143,9 @@ impl CounterReadback {
     }
 
     /// The newest frame whose counters have arrived, if any (polls without waiting).
-    pub fn poll(&mut self, renderer: &Renderer) -> Option<(EncodedFrame, GpuCounters)> {
+    pub fn poll(&mut self, gpu: &Gpu) -> Option<(EncodedFrame, GpuCounters)> {
         // An error here only means nothing new arrived.
-        let _ = renderer.gpu.device.poll(wgpu::PollType::Poll);
+        let _ = gpu.device.poll(wgpu::PollType::Poll);
         let mut newest = None;
         while let Some((_, _, ready)) = self.in_flight.front() {
             if !ready.0.load(Ordering::Acquire) {
@@ -169,14 +159,14 @@ impl CounterReadback {
                 .flatten();
             match bytes {
                 Some(bytes) => {
-                    let counters = renderer.parse_counters(&bytes, &frame);
+                    let counters = parse_counters(gpu, &bytes, &frame);
                     newest = Some((frame, counters));
                     drop(bytes);
                     buffer.unmap();
                     self.free.push(buffer);
                 }
                 // A failed mapping: replace the buffer.
-                None => self.free.push(renderer.counters_buffer_like(&buffer)),
+                None => self.free.push(mappable_counters(gpu, buffer.size())),
             }
         }
         newest

@@ -8,21 +8,55 @@ use super::camera::{Camera, bounding_sphere};
 use super::settings::{DEPTH_PUSH, Mode, PREFILTER_PX, Settings};
 use crate::tree::TreeMeta;
 
-/// Mirrors `struct Frame` in `shaders/common.wgsl`, field for field.
+/// Mirrors `struct Frame` in `shaders/common.wgsl`, field for field (the WGSL file
+/// documents each); 272 bytes, with the padding WGSL's vec3 alignment asks for.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub(super) struct FrameUniform {
     pub view: [[f32; 4]; 4],
     pub proj: [[f32; 4]; 4],
-    pub model_offset: [f32; 4],
-    pub viewport: [f32; 4],
-    pub lod: [f32; 4],
-    pub lens: [f32; 4],
-    pub light: [f32; 4],
+    pub model_offset: [f32; 3],
+    pub _pad0: f32,
+    pub viewport: [f32; 2],
+    pub inv_viewport: [f32; 2],
+    pub eps: f32,
+    pub error_scale: f32,
+    pub near: f32,
+    pub depth_push: f32,
+    pub tan_half_fov: [f32; 2],
+    pub prefilter_px: f32,
+    pub ewa: f32,
+    pub light_dir: [f32; 3],
+    pub specular: f32,
     pub background: [f32; 4],
-    pub flags: [u32; 4],
-    pub blend: [f32; 4],
-    pub lod_eye: [f32; 4],
+    pub mode: u32,
+    pub cull_back_faces: u32,
+    pub lod_on: u32,
+    pub lod_frozen: u32,
+    pub radius_scale: f32,
+    pub coverage_weight: f32,
+    pub _pad1: [f32; 2],
+    pub lod_eye: [f32; 3],
+    pub _pad2: f32,
+}
+
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 272);
+
+/// The layout of bind group 0 of every pass: the frame uniform.
+pub(super) fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("frame"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<FrameUniform>() as u64),
+            },
+            count: None,
+        }],
+    })
 }
 
 /// The sRGB transfer function, inverted: an sRGB-encoded value in 0–1 to linear.
@@ -61,54 +95,42 @@ impl FrameUniform {
             Mode::Points => 4,
             Mode::Mesh => 5,
         };
+        let light = settings.light.normalize_or(Vec3::Z);
+        let [r, g, b] = settings.background.map(srgb_to_linear);
         FrameUniform {
             view: camera.view_rotation().to_cols_array_2d(),
             proj: camera.projection(aspect, near).to_cols_array_2d(),
-            model_offset: (-eye_rel).as_vec3().extend(0.0).to_array(),
-            viewport: [
-                width as f32,
-                height as f32,
-                1.0 / width as f32,
-                1.0 / height as f32,
-            ],
-            lod: [lod_eps as f32, meta.error_scale, near as f32, DEPTH_PUSH],
-            lens: [
-                (tan_y * aspect) as f32,
-                tan_y as f32,
-                PREFILTER_PX,
-                if settings.ewa { 1.0 } else { 0.0 },
-            ],
-            light: settings.light.normalize_or(Vec3::Z).extend(0.25).to_array(),
-            background: settings
-                .background
-                .map(srgb_to_linear)
-                .into_iter()
-                .chain([1.0])
-                .collect::<Vec<_>>()
-                .try_into()
-                .unwrap(),
-            flags: [
-                mode,
-                settings.cull_back_faces as u32,
-                (lod_eps > 0.0) as u32,
-                settings.lod_eye.is_some() as u32,
-            ],
-            blend: [
-                settings.radius_scale,
-                if settings.mode == Mode::Shaded {
-                    settings.coverage_weight
-                } else {
-                    0.0
-                },
-                0.0,
-                0.0,
-            ],
+            model_offset: (-eye_rel).as_vec3().to_array(),
+            _pad0: 0.0,
+            viewport: [width as f32, height as f32],
+            inv_viewport: [1.0 / width as f32, 1.0 / height as f32],
+            eps: lod_eps as f32,
+            error_scale: meta.error_scale,
+            near: near as f32,
+            depth_push: DEPTH_PUSH,
+            tan_half_fov: [(tan_y * aspect) as f32, tan_y as f32],
+            prefilter_px: PREFILTER_PX,
+            ewa: if settings.ewa { 1.0 } else { 0.0 },
+            light_dir: light.to_array(),
+            specular: 0.25,
+            background: [r, g, b, 1.0],
+            mode,
+            cull_back_faces: settings.cull_back_faces as u32,
+            lod_on: (lod_eps > 0.0) as u32,
+            lod_frozen: settings.lod_eye.is_some() as u32,
+            radius_scale: settings.radius_scale,
+            coverage_weight: if settings.mode == Mode::Shaded {
+                settings.coverage_weight
+            } else {
+                0.0
+            },
+            _pad1: [0.0; 2],
             lod_eye: settings
                 .lod_eye
                 .map_or(DVec3::ZERO, |e| e - camera.eye)
                 .as_vec3()
-                .extend(0.0)
                 .to_array(),
+            _pad2: 0.0,
         }
     }
 }

@@ -1,8 +1,12 @@
-//! The G-buffer that passes 1–2 write and pass 3 reads, for one frame size: the colour
-//! sum (colour·w, w), the normal sum (normal·w, z·w), both Rgba16Float, and the
-//! reversed-Z depth of pass 1.
+//! The G-buffer that passes 1–2 (and the mesh, and plain points) write and pass 3 reads,
+//! for one frame size: the colour sum (colour·w, w), the normal sum (normal·w, z·w),
+//! both Rgba16Float, and the reversed-Z depth of pass 1; and how a pass attaches to it
+//! (its render pass, colour targets and depth state).
 
-use super::pipelines::{DEPTH, GBUFFER};
+/// Format of both attribute sums.
+pub(super) const GBUFFER: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Reversed-Z depth (1 at the near plane, 0 at infinity).
+pub(super) const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// A 2D render target of `format`.
 pub(super) fn target(
@@ -58,4 +62,93 @@ impl GBuffer {
             normal_sum,
         }
     }
+
+    /// A render pass over the G-buffer: its two colour sums (unless `depth_only`) and
+    /// the depth, cleared or loaded, with `timestamps` written at its start.
+    pub fn pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        label: &str,
+        depth_only: bool,
+        clear: bool,
+        timestamps: Option<wgpu::RenderPassTimestampWrites>,
+    ) -> wgpu::RenderPass<'e> {
+        let color = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: store(if clear {
+                    wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
+                } else {
+                    wgpu::LoadOp::Load
+                }),
+            })
+        };
+        let colors = [color(&self.color_view), color(&self.normal_view)];
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
+            color_attachments: if depth_only { &[] } else { &colors },
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.depth_view,
+                depth_ops: Some(store(if clear {
+                    wgpu::LoadOp::Clear(0.0)
+                } else {
+                    wgpu::LoadOp::Load
+                })),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timestamps,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        })
+    }
 }
+
+/// `load`, then store.
+pub(super) fn store<V>(load: wgpu::LoadOp<V>) -> wgpu::Operations<V> {
+    wgpu::Operations {
+        load,
+        store: wgpu::StoreOp::Store,
+    }
+}
+
+/// The two colour targets of a pass that writes the G-buffer, blended by `blend`.
+pub(super) fn color_targets(
+    blend: Option<wgpu::BlendState>,
+) -> [Option<wgpu::ColorTargetState>; 2] {
+    let t = wgpu::ColorTargetState {
+        format: GBUFFER,
+        blend,
+        write_mask: wgpu::ColorWrites::ALL,
+    };
+    [Some(t.clone()), Some(t)]
+}
+
+/// Depth tested with `compare`, written if `write`.
+pub(super) fn depth_state(
+    compare: wgpu::CompareFunction,
+    write: bool,
+) -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState {
+        format: DEPTH,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(compare),
+        stencil: Default::default(),
+        bias: Default::default(),
+    })
+}
+
+/// Additive blending of colour and alpha: the attribute sums of pass 2.
+pub(super) const ADD: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+    alpha: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+};

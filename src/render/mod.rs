@@ -1,30 +1,43 @@
 //! Rendering (DESIGN.md §6–7): the GPU, cameras, and the three-pass deferred EWA
 //! splatting renderer with its mesh reference pass, drawing a [`Scene`] of the tree
-//! layer (the only layer it imports). WGSL lives in `shaders/`.
+//! layer (the only layer it imports). One module per pass, each with its layouts,
+//! pipeline, encoding and WGSL (`shaders/`, composed by [`shaders`]):
+//!
+//! ```text
+//! plan ─► cull ─► splats (visibility, attributes; or points) | mesh ─► shading
+//!          frame (uniform) · gbuffer · targets · gpu_scene (upload) · counters
+//! ```
+//!
+//! [`Renderer`] composes them.
 
 pub mod camera;
 mod counters;
-mod encode;
+mod cull;
 mod frame;
+mod fullscreen;
 mod gbuffer;
 pub mod gpu;
+mod gpu_scene;
+mod mesh;
 pub mod metrics;
-mod pipelines;
+mod plan;
 mod readback;
 pub mod renderer;
 pub mod settings;
 mod shaders;
+mod shading;
+mod splats;
 mod targets;
-pub mod upload;
+mod upload;
 
 pub use crate::tree::scene::{MeshData, Scene};
 pub use camera::Camera;
 pub use counters::{CounterReadback, GpuCounters};
-pub use encode::EncodedFrame;
+pub use fullscreen::fullscreen_pipeline;
 pub use gpu::Gpu;
-pub use pipelines::{OUTPUT_GAMMA, fullscreen_pipeline};
+pub use gpu_scene::{GpuScene, MeshUpload, SliceUpload};
+pub use plan::EncodedFrame;
 pub use renderer::{FrameStats, Image, Renderer};
 pub use settings::{Culling, Mode, Settings};
 pub use shaders::module as shader_module;
-pub use targets::FrameTargets;
-pub use upload::{GpuScene, MeshUpload, SliceUpload};
+pub use targets::{FrameTargets, OUTPUT_GAMMA};

@@ -1,16 +1,34 @@
-//! The renderer: pipelines made once per device, and offline frames (encode, submit,
-//! read back pixels, coverage, depth and counters). The passes themselves are recorded
-//! by `encode.rs`; the viewer records them into its own encoder instead.
+//! The renderer: the passes, made once per device, composed into frames. A frame is
+//! recorded into a caller's encoder ([`Renderer::encode`]: the viewer records into its
+//! own), or rendered offline and read back (pixels, coverage, depth and counters).
+//!
+//! ```text
+//! CPU: plan (ε, prefix by binary search) ─► per slice of the list: instanced quads
+//! cull (compute, optional): survivors of the selection test ─► indirect draw
+//! pass 1 visibility:  depth only, pushed back by a fraction of the radius
+//! pass 2 attributes:  depth test against pass 1, additive (colour·w, w), (normal·w, z·w)
+//!        (or: the mesh reference, or plain points, instead of passes 1–2)
+//! pass 3 shading:     full-screen, normalize and Blinn-Phong, sRGB out
+//! ```
 
 use rayon::prelude::*;
 
 use super::camera::Camera;
+use super::counters::read_counters_now;
+use super::cull::CullPass;
+use super::frame::{FrameUniform, frame_layout, srgb_to_linear};
+use super::gbuffer::{GBuffer, store};
 use super::gpu::Gpu;
-use super::pipelines::Pipelines;
+use super::gpu_scene::{GpuScene, MeshUpload, SliceUpload};
+use super::mesh::MeshPass;
+use super::plan::{EncodedFrame, plan};
 use super::readback;
-use super::settings::{Mode, Settings};
-use super::targets::FrameTargets;
-use super::upload::GpuScene;
+use super::settings::{Culling, Mode, Settings};
+use super::shading::ShadingPass;
+use super::splats::SplatPasses;
+use super::targets::{FrameTargets, check_size};
+use super::upload;
+use crate::tree::report::{Report, Silent, Step};
 use crate::tree::scene::Scene;
 use crate::tree::select::is_drawn;
 
@@ -40,13 +58,155 @@ pub struct FrameStats {
 
 pub struct Renderer {
     pub gpu: Gpu,
-    pub(super) pipelines: Pipelines,
+    /// Bind group 0 of every pass: the frame uniform.
+    frame_layout: wgpu::BindGroupLayout,
+    cull: CullPass,
+    splats: SplatPasses,
+    mesh: MeshPass,
+    shading: ShadingPass,
 }
 
 impl Renderer {
     pub fn new(gpu: Gpu) -> Renderer {
-        let pipelines = Pipelines::new(&gpu.device);
-        Renderer { gpu, pipelines }
+        let device = &gpu.device;
+        let frame_layout = frame_layout(device);
+        Renderer {
+            cull: CullPass::new(device, &frame_layout),
+            splats: SplatPasses::new(device, &frame_layout),
+            mesh: MeshPass::new(device, &frame_layout),
+            shading: ShadingPass::new(device, &frame_layout),
+            frame_layout,
+            gpu,
+        }
+    }
+
+    /// Targets for frames of `size`, checked against the adapter's limits.
+    pub fn targets(&self, size: (u32, u32)) -> anyhow::Result<FrameTargets> {
+        let device = &self.gpu.device;
+        check_size(&device.limits(), size)?;
+        let gbuffer = GBuffer::new(device, size);
+        let gbuffer_bind = self.shading.bind(device, &gbuffer);
+        Ok(FrameTargets::new(
+            device,
+            size,
+            self.gpu.timestamps,
+            &self.frame_layout,
+            (gbuffer, gbuffer_bind),
+        ))
+    }
+
+    /// Records one frame of `scene` into `encoder`, drawing into `targets.output`. The
+    /// frame uniform and the compaction records are written through the queue, so they
+    /// take effect at the next submit.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &FrameTargets,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        camera: &Camera,
+        settings: &Settings,
+    ) -> anyhow::Result<EncodedFrame> {
+        if settings.mode == Mode::Mesh && gpu_scene.mesh.is_none() {
+            anyhow::bail!("mesh mode needs a model with faces, read from its PLY file");
+        }
+        let compute = settings.culling == Culling::Compute && settings.mode != Mode::Mesh;
+        let uploaded = (gpu_scene.uploaded_nodes(), gpu_scene.slices.len());
+        let frame = plan(scene, camera, settings, targets.size.1, uploaded, compute);
+        let uniform = FrameUniform::new(scene.meta(), camera, settings, targets.size, frame.eps);
+        let queue = &self.gpu.queue;
+        queue.write_buffer(&targets.frame_buffer, 0, bytemuck::bytes_of(&uniform));
+        let shares = gpu_scene.shares(frame.prefix_len);
+        if compute {
+            self.cull
+                .encode(queue, encoder, &targets.frame_bind, &shares);
+        }
+        let g = &targets.gbuffer;
+        g.pass(encoder, "clear", false, true, targets.start_timestamp());
+        let pipelines = self.splats.of(compute);
+        let draw = |encoder: &mut wgpu::CommandEncoder, label, depth_only, pipeline| {
+            let mut pass = g.pass(encoder, label, depth_only, false, None);
+            self.splats
+                .draw(&mut pass, pipeline, &targets.frame_bind, &shares, compute);
+        };
+        match (settings.mode, &gpu_scene.mesh) {
+            (Mode::Mesh, Some(mesh)) => self.mesh.encode(encoder, g, &targets.frame_bind, mesh),
+            (Mode::Points, _) => draw(encoder, "points", false, &pipelines.points),
+            _ => {
+                draw(encoder, "visibility", true, &pipelines.visibility);
+                draw(encoder, "attributes", false, &pipelines.attributes);
+            }
+        }
+        self.shading.encode(encoder, targets);
+        if let Some((set, resolve)) = &targets.queries {
+            encoder.resolve_query_set(set, 0..2, resolve, 0);
+        }
+        Ok(frame)
+    }
+
+    /// Records a frame with nothing in it: the output cleared to `background` (sRGB).
+    pub fn encode_empty(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &FrameTargets,
+        background: [f32; 3],
+    ) {
+        let [r, g, b] = background.map(|c| srgb_to_linear(c) as f64);
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("empty"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &targets.output_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: store(wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 })),
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+    }
+
+    /// Uploads a scene's list (once, in binding-size slices) and mesh.
+    pub fn upload(&self, scene: &Scene) -> GpuScene {
+        self.upload_reporting(scene, &Silent)
+    }
+
+    /// [`Renderer::upload`], telling `report` the nodes uploaded, slice by slice.
+    pub fn upload_reporting(&self, scene: &Scene, report: &dyn Report) -> GpuScene {
+        let nodes = scene.nodes();
+        report.step(Step::Upload, nodes.len() as u64);
+        let mut gpu_scene = self.empty_gpu_scene(nodes.len());
+        for range in self.slice_plan(nodes.len()) {
+            report.advance(range.len() as u64);
+            gpu_scene.push(self.upload_slice(&nodes[range]));
+        }
+        if let Some(mesh) = self.upload_mesh(scene) {
+            gpu_scene.set_mesh(mesh);
+        }
+        gpu_scene
+    }
+
+    /// The node ranges of the slices of a list of `total` nodes, front first.
+    pub fn slice_plan(&self, total: usize) -> impl Iterator<Item = std::ops::Range<usize>> {
+        upload::slice_plan(&self.gpu, total)
+    }
+
+    /// A scene of `total` nodes with nothing uploaded yet.
+    pub fn empty_gpu_scene(&self, total: usize) -> GpuScene {
+        upload::empty_gpu_scene(&self.gpu, total)
+    }
+
+    /// Uploads one slice of the list (a range given by [`Renderer::slice_plan`]), to
+    /// be pushed in order.
+    pub fn upload_slice(&self, chunk: &[crate::tree::NodeRecord]) -> SliceUpload {
+        upload::upload_slice(&self.gpu.device, (&self.splats, &self.cull), chunk)
+    }
+
+    /// Uploads the mesh reference of a scene that has one.
+    pub fn upload_mesh(&self, scene: &Scene) -> Option<MeshUpload> {
+        let mesh = scene.mesh.as_ref()?;
+        Some(MeshUpload(MeshPass::upload(&self.gpu.device, mesh)))
     }
 
     /// Renders one frame and reads it back, with its statistics. `selected` is the CPU
@@ -82,7 +242,7 @@ impl Renderer {
         let out_buffer = readback::copy_texture(device, &mut encoder, &targets.output, 4);
         let weight_buffer = readback::copy_texture(device, &mut encoder, &g.color_sum, 8);
         let normal_buffer = readback::copy_texture(device, &mut encoder, &g.normal_sum, 8);
-        let counters = self.read_counters_now(encoder, targets, gpu_scene, &frame)?;
+        let counters = read_counters_now(&self.gpu, encoder, targets, gpu_scene, &frame)?;
         let (width, height) = targets.size;
         let rgba = readback::unpad_rgba8(&readback::read(device, &out_buffer)?, width, height);
         // A pixel counts as covered once it is at least half opaque.

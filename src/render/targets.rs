@@ -2,8 +2,13 @@
 //! keeps one per window size): the G-buffer, the shaded output, the frame uniform and
 //! the bind groups that point at them, and the timestamp queries.
 
+use super::frame::FrameUniform;
 use super::gbuffer::GBuffer;
-use super::pipelines::{OUTPUT, OUTPUT_GAMMA, Pipelines};
+
+/// The shaded output: written linear, stored sRGB-encoded.
+pub(super) const OUTPUT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// The same bytes seen without sRGB decoding (overlays, presentation).
+pub const OUTPUT_GAMMA: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 /// Render targets and per-frame buffers for one `size`.
 pub struct FrameTargets {
@@ -22,13 +27,15 @@ pub struct FrameTargets {
 }
 
 impl FrameTargets {
+    /// Targets of `size` around `gbuffer` (of the same size) and its bind group for
+    /// shading; the frame uniform bound as `frame_layout` says.
     pub(super) fn new(
         device: &wgpu::Device,
-        pipelines: &Pipelines,
         size: (u32, u32),
         timestamps: bool,
+        frame_layout: &wgpu::BindGroupLayout,
+        (gbuffer, gbuffer_bind): (GBuffer, wgpu::BindGroup),
     ) -> FrameTargets {
-        let gbuffer = GBuffer::new(device, size);
         let output = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("output"),
             size: wgpu::Extent3d {
@@ -47,31 +54,17 @@ impl FrameTargets {
         });
         let frame_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame"),
-            size: std::mem::size_of::<super::frame::FrameUniform>() as u64,
+            size: std::mem::size_of::<FrameUniform>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let frame_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("frame"),
-            layout: &pipelines.frame_layout,
+            layout: frame_layout,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
                 resource: frame_buffer.as_entire_binding(),
             }],
-        });
-        let gbuffer_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("gbuffer"),
-            layout: &pipelines.gbuffer_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&gbuffer.color_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&gbuffer.normal_view),
-                },
-            ],
         });
         let queries = timestamps.then(|| {
             let set = device.create_query_set(&wgpu::QuerySetDescriptor {
@@ -97,6 +90,28 @@ impl FrameTargets {
             gbuffer_bind,
             queries,
         }
+    }
+
+    /// The timestamp at the start of the frame's first G-buffer pass.
+    pub(super) fn start_timestamp(&self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+        self.queries
+            .as_ref()
+            .map(|(q, _)| wgpu::RenderPassTimestampWrites {
+                query_set: q,
+                beginning_of_pass_write_index: Some(0),
+                end_of_pass_write_index: None,
+            })
+    }
+
+    /// The timestamp at the end of shading.
+    pub(super) fn end_timestamp(&self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+        self.queries
+            .as_ref()
+            .map(|(q, _)| wgpu::RenderPassTimestampWrites {
+                query_set: q,
+                beginning_of_pass_write_index: None,
+                end_of_pass_write_index: Some(1),
+            })
     }
 
     /// The output seen as plain `Rgba8Unorm`: its bytes are already sRGB-encoded, so an

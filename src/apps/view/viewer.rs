@@ -100,7 +100,7 @@ impl Viewer {
     ) {
         let radius = bounding_sphere(scene.meta()).1;
         let orbit = OrbitCamera::from_camera(camera, radius);
-        let counters = CounterReadback::new(&self.renderer, &gpu_scene);
+        let counters = CounterReadback::new(&self.renderer.gpu, &gpu_scene);
         if self.settings.mode == Mode::Mesh && gpu_scene.mesh_triangles() == 0 {
             self.settings.mode = Mode::Shaded;
         }
@@ -296,8 +296,7 @@ impl Viewer {
                     &camera,
                     &self.settings,
                 )?;
-                m.counters
-                    .record(&self.renderer, encoder, targets, &m.gpu_scene, &frame);
+                m.counters.record(encoder, targets, &m.gpu_scene, &frame);
                 self.stats.frame = Some(frame);
             }
             None => self
@@ -320,7 +319,7 @@ impl Viewer {
 
     fn collect_counters(&mut self) {
         if let Some(m) = &mut self.model
-            && let Some((frame, counters)) = m.counters.poll(&self.renderer)
+            && let Some((frame, counters)) = m.counters.poll(&self.renderer.gpu)
         {
             self.stats.gpu = counters;
             self.stats.measured_prefix = frame.prefix_len;

@@ -1,0 +1,117 @@
+//! Compute culling: each node of a slice's share of the prefix is tested once against
+//! the selection test (and the frustum, and back faces when asked); survivors are
+//! appended to the slice's survivor list, whose length becomes the instance count of
+//! the indirect draw that follows (`splats.rs`, 4 vertices per survivor). WGSL:
+//! `shaders/cull.wgsl`.
+
+use bytemuck::{Pod, Zeroable};
+
+use super::gpu_scene::Slice;
+use super::shaders::{WORKGROUP_SIZE, module};
+
+/// A slice's compaction record (`struct Compaction` in cull.wgsl): the indirect draw's
+/// arguments, whose instance count the pass counts up, then the slice's share of the
+/// prefix.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub(super) struct Compaction {
+    pub vertex_count: u32,
+    pub instance_count: u32,
+    pub first_vertex: u32,
+    pub first_instance: u32,
+    pub count: u32,
+}
+
+const _: () = assert!(
+    std::mem::offset_of!(Compaction, count) == std::mem::size_of::<wgpu::util::DrawIndirectArgs>()
+);
+
+impl Compaction {
+    /// Before culling: 4 vertices per splat, no survivor yet, `count` nodes to test.
+    pub fn reset(count: u32) -> Compaction {
+        Compaction {
+            vertex_count: 4,
+            instance_count: 0,
+            first_vertex: 0,
+            first_instance: 0,
+            count,
+        }
+    }
+
+    /// Byte offset of the instance count (the survivors), for reading it back.
+    pub const SURVIVORS_AT: u64 = std::mem::offset_of!(Compaction, instance_count) as u64;
+}
+
+/// A storage-buffer entry of bind group 1, visible to the compute stage.
+fn storage(binding: u32, read_only: bool, min_size: u64) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: wgpu::BufferSize::new(min_size),
+        },
+        count: None,
+    }
+}
+
+/// The cull pass: its bind group layout (nodes, survivors, compaction) and pipeline.
+pub(super) struct CullPass {
+    pub layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+}
+
+impl CullPass {
+    pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> CullPass {
+        let node = std::mem::size_of::<crate::tree::NodeRecord>() as u64;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("cull"),
+            entries: &[
+                storage(0, true, node),
+                storage(1, false, 4),
+                storage(2, false, std::mem::size_of::<Compaction>() as u64),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("cull"),
+            bind_group_layouts: &[Some(frame_layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("cull"),
+            layout: Some(&pipeline_layout),
+            module: &module(device, "cull"),
+            entry_point: Some("cull"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        CullPass { layout, pipeline }
+    }
+
+    /// Resets every slice's compaction record to its share of the prefix (through the
+    /// queue: it takes effect at the next submit), then records the culling of each
+    /// slice that holds part of the prefix.
+    pub fn encode(
+        &self,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        frame_bind: &wgpu::BindGroup,
+        shares: &[(&Slice, u32)],
+    ) {
+        for (slice, n) in shares {
+            let record = Compaction::reset(*n);
+            queue.write_buffer(&slice.compaction, 0, bytemuck::bytes_of(&record));
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("cull"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, frame_bind, &[]);
+        for (slice, n) in shares.iter().filter(|(_, n)| *n > 0) {
+            pass.set_bind_group(1, &slice.cull, &[]);
+            pass.dispatch_workgroups(n.div_ceil(WORKGROUP_SIZE), 1, 1);
+        }
+    }
+}

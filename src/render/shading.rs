@@ -1,0 +1,76 @@
+//! Pass 3, shading: a full-screen triangle reads the G-buffer's sums, normalizes them
+//! (colour = Σcw/Σw, normal = normalize(Σnw)), and shades each pixel (Blinn-Phong with
+//! a movable light, two-sided); background where nothing contributed. Written linear
+//! into the sRGB output. WGSL: `shaders/shade.wgsl`.
+
+use super::fullscreen::fullscreen_pipeline;
+use super::gbuffer::{GBuffer, store};
+use super::shaders::module;
+use super::targets::{FrameTargets, OUTPUT};
+
+pub(super) struct ShadingPass {
+    /// Bind group 1: the colour and normal sums, as textures.
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::RenderPipeline,
+}
+
+impl ShadingPass {
+    pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> ShadingPass {
+        let texture = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gbuffer"),
+            entries: &[texture(0), texture(1)],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("shade"),
+            bind_group_layouts: &[Some(frame_layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let shader = module(device, "shade");
+        let pipeline = fullscreen_pipeline(device, &pipeline_layout, &shader, "fs_shade", OUTPUT);
+        ShadingPass { layout, pipeline }
+    }
+
+    /// The bind group of `gbuffer`'s sums for this pass.
+    pub fn bind(&self, device: &wgpu::Device, gbuffer: &GBuffer) -> wgpu::BindGroup {
+        let view = |binding, view| wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::TextureView(view),
+        };
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("gbuffer"),
+            layout: &self.layout,
+            entries: &[view(0, &gbuffer.color_view), view(1, &gbuffer.normal_view)],
+        })
+    }
+
+    /// Shades `targets`' G-buffer into its output; writes the frame's end timestamp.
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, targets: &FrameTargets) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shade"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &targets.output_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: store(wgpu::LoadOp::Clear(wgpu::Color::BLACK)),
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: targets.end_timestamp(),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &targets.frame_bind, &[]);
+        pass.set_bind_group(1, &targets.gbuffer_bind, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}

@@ -1,0 +1,159 @@
+//! The splat passes (DESIGN.md §7): pass 1, visibility (depth only, pushed back), and
+//! pass 2, attributes (additive (colour·w, w) and (normal·w, z·w) into the G-buffer),
+//! or plain points (no blending) instead of both. One instanced quad of 4 vertices per
+//! node: every node of the prefix, culled in the vertex stage ("direct"), or the
+//! survivors that `cull.rs` compacted, drawn indirectly ("compacted"). WGSL:
+//! `shaders/splat.wgsl`.
+
+use super::gbuffer::{ADD, color_targets, depth_state};
+use super::gpu_scene::Slice;
+use super::shaders::module;
+use crate::tree::NodeRecord;
+
+/// The three splat pipelines of one culling strategy.
+pub(super) struct SplatPipelines {
+    pub visibility: wgpu::RenderPipeline,
+    pub attributes: wgpu::RenderPipeline,
+    pub points: wgpu::RenderPipeline,
+}
+
+/// Layouts of bind group 1 and the pipelines of both culling strategies.
+pub(super) struct SplatPasses {
+    /// The slice's nodes (vertex culling).
+    pub nodes_layout: wgpu::BindGroupLayout,
+    /// The slice's nodes and survivors (compute culling).
+    pub compacted_layout: wgpu::BindGroupLayout,
+    pub direct: SplatPipelines,
+    pub compacted: SplatPipelines,
+}
+
+/// A read-only storage buffer of bind group 1 for the vertex stage.
+fn vertex_storage(binding: u32, min_size: u64) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: wgpu::BufferSize::new(min_size),
+        },
+        count: None,
+    }
+}
+
+/// The pipelines of vertex entry point `vs` (bind group 1 laid out by `nodes`).
+fn pipelines(
+    device: &wgpu::Device,
+    shader: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    vs: &str,
+) -> SplatPipelines {
+    let pipeline = |fs: &str, targets: &[Option<wgpu::ColorTargetState>], depth| {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(fs),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module: shader,
+                entry_point: Some(vs),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleStrip,
+                ..Default::default()
+            },
+            depth_stencil: depth,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: shader,
+                entry_point: Some(fs),
+                compilation_options: Default::default(),
+                targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    };
+    use wgpu::CompareFunction::{Greater, GreaterEqual};
+    SplatPipelines {
+        visibility: pipeline("fs_visibility", &[], depth_state(Greater, true)),
+        attributes: pipeline(
+            "fs_attributes",
+            &color_targets(Some(ADD)),
+            depth_state(GreaterEqual, false),
+        ),
+        points: pipeline(
+            "fs_points",
+            &color_targets(None),
+            depth_state(Greater, true),
+        ),
+    }
+}
+
+impl SplatPasses {
+    pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> SplatPasses {
+        let node = std::mem::size_of::<NodeRecord>() as u64;
+        let bind_layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries,
+            })
+        };
+        let nodes_layout = bind_layout("nodes", &[vertex_storage(0, node)]);
+        let compacted_layout = bind_layout(
+            "compacted nodes",
+            &[vertex_storage(0, node), vertex_storage(1, 4)],
+        );
+        let pipeline_layout = |second: &wgpu::BindGroupLayout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: None,
+                bind_group_layouts: &[Some(frame_layout), Some(second)],
+                immediate_size: 0,
+            })
+        };
+        let shader = module(device, "splat");
+        SplatPasses {
+            direct: pipelines(device, &shader, &pipeline_layout(&nodes_layout), "vs_splat"),
+            compacted: pipelines(
+                device,
+                &shader,
+                &pipeline_layout(&compacted_layout),
+                "vs_splat_compacted",
+            ),
+            nodes_layout,
+            compacted_layout,
+        }
+    }
+
+    /// Draws each slice's share of the prefix with `pipeline`: the compacted survivors
+    /// (indirect) after compute culling, else every node of the share.
+    pub fn draw(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        pipeline: &wgpu::RenderPipeline,
+        frame_bind: &wgpu::BindGroup,
+        shares: &[(&Slice, u32)],
+        compacted: bool,
+    ) {
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, frame_bind, &[]);
+        for (slice, n) in shares.iter().filter(|(_, n)| *n > 0) {
+            if compacted {
+                pass.set_bind_group(1, &slice.compacted, &[]);
+                pass.draw_indirect(&slice.compaction, 0);
+            } else {
+                pass.set_bind_group(1, &slice.direct, &[]);
+                pass.draw(0..4, 0..*n);
+            }
+        }
+    }
+
+    /// The pipelines of a culling strategy.
+    pub fn of(&self, compacted: bool) -> &SplatPipelines {
+        if compacted {
+            &self.compacted
+        } else {
+            &self.direct
+        }
+    }
+}
