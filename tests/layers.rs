@@ -184,3 +184,48 @@ fn no_file_imports_itself_through_others() {
         panic!("import cycle: {}", cycle.join(" → "));
     }
 }
+
+/// Functions of `src/` and their lengths in lines: from the `fn` line to the closing
+/// brace at the same indentation (the layout `cargo fmt` gives).
+fn function_lengths() -> Vec<(usize, String)> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut out = Vec::new();
+    for file in sources(&src) {
+        let text = std::fs::read_to_string(&file).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            let indent = &line[..line.len() - line.trim_start().len()];
+            let rest = line.trim_start();
+            let rest = rest
+                .strip_prefix("pub ")
+                .or_else(|| rest.strip_prefix("pub(super) "))
+                .or_else(|| rest.strip_prefix("pub(crate) "))
+                .unwrap_or(rest);
+            let rest = rest.strip_prefix("const ").unwrap_or(rest);
+            let Some(name) = rest.strip_prefix("fn ") else {
+                continue;
+            };
+            let close = format!("{indent}}}");
+            if let Some(end) = lines[i + 1..].iter().position(|l| *l == close) {
+                let name: String = name
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
+                out.push((end + 2, format!("{}: {name}", file.display())));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn no_function_is_over_100_lines() {
+    let lengths = function_lengths();
+    assert!(
+        lengths.len() > 300,
+        "found only {} functions",
+        lengths.len()
+    );
+    let long: Vec<_> = lengths.into_iter().filter(|(n, _)| *n > 100).collect();
+    assert!(long.is_empty(), "functions over 100 lines: {long:?}");
+}

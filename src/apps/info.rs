@@ -123,13 +123,9 @@ impl PlyInfo {
         })
     }
 
-    /// The report as a person reads it.
-    pub fn to_text(&self) -> String {
-        let g = &self.geometry;
-        let s = &self.surfels;
-        let yes = |b: bool| if b { "yes" } else { "no" };
-        let mut out = String::new();
-        let mut line = |k: &str, v: String| field(&mut out, k, v);
+    /// File, format, comments, elements and properties.
+    fn header_lines(&self, out: &mut String) {
+        let mut line = |k: &str, v: String| field(out, k, v);
         line("file", format!("{} ({})", self.file, bytes(self.bytes)));
         line("format", self.format.clone());
         for c in &self.comments {
@@ -144,6 +140,11 @@ impl PlyInfo {
                 line("", format!("property {p}"));
             }
         }
+    }
+
+    /// What was read and dropped, the boxes and the origin.
+    fn geometry_lines(&self, out: &mut String) {
+        let g = &self.geometry;
         let mut vertices = format!(
             "{} read, {} dropped (NaN or infinite coordinates)",
             count(g.vertices_in_file),
@@ -161,9 +162,10 @@ impl PlyInfo {
                 count(g.outliers)
             );
         }
-        line("vertices", vertices);
+        field(out, "vertices", vertices);
         if self.present.faces || g.faces_in_file > 0 {
-            line(
+            field(
+                out,
                 "faces",
                 format!(
                     "{} read → {} triangles; skipped: {} with < 3 vertices, {} triangles on dropped vertices",
@@ -174,11 +176,20 @@ impl PlyInfo {
                 ),
             );
         }
-        place_fields(&mut out, &self.bounds, self.origin);
+        place_fields(out, &self.bounds, self.origin);
         if self.core != self.bounds {
-            field(&mut out, "core min", xyz(self.core.min));
-            field(&mut out, "core max", xyz(self.core.max));
+            field(out, "core min", xyz(self.core.min));
+            field(out, "core max", xyz(self.core.max));
         }
+    }
+
+    /// The report as a person reads it.
+    pub fn to_text(&self) -> String {
+        let s = &self.surfels;
+        let yes = |b: bool| if b { "yes" } else { "no" };
+        let mut out = String::new();
+        self.header_lines(&mut out);
+        self.geometry_lines(&mut out);
         let mut line = |k: &str, v: String| field(&mut out, k, v);
         line(
             "present",

@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod convert;
+pub mod frame_args;
 pub mod info;
 pub mod progress;
 pub mod render;

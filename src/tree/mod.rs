@@ -93,6 +93,69 @@ fn error_scale(surfels: &[Surfel]) -> f32 {
     if e > 0.0 && e.is_finite() { e } else { 1.0 }
 }
 
+/// The record of an internal node from its children's (already computed): the
+/// parent disk and colour, its radius rounded up from f64 so that it still reaches
+/// every child, and its error rounded up and never below a child's.
+fn internal_record(
+    node: &hierarchy::Internal,
+    records: &[NodeRecord],
+    scale: f32,
+    oriented: bool,
+) -> NodeRecord {
+    let k = node.child_count as usize;
+    let mut disks = [Disk::new(Vec3::ZERO, Vec3::Z, 0.0); 4];
+    let mut colors = [[0u8; 4]; 4];
+    let mut children_max = 0;
+    for (j, &c) in node.children().iter().enumerate() {
+        let r = &records[c as usize];
+        disks[j] = Disk::new(r.position(), r.normal(), r.radius());
+        colors[j] = r.color;
+        children_max = children_max.max(r.error);
+    }
+    let (disks, colors) = (&disks[..k], &colors[..k]);
+    let (disk, color) = parent_disk(disks, colors, oriented);
+    let mut rec = NodeRecord::new(disk.p.as_vec3(), disk.r as f32, disk.n.as_vec3(), color);
+    if (rec.radius() as f64) < disk.r {
+        rec.radius = f32::from_bits(rec.radius).next_up().to_bits();
+    }
+    let e = node_error(&disk, disks);
+    rec.error = encode_up(e, scale).max(children_max);
+    rec
+}
+
+/// Top-down: each node's parent error (a bit copy), δ rounded up and level; parents
+/// read from a snapshot of the internal nodes (ids `n..`) so that every node is
+/// written in parallel.
+fn link_parents(
+    records: &mut [NodeRecord],
+    parent_ids: &[u32],
+    levels: &[u16],
+    n: usize,
+    scale: f32,
+) {
+    let internal: Vec<(u16, Vec3)> = records[n..]
+        .par_iter()
+        .map(|r| (r.error, r.position()))
+        .collect();
+    records.par_iter_mut().enumerate().for_each(|(id, r)| {
+        r.level = levels[id];
+        match parent_ids[id] {
+            u32::MAX => {
+                r.parent_error = f16::INFINITY.to_bits();
+                r.delta = 0;
+            }
+            p => {
+                let (error, position) = internal[p as usize - n];
+                r.parent_error = error;
+                r.delta = encode_up(
+                    (r.position().as_dvec3() - position.as_dvec3()).length(),
+                    scale,
+                );
+            }
+        }
+    });
+}
+
 /// Stage 2: node disks and errors bottom-up, one level at a time (nodes of a level are
 /// independent), then each node's parent error, δ and level top-down. `report` hears
 /// internal nodes done.
@@ -126,27 +189,7 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Rep
             .with_min_len(256)
             .map(|&id| {
                 let node = &hierarchy.internal[id as usize - n];
-                let k = node.child_count as usize;
-                let mut disks = [Disk::new(Vec3::ZERO, Vec3::Z, 0.0); 4];
-                let mut colors = [[0u8; 4]; 4];
-                let mut children_max = 0;
-                for (j, &c) in node.children().iter().enumerate() {
-                    let r = &records[c as usize];
-                    disks[j] = Disk::new(r.position(), r.normal(), r.radius());
-                    colors[j] = r.color;
-                    children_max = children_max.max(r.error);
-                }
-                let (disks, colors) = (&disks[..k], &colors[..k]);
-                let (disk, color) = parent_disk(disks, colors, oriented);
-                let mut rec =
-                    NodeRecord::new(disk.p.as_vec3(), disk.r as f32, disk.n.as_vec3(), color);
-                // Stored radius rounded up from f64: the disk still reaches every child.
-                if (rec.radius() as f64) < disk.r {
-                    rec.radius = f32::from_bits(rec.radius).next_up().to_bits();
-                }
-                let e = node_error(&disk, disks);
-                rec.error = encode_up(e, scale).max(children_max);
-                (id, rec)
+                (id, internal_record(node, &records, scale, oriented))
             })
             .collect();
         for (id, rec) in done {
@@ -154,31 +197,8 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Rep
         }
         report.advance(ids.len() as u64);
     }
-    // Top-down: parent error (bit copy), δ rounded up, level; parents read from a
-    // snapshot of the internal nodes so that every node is written in parallel.
     let parent_ids = hierarchy.parents();
-    let internal: Vec<(u16, Vec3)> = records[n..]
-        .par_iter()
-        .map(|r| (r.error, r.position()))
-        .collect();
-    records.par_iter_mut().enumerate().for_each(|(id, r)| {
-        r.level = levels[id];
-        match parent_ids[id] {
-            u32::MAX => {
-                r.parent_error = f16::INFINITY.to_bits();
-                r.delta = 0;
-            }
-            p => {
-                let (error, position) = internal[p as usize - n];
-                r.parent_error = error;
-                r.delta = encode_up(
-                    (r.position().as_dvec3() - position.as_dvec3()).length(),
-                    scale,
-                );
-            }
-        }
-    });
-    drop(internal);
+    link_parents(&mut records, &parent_ids, &levels, n, scale);
     let (centre_min, centre_max) = records
         .par_iter()
         .map(|r| (r.position(), r.position()))

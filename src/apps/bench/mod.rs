@@ -22,7 +22,7 @@ use crate::render::{
     Camera, Culling, FrameTargets, Gpu, GpuScene, Image, Mode, Renderer, Scene, Settings,
 };
 use measure::{Frames, Measured, measure};
-use report::{Environment, Row};
+use report::{Environment, Row, Strategy, culling_name};
 
 /// Frames per camera of the stability check's runs, at least.
 /// The stability check's runs: warm-up frames per camera, and timed frames in all at
@@ -40,7 +40,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Frame size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "512x512", value_parser = crate::apps::render::parse_size)]
+    #[arg(long, default_value = "512x512", value_parser = crate::apps::frame_args::parse_size)]
     pub size: (u32, u32),
     /// Cameras per orbit (evenly spaced azimuths, elevation 20°).
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
@@ -133,13 +133,6 @@ fn sweep_settings(eps_px: f64, culling: Culling) -> Settings {
     }
 }
 
-fn culling_name(c: Culling) -> &'static str {
-    match c {
-        Culling::Compute => "compute",
-        Culling::Vertex => "vertex",
-    }
-}
-
 /// Today's date (UTC), YYYY-MM-DD, from the system clock.
 fn today() -> String {
     let days = std::time::SystemTime::now()
@@ -158,7 +151,8 @@ fn today() -> String {
     format!("{y:04}-{m:02}-{d:02}")
 }
 
-pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+/// `--quick` applied and the sweep checked.
+fn effective_args(args: &BenchArgs) -> anyhow::Result<BenchArgs> {
     let mut args = args.clone();
     if args.quick {
         (args.views, args.fly_steps, args.warmup, args.frames) = (2, 3, 1, 2);
@@ -167,11 +161,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if args.eps.iter().any(|e| !e.is_finite() || *e < 0.0) {
         anyhow::bail!("--eps: every ε must be a finite number ≥ 0");
     }
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("{}: cannot make the folder", args.out.display()))?;
-    let scene = Scene::open(&args.model)?;
-    let gpu = Gpu::new(args.backend.as_deref())?;
-    let env = Environment {
+    Ok(args)
+}
+
+/// What labels the results: model, reference, adapter, machine and date.
+fn environment(args: &BenchArgs, scene: &Scene, gpu: &Gpu) -> Environment {
+    Environment {
         model: args.model.file_name().map_or_else(
             || args.model.display().to_string(),
             |n| n.to_string_lossy().to_string(),
@@ -187,12 +182,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         machine: report::machine(),
         date: today(),
         size: args.size,
-    };
-    println!("adapter   {}", env.label());
-    let renderer = Renderer::new(gpu);
-    let gpu_scene = renderer.upload(&scene);
-    let meta = scene.meta();
-    let fov = 45f64.to_radians();
+    }
+}
+
+/// The camera paths: the three orbits, then the fly-through.
+fn camera_paths(scene: &Scene, args: &BenchArgs) -> Vec<(String, Vec<Camera>)> {
+    let (meta, fov) = (scene.meta(), 45f64.to_radians());
     let mut paths: Vec<(String, Vec<Camera>)> = plan::ORBITS
         .iter()
         .map(|(name, fill)| {
@@ -206,8 +201,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         "fly-through".into(),
         plan::fly_through(meta, args.fly_steps as usize, fov),
     ));
+    paths
+}
 
-    // Frames: references, SPT (two cullings), random subsets (orbits, ε > 0), stability.
+/// A progress bar over every frame the run will draw: references, SPT (two cullings),
+/// random subsets (orbits, ε > 0) and the stability check.
+fn frame_progress(args: &BenchArgs, paths: &[(String, Vec<Camera>)]) -> ProgressBar {
     let per_camera = (args.warmup + args.frames) as u64;
     let cams: u64 = paths.iter().map(|p| p.1.len() as u64).sum();
     let orbit_cams = args.views as u64 * 3;
@@ -231,6 +230,21 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             .expect("valid template")
             .progress_chars("=> "),
     );
+    progress
+}
+
+pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    let args = effective_args(args)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot make the folder", args.out.display()))?;
+    let scene = Scene::open(&args.model)?;
+    let gpu = Gpu::new(args.backend.as_deref())?;
+    let env = environment(&args, &scene, &gpu);
+    println!("adapter   {}", env.label());
+    let renderer = Renderer::new(gpu);
+    let gpu_scene = renderer.upload(&scene);
+    let paths = camera_paths(&scene, &args);
+    let progress = frame_progress(&args, &paths);
     let bench = Bench {
         renderer: &renderer,
         targets: renderer.targets(args.size)?,
@@ -246,95 +260,163 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     for (path, cameras) in &paths {
         progress.set_message(format!("{path}: references"));
         let references = bench.references(&scene, &gpu_scene, cameras)?;
-        let mut leaves_drawn = None;
-        for &eps_px in &args.eps {
-            for culling in [Culling::Compute, Culling::Vertex] {
-                progress.set_message(format!("{path}: spt ε {eps_px} {}", culling_name(culling)));
-                let mut m =
-                    bench.run((&scene, &gpu_scene), cameras, &references, eps_px, culling)?;
-                if culling == Culling::Compute {
-                    if eps_px == 0.0 {
-                        leaves_drawn = Some(m.splats);
-                    }
-                } else if let Some(compute) = rows.last() {
-                    // Vertex culling drops the same splats by the same test
-                    // (`splat_visible`), but only compute culling counts them.
-                    m.splats = compute.m.splats;
-                }
-                rows.push(Row {
-                    path: path.clone(),
-                    strategy: if eps_px == 0.0 { "no-lod" } else { "spt" },
-                    culling: culling_name(culling),
-                    eps_px,
-                    cameras: cameras.len(),
-                    m,
-                });
-                print_row(rows.last().expect("just pushed"));
-            }
-            if eps_px == 0.0 || !path.starts_with("orbit") {
-                continue;
-            }
-            // As many leaves drawn as SPT drew: the subset is drawn from all leaves, of
-            // which a share `visible` passes the frustum at these cameras.
-            let spt_drawn = rows
-                .iter()
-                .rev()
-                .find(|r| r.path == *path && r.culling == "compute")
-                .map_or(0.0, |r| r.m.splats);
-            let visible = leaves_drawn
-                .map_or(1.0, |d| d / leaves.len().max(1) as f64)
-                .clamp(1e-6, 1.0);
-            let n = (spt_drawn / visible).round() as usize;
-            let subset = random_subset::random_subset(meta, &leaves, n, 0x5EED ^ n as u64);
-            let subset_gpu = renderer.upload(&subset);
-            progress.set_message(format!("{path}: random ε {eps_px}"));
-            let m = bench.run(
-                (&subset, &subset_gpu),
-                cameras,
-                &references,
-                0.0,
-                Culling::Compute,
-            )?;
-            rows.push(Row {
-                path: path.clone(),
-                strategy: "random",
-                culling: "compute",
-                eps_px,
-                cameras: cameras.len(),
-                m,
-            });
-            print_row(rows.last().expect("just pushed"));
-        }
+        let sweep = Sweep {
+            bench: &bench,
+            scene: (&scene, &gpu_scene),
+            leaves: &leaves,
+            path,
+            cameras,
+            references: &references,
+        };
+        sweep.run(&args.eps, &mut rows)?;
         if path == "orbit-mid" {
             mid_refs = references;
         }
     }
+    let (checks, stable) = stability_runs(
+        &bench,
+        (&scene, &gpu_scene),
+        &paths,
+        &mid_refs,
+        &args,
+        &rows,
+    )?;
+    progress.finish_and_clear();
+    for c in &checks {
+        println!("stability {c}");
+    }
+    write_results(&args.out, &env, &rows, &checks)?;
+    if !stable {
+        anyhow::bail!(
+            "the numbers are not stable between two runs of the same configuration (see summary.md)"
+        );
+    }
+    Ok(())
+}
 
-    // Stability: the mid orbit at ε = 1 px (or the sweep's nearest), compute culling,
-    // twice more, their frames interleaved; their splat counts must also equal the
-    // sweep's.
+/// One camera path's sweep: SPT at every ε with both cullings, and at the orbits a
+/// random subset of leaves as large as what SPT drew.
+struct Sweep<'a> {
+    bench: &'a Bench<'a>,
+    scene: (&'a Scene, &'a GpuScene),
+    leaves: &'a [crate::tree::NodeRecord],
+    path: &'a str,
+    cameras: &'a [Camera],
+    references: &'a [Image],
+}
+
+impl Sweep<'_> {
+    fn row(&self, strategy: Strategy, culling: Culling, eps_px: f64, m: Measured) -> Row {
+        let row = Row {
+            path: self.path.to_owned(),
+            strategy,
+            culling,
+            eps_px,
+            cameras: self.cameras.len(),
+            m,
+        };
+        print_row(&row);
+        row
+    }
+
+    fn run(&self, eps: &[f64], rows: &mut Vec<Row>) -> anyhow::Result<()> {
+        let progress = self.bench.frames.progress;
+        let mut leaves_drawn = None;
+        for &eps_px in eps {
+            let strategy = if eps_px == 0.0 {
+                Strategy::NoLod
+            } else {
+                Strategy::Spt
+            };
+            let mut spt_drawn = 0.0;
+            for culling in [Culling::Compute, Culling::Vertex] {
+                let what = format!("{}: spt ε {eps_px} {}", self.path, culling_name(culling));
+                progress.set_message(what);
+                let mut m =
+                    self.bench
+                        .run(self.scene, self.cameras, self.references, eps_px, culling)?;
+                if culling == Culling::Compute {
+                    spt_drawn = m.splats;
+                    leaves_drawn = leaves_drawn.or((eps_px == 0.0).then_some(m.splats));
+                } else {
+                    // Vertex culling drops the same splats by the same test
+                    // (`splat_visible`), but only compute culling counts them.
+                    m.splats = spt_drawn;
+                }
+                rows.push(self.row(strategy, culling, eps_px, m));
+            }
+            if eps_px > 0.0 && self.path.starts_with("orbit") {
+                let m = self.random_subset(eps_px, spt_drawn, leaves_drawn)?;
+                rows.push(self.row(Strategy::Random, Culling::Compute, eps_px, m));
+            }
+        }
+        Ok(())
+    }
+
+    /// A random subset of leaves drawing as many splats as SPT drew (`spt_drawn`): drawn
+    /// from all leaves, of which a share (`leaves_drawn` of all) passes the frustum at
+    /// these cameras.
+    fn random_subset(
+        &self,
+        eps_px: f64,
+        spt_drawn: f64,
+        leaves_drawn: Option<f64>,
+    ) -> anyhow::Result<Measured> {
+        let visible = leaves_drawn
+            .map_or(1.0, |d| d / self.leaves.len().max(1) as f64)
+            .clamp(1e-6, 1.0);
+        let n = (spt_drawn / visible).round() as usize;
+        let meta = self.scene.0.meta();
+        let subset = random_subset::random_subset(meta, self.leaves, n, 0x5EED ^ n as u64);
+        let subset_gpu = self.bench.renderer.upload(&subset);
+        self.bench
+            .frames
+            .progress
+            .set_message(format!("{}: random ε {eps_px}", self.path));
+        self.bench.run(
+            (&subset, &subset_gpu),
+            self.cameras,
+            self.references,
+            0.0,
+            Culling::Compute,
+        )
+    }
+}
+
+/// Stability: the mid orbit at ε = 1 px (or the sweep's nearest), compute culling,
+/// twice more, their frames interleaved; their splat counts must also equal the
+/// sweep's. Returns the findings and whether they hold.
+fn stability_runs(
+    bench: &Bench,
+    scene: (&Scene, &GpuScene),
+    paths: &[(String, Vec<Camera>)],
+    mid_refs: &[Image],
+    args: &BenchArgs,
+    rows: &[Row],
+) -> anyhow::Result<(Vec<String>, bool)> {
     let eps_check = args
         .eps
         .iter()
         .copied()
         .min_by(|a, b| (a - 1.0).abs().total_cmp(&(b - 1.0).abs()))
         .unwrap_or(1.0);
+    let progress = bench.frames.progress;
     progress.set_message("stability: twice again".to_string());
     let mid = &paths[1].1;
     // Enough frames for a steady median, even in a --quick run.
     let frames = Frames {
         warmup: args.warmup.max(STABILITY_WARMUP),
         timed: args.frames.max(STABILITY_SAMPLES.div_ceil(args.views)),
-        progress: &progress,
+        progress,
     };
     let settings = sweep_settings(eps_check, Culling::Compute);
     let mut again = measure::measure_runs(
-        &renderer,
+        bench.renderer,
         &bench.targets,
-        (&scene, &gpu_scene),
+        scene,
         mid,
         &settings,
-        &mid_refs,
+        mid_refs,
         &frames,
         2,
     )?;
@@ -342,24 +424,25 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         again.pop().expect("two runs"),
         again.pop().expect("two runs"),
     );
-    progress.finish_and_clear();
     let swept = rows
         .iter()
-        .find(|r| r.path == "orbit-mid" && r.culling == "compute" && r.eps_px == eps_check)
+        .find(|r| r.path == "orbit-mid" && r.culling == Culling::Compute && r.eps_px == eps_check)
         .expect("measured in the sweep");
-    let (checks, stable) = stability(swept, &once, &twice);
-    for c in &checks {
-        println!("stability {c}");
-    }
+    Ok(stability(swept, &once, &twice))
+}
 
-    let out = &args.out;
-    report::write_csv(&out.join("results.csv"), &env, &rows)?;
-    report::write_text(
-        &out.join("summary.md"),
-        &report::summary(&env, &rows, &checks),
-    )?;
-    plot::write(&out.join("speed_vs_error.png"), &env, &rows)?;
-    for pair in report::equal_budget_pairs(&rows) {
+/// `results.csv`, `summary.md`, `speed_vs_error.png`, and a note for each budget where
+/// the random subset beat SPT.
+fn write_results(
+    out: &Path,
+    env: &Environment,
+    rows: &[Row],
+    checks: &[String],
+) -> anyhow::Result<()> {
+    report::write_csv(&out.join("results.csv"), env, rows)?;
+    report::write_text(&out.join("summary.md"), &report::summary(env, rows, checks))?;
+    plot::write(&out.join("speed_vs_error.png"), env, rows)?;
+    for pair in report::equal_budget_pairs(rows) {
         if report::verdict(pair.0, pair.1) == "**no**" {
             println!(
                 "note      {} ε {}: random subset {:.2} dB > SPT {:.2} dB at {:.0} / {:.0} splats",
@@ -374,15 +457,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     println!(
         "wrote     {}",
-        Path::new(out)
-            .join("{results.csv, summary.md, speed_vs_error.png}")
+        out.join("{results.csv, summary.md, speed_vs_error.png}")
             .display()
     );
-    if !stable {
-        anyhow::bail!(
-            "the numbers are not stable between two runs of the same configuration (see summary.md)"
-        );
-    }
     Ok(())
 }
 
@@ -431,8 +508,8 @@ fn print_row(r: &Row) {
     println!(
         "{:<12} {:<7} {:<8} ε {:<5} splats {:>10.0} prefix {:>10.0} gpu {:>9} ms  psnr {:>6.2} dB  holes {:.3} %",
         r.path,
-        r.strategy,
-        r.culling,
+        r.strategy.name(),
+        culling_name(r.culling),
         r.eps_px,
         r.m.splats,
         r.m.prefix,

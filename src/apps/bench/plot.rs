@@ -6,7 +6,8 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::report::{Environment, Row};
+use super::report::{Environment, Row, Strategy, culling_name};
+use crate::render::Culling;
 use crate::render::metrics::save_png;
 
 const SIZE: (u32, u32) = (1200, 800);
@@ -31,9 +32,9 @@ type Curve = (String, RGBColor, usize, Vec<(f64, f64)>);
 
 fn curves(rows: &[Row]) -> Vec<Curve> {
     let strategies = [
-        ("spt", "compute", RGBColor(31, 119, 180)),
-        ("spt", "vertex", RGBColor(44, 160, 44)),
-        ("random", "compute", RGBColor(214, 39, 40)),
+        (Strategy::Spt, Culling::Compute, RGBColor(31, 119, 180)),
+        (Strategy::Spt, Culling::Vertex, RGBColor(44, 160, 44)),
+        (Strategy::Random, Culling::Compute, RGBColor(214, 39, 40)),
     ];
     let mut out = Vec::new();
     for (k, path) in ["orbit-near", "orbit-mid", "orbit-far"].iter().enumerate() {
@@ -43,14 +44,20 @@ fn curves(rows: &[Row]) -> Vec<Curve> {
                 .filter(|r| {
                     r.path == *path
                         && r.culling == culling
-                        && (r.strategy == strategy || (strategy == "spt" && r.strategy == "no-lod"))
+                        && (r.strategy == strategy
+                            || (strategy == Strategy::Spt && r.strategy == Strategy::NoLod))
                 })
                 .filter_map(|r| r.m.gpu_ms_median.map(|ms| (r.eps_px, ms, r.m.psnr_db)))
                 .collect();
             points.sort_by(|a, b| a.0.total_cmp(&b.0));
             if !points.is_empty() {
                 out.push((
-                    format!("{strategy} ({culling} culling), {}", &path[6..]),
+                    format!(
+                        "{} ({} culling), {}",
+                        strategy.name(),
+                        culling_name(culling),
+                        &path[6..]
+                    ),
                     color,
                     k,
                     points.iter().map(|p| (p.1, p.2)).collect(),

@@ -6,16 +6,45 @@ use std::path::Path;
 
 use super::measure::{Measured, PSNR_CAP_DB};
 use crate::io::atomic::write_atomically;
+use crate::render::Culling;
+
+/// How a configuration chose its splats.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Strategy {
+    /// The sequential point tree's selection.
+    Spt,
+    /// A random subset of the leaves, as many as SPT drew.
+    Random,
+    /// Every leaf (ε = 0).
+    NoLod,
+}
+
+impl Strategy {
+    /// The name in the CSV, the tables and the plot.
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Spt => "spt",
+            Strategy::Random => "random",
+            Strategy::NoLod => "no-lod",
+        }
+    }
+}
+
+/// The name of a culling strategy in the CSV, the tables and the plot.
+pub fn culling_name(c: Culling) -> &'static str {
+    match c {
+        Culling::Compute => "compute",
+        Culling::Vertex => "vertex",
+    }
+}
 
 /// One measured configuration.
 #[derive(Debug, Clone)]
 pub struct Row {
     /// "orbit-near", "orbit-mid", "orbit-far" or "fly-through".
     pub path: String,
-    /// "spt", "random" (random subset of leaves) or "no-lod" (leaves only).
-    pub strategy: &'static str,
-    /// "compute" or "vertex".
-    pub culling: &'static str,
+    pub strategy: Strategy,
+    pub culling: Culling,
     pub eps_px: f64,
     pub cameras: usize,
     pub m: Measured,
@@ -92,8 +121,8 @@ pub fn write_csv(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result
             "{},{},{},{},{},{},{:.1},{:.1},{},{},{:.3},{},{:.6},{:.6},{},{},{},{},{},{},{},{}",
             field(&env.model),
             r.path,
-            r.strategy,
-            r.culling,
+            r.strategy.name(),
+            culling_name(r.culling),
             r.eps_px,
             r.cameras,
             m.splats,
@@ -152,8 +181,8 @@ pub fn summary(env: &Environment, rows: &[Row], checks: &[String]) -> String {
             let _ = writeln!(
                 s,
                 "| {} | {} | {} | {:.0} | {:.0} | {} | {} | {:.1} | {} | {:.3} % | {:.3} % |",
-                r.strategy,
-                r.culling,
+                r.strategy.name(),
+                culling_name(r.culling),
                 r.eps_px,
                 m.splats,
                 m.prefix,
@@ -219,12 +248,12 @@ pub fn verdict(spt: &Row, random: &Row) -> &'static str {
 /// Each random-subset row with the SPT row (compute culling) whose budget it matched.
 pub fn equal_budget_pairs(rows: &[Row]) -> Vec<(&Row, &Row)> {
     rows.iter()
-        .filter(|r| r.strategy == "random")
+        .filter(|r| r.strategy == Strategy::Random)
         .filter_map(|random| {
             rows.iter()
                 .find(|r| {
-                    r.strategy == "spt"
-                        && r.culling == "compute"
+                    r.strategy == Strategy::Spt
+                        && r.culling == Culling::Compute
                         && r.path == random.path
                         && r.eps_px == random.eps_px
                 })

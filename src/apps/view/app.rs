@@ -251,6 +251,8 @@ impl App {
         }
     }
 
+    /// One frame: the panel's input and layout, the model's frame with the panel over
+    /// it, presentation; then what follows a frame (logs, scripted frames, screenshots).
     fn redraw(&mut self, event_loop: &ActiveEventLoop) {
         self.poll_background();
         if self.failure.is_some() {
@@ -273,8 +275,42 @@ impl App {
         {
             m.camera.orbit(-self.args.spin / 0.3, 0.0);
         }
+        let Some((output, primitives, commands)) = self.run_panel() else {
+            return;
+        };
+        let Some(w) = &mut self.windowed else { return };
+        let renderer = w.viewer.renderer.clone();
+        let mut encoder = renderer
+            .gpu
+            .device
+            .create_command_encoder(&Default::default());
+        if let Err(e) = w.viewer.draw(&mut encoder, size) {
+            self.message = Some((format!("{e:#}"), true));
+            // Fall back to what always draws.
+            w.viewer.settings.mode = crate::render::Mode::Shaded;
+            return;
+        }
+        paint_panel(w, &renderer, &mut encoder, (&output, &primitives), size);
+        let targets = w.viewer.current_targets().expect("just drawn");
+        let presented = w.presenter.present(&renderer, encoder, targets);
+        if matches!(presented, Presented::Skipped) {
+            w.window.request_redraw();
+            return;
+        }
+        w.viewer.submitted();
+        self.last_frame = Some(now);
+        for commands in commands {
+            self.input(Input::Command(commands));
+        }
+        self.after_frame(event_loop, seconds);
+    }
 
-        // The panel.
+    /// The panel: its input taken from the window, laid out and tessellated, with the
+    /// commands its buttons gave.
+    fn run_panel(
+        &mut self,
+    ) -> Option<(egui::FullOutput, Vec<egui::ClippedPrimitive>, Vec<Command>)> {
+        let w = self.windowed.as_mut()?;
         let raw = w.egui_state.take_egui_input(&w.window);
         let status = PanelStatus {
             adapter: &w.adapter,
@@ -290,82 +326,21 @@ impl App {
         };
         let mut commands = Vec::new();
         let viewer = &mut w.viewer;
-        let output = self.egui_ctx.run_ui(raw, |ui| {
+        let mut output = self.egui_ctx.run_ui(raw, |ui| {
             if viewer.show_panel {
                 commands = panel::show(ui.ctx(), viewer, &status);
             }
         });
-        w.egui_state
-            .handle_platform_output(&w.window, output.platform_output);
-        let primitives = self
-            .egui_ctx
-            .tessellate(output.shapes, output.pixels_per_point);
+        let platform = std::mem::take(&mut output.platform_output);
+        w.egui_state.handle_platform_output(&w.window, platform);
+        let shapes = std::mem::take(&mut output.shapes);
+        let primitives = self.egui_ctx.tessellate(shapes, output.pixels_per_point);
+        Some((output, primitives, commands))
+    }
 
-        // The frame, the panel over it, then presentation.
-        let renderer = w.viewer.renderer.clone();
-        let device = &renderer.gpu.device;
-        let mut encoder = device.create_command_encoder(&Default::default());
-        if let Err(e) = w.viewer.draw(&mut encoder, size) {
-            self.message = Some((format!("{e:#}"), true));
-            // Fall back to what always draws.
-            w.viewer.settings.mode = crate::render::Mode::Shaded;
-            return;
-        }
-        let targets = w.viewer.current_targets().expect("just drawn");
-        let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [size.0, size.1],
-            pixels_per_point: output.pixels_per_point,
-        };
-        for (id, deltas) in &output.textures_delta.set {
-            for delta in deltas {
-                w.egui_renderer
-                    .update_texture(device, &renderer.gpu.queue, *id, delta);
-            }
-        }
-        let extra = w.egui_renderer.update_buffers(
-            device,
-            &renderer.gpu.queue,
-            &mut encoder,
-            &primitives,
-            &screen,
-        );
-        {
-            let view = targets.gamma_view();
-            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("panel"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            w.egui_renderer
-                .render(&mut pass.forget_lifetime(), &primitives, &screen);
-        }
-        for id in &output.textures_delta.free {
-            w.egui_renderer.free_texture(id);
-        }
-        if !extra.is_empty() {
-            renderer.gpu.queue.submit(extra);
-        }
-        let presented = w.presenter.present(&renderer, encoder, targets);
-        if matches!(presented, Presented::Skipped) {
-            w.window.request_redraw();
-            return;
-        }
-        w.viewer.submitted();
-        self.last_frame = Some(now);
-        for commands in commands {
-            self.input(Input::Command(commands));
-        }
+    /// After a presented frame: the first frame's time, the scripted frames' times, and
+    /// the screenshots asked for.
+    fn after_frame(&mut self, event_loop: &ActiveEventLoop, seconds: f64) {
         let Some(w) = &mut self.windowed else { return };
         if w.viewer.model.is_some() && !self.first_frame_logged {
             self.first_frame_logged = true;
@@ -506,6 +481,60 @@ fn key_input(key: &Key, pressed: bool, control: bool) -> Option<Input> {
             _ => None,
         },
         _ => None,
+    }
+}
+
+/// Draws the panel (`output` of egui, tessellated into `primitives`) over the frame
+/// just drawn into the viewer's targets, in gamma space.
+fn paint_panel(
+    w: &mut Windowed,
+    renderer: &Renderer,
+    encoder: &mut wgpu::CommandEncoder,
+    (output, primitives): (&egui::FullOutput, &[egui::ClippedPrimitive]),
+    size: (u32, u32),
+) {
+    let (device, queue) = (&renderer.gpu.device, &renderer.gpu.queue);
+    let screen = egui_wgpu::ScreenDescriptor {
+        size_in_pixels: [size.0, size.1],
+        pixels_per_point: output.pixels_per_point,
+    };
+    for (id, deltas) in &output.textures_delta.set {
+        for delta in deltas {
+            w.egui_renderer.update_texture(device, queue, *id, delta);
+        }
+    }
+    let extra = w
+        .egui_renderer
+        .update_buffers(device, queue, encoder, primitives, &screen);
+    let Some(targets) = w.viewer.current_targets() else {
+        return;
+    };
+    {
+        let view = targets.gamma_view();
+        let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("panel"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        w.egui_renderer
+            .render(&mut pass.forget_lifetime(), primitives, &screen);
+    }
+    for id in &output.textures_delta.free {
+        w.egui_renderer.free_texture(id);
+    }
+    if !extra.is_empty() {
+        queue.submit(extra);
     }
 }
 

@@ -21,7 +21,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 
-use crate::apps::render::RenderArgs;
+use crate::apps::frame_args::RenderArgs;
 
 /// The model opened when none is given, relative to the repository.
 pub const DEFAULT_MODEL: &str = "data/torus_knot.ply";

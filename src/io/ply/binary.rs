@@ -105,6 +105,96 @@ fn vertex_columns(
     Ok(ColumnRows { columns })
 }
 
+/// The rows of a face element whose polygons are all triangles, at a fixed stride; the
+/// vertex-index list starts `prefix` bytes into each row.
+struct TriangleRows<'a> {
+    body: &'a [u8],
+    stride: usize,
+    prefix: usize,
+    count: Scalar,
+    item: Scalar,
+    big: bool,
+    vertex_count: u64,
+}
+
+/// A row that is not a triangle (`None`: fall back to row by row), or a bad index.
+type RowFault = Option<Problem>;
+
+impl TriangleRows<'_> {
+    /// Row `row` with a uchar count and int or uint indices.
+    #[inline]
+    fn common(&self, row: usize) -> Result<[u32; 3], RowFault> {
+        let r: &[u8; 13] = self.body[row * self.stride + self.prefix..][..13]
+            .try_into()
+            .unwrap();
+        if r[0] != 3 {
+            return Err(None);
+        }
+        let get = |j: usize| {
+            let b = [r[1 + 4 * j], r[2 + 4 * j], r[3 + 4 * j], r[4 + 4 * j]];
+            let v = if self.big {
+                u32::from_be_bytes(b)
+            } else {
+                u32::from_le_bytes(b)
+            };
+            if self.item == Scalar::I32 {
+                v as i32 as i64
+            } else {
+                v as i64
+            }
+        };
+        let tri = [get(0), get(1), get(2)];
+        match tri
+            .into_iter()
+            .find(|&i| i < 0 || i as u64 >= self.vertex_count)
+        {
+            None => Ok(tri.map(|i| i as u32)),
+            Some(bad) => Err(check_index(bad, self.vertex_count, row as u64).err()),
+        }
+    }
+
+    /// Row `row` with any count and index types.
+    #[inline]
+    fn any(&self, row: usize) -> Result<[u32; 3], RowFault> {
+        let r = &self.body[row * self.stride + self.prefix..];
+        if self.count.read_int(r, self.big) != Some(3) {
+            return Err(None);
+        }
+        let mut tri = [0u32; 3];
+        for (j, t) in tri.iter_mut().enumerate() {
+            let at = self.count.size() + j * self.item.size();
+            let i = self.item.read_int(&r[at..], self.big).unwrap_or(-1);
+            check_index(i, self.vertex_count, row as u64).map_err(Some)?;
+            *t = i as u32;
+        }
+        Ok(tri)
+    }
+}
+
+/// Fills `triangles` (one per row) in parallel with `decode`; the first row that
+/// fails, if any, with its fault.
+fn decode_triangles(
+    triangles: &mut [[u32; 3]],
+    decode: impl Fn(usize) -> Result<[u32; 3], RowFault> + Sync,
+) -> Option<(usize, RowFault)> {
+    const CHUNK: usize = 1 << 16;
+    triangles
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .map(|(c, out)| {
+            for (k, tri) in out.iter_mut().enumerate() {
+                let row = c * CHUNK + k;
+                match decode(row) {
+                    Ok(t) => *tri = t,
+                    Err(fault) => return Some((row, fault)),
+                }
+            }
+            None
+        })
+        .find_first(Option::is_some)
+        .flatten()
+}
+
 /// Faces when every polygon is a triangle: rows have a fixed stride, decoded in
 /// parallel. Returns `Ok(None)` when some row is not a triangle (or the rows cannot all
 /// be triangles), so that the caller falls back to [`faces_by_row`].
@@ -137,65 +227,23 @@ fn faces_fixed_triangles(
     if end > data.len() {
         return Ok(None);
     }
-    let body = &data[pos..end];
+    let t = TriangleRows {
+        body: &data[pos..end],
+        stride,
+        prefix,
+        count,
+        item,
+        big,
+        vertex_count,
+    };
     // The layout most tools write (uchar count, int or uint indices) gets its own loop.
     let common = count == Scalar::U8 && matches!(item, Scalar::I32 | Scalar::U32);
     let mut triangles = vec![[0u32; 3]; rows];
-    const CHUNK: usize = 1 << 16;
-    let first_bad = triangles
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .map(|(c, out)| {
-            if common {
-                for (k, tri) in out.iter_mut().enumerate() {
-                    let row = c * CHUNK + k;
-                    let r: &[u8; 13] = body[row * stride + prefix..][..13].try_into().unwrap();
-                    if r[0] != 3 {
-                        return Some((row, None));
-                    }
-                    let get = |j: usize| {
-                        let b = [r[1 + 4 * j], r[2 + 4 * j], r[3 + 4 * j], r[4 + 4 * j]];
-                        let v = if big {
-                            u32::from_be_bytes(b)
-                        } else {
-                            u32::from_le_bytes(b)
-                        };
-                        if item == Scalar::I32 {
-                            v as i32 as i64
-                        } else {
-                            v as i64
-                        }
-                    };
-                    *tri = [get(0), get(1), get(2)].map(|i| i as u32);
-                    if tri.iter().any(|&i| i as u64 >= vertex_count) {
-                        let bad = [get(0), get(1), get(2)]
-                            .into_iter()
-                            .find(|&i| i < 0 || i as u64 >= vertex_count);
-                        let p = check_index(bad.unwrap_or(-1), vertex_count, row as u64).err();
-                        return Some((row, p));
-                    }
-                }
-                return None;
-            }
-            for (k, tri) in out.iter_mut().enumerate() {
-                let row = c * CHUNK + k;
-                let r = &body[row * stride + prefix..];
-                if count.read_int(r, big) != Some(3) {
-                    return Some((row, None));
-                }
-                for (j, t) in tri.iter_mut().enumerate() {
-                    let at = count.size() + j * item.size();
-                    let i = item.read_int(&r[at..], big).unwrap_or(-1);
-                    if let Err(p) = check_index(i, vertex_count, row as u64) {
-                        return Some((row, Some(p)));
-                    }
-                    *t = i as u32;
-                }
-            }
-            None
-        })
-        .find_first(Option::is_some)
-        .flatten();
+    let first_bad = if common {
+        decode_triangles(&mut triangles, |row| t.common(row))
+    } else {
+        decode_triangles(&mut triangles, |row| t.any(row))
+    };
     match first_bad {
         None => Ok(Some((
             Faces {

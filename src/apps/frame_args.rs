@@ -1,0 +1,130 @@
+//! The options of one frame, shared by `spt render`, the viewer and `spt bench`: image
+//! size, camera, budget, display mode, light and culling, and their parsers.
+
+use anyhow::bail;
+use glam::{DVec3, Vec3};
+
+use crate::render::{Camera, Culling, Mode, Scene, Settings};
+
+/// The options `spt render` (and the viewer's screenshots) take.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RenderArgs {
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1024x768", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Orbit camera: azimuth and elevation in degrees, distance in bounding-sphere radii
+    /// (default: the whole model framed from azimuth 30, elevation 20).
+    #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, conflicts_with_all = ["eye", "target"])]
+    pub orbit: Option<[f64; 3]>,
+    /// Eye position in the model file's coordinates (with --target).
+    #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, requires = "target")]
+    pub eye: Option<[f64; 3]>,
+    /// Point looked at, in the model file's coordinates (with --eye).
+    #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, requires = "eye")]
+    pub target: Option<[f64; 3]>,
+    /// Vertical field of view, degrees.
+    #[arg(long, default_value_t = 45.0)]
+    pub fov: f64,
+    /// Largest screen-space error in pixels (0: leaves only).
+    #[arg(long, default_value_t = 1.0)]
+    pub error_px: f64,
+    #[arg(long, value_enum, default_value = "shaded")]
+    pub mode: Mode,
+    /// Direction toward the light in view space: x right, y up, z toward the viewer.
+    #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, default_value = "0.4,0.6,1")]
+    pub light: [f64; 3],
+    /// Background colour, r,g,b in 0–1 (sRGB).
+    #[arg(long, value_parser = parse_triple, default_value = "1,1,1")]
+    pub background: [f64; 3],
+    /// Without the EWA screen-space prefilter.
+    #[arg(long)]
+    pub no_ewa: bool,
+    /// Without level of detail: every leaf.
+    #[arg(long)]
+    pub no_lod: bool,
+    /// Skip splats whose normal faces away (oriented models).
+    #[arg(long)]
+    pub cull_back_faces: bool,
+    /// Culling of the splats: by a compute pass that compacts the survivors into an
+    /// indirect draw (faster on every model measured), or in the vertex stage.
+    #[arg(long, value_enum, default_value = "compute")]
+    pub culling: Culling,
+    /// Render this many frames of the same view and report median and p95 times (the
+    /// image of the last one is written).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub frames: u32,
+    /// GPU backend: vulkan, gl, metal, dx12 or all (default: $SPT_BACKEND, else any).
+    #[arg(long)]
+    pub backend: Option<String>,
+}
+
+/// Parses WIDTHxHEIGHT (1–16384 each).
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or("expected WIDTHxHEIGHT, e.g. 1024x768")?;
+    let (w, h): (u32, u32) = (
+        w.parse().map_err(|_| "bad width")?,
+        h.parse().map_err(|_| "bad height")?,
+    );
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err("width and height must be 1–16384".into());
+    }
+    Ok((w, h))
+}
+
+fn parse_triple(s: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| e.to_string())?;
+    let t: [f64; 3] = v
+        .try_into()
+        .map_err(|_| "expected three comma-separated numbers".to_string())?;
+    if t.iter().any(|x| !x.is_finite()) {
+        return Err("numbers must be finite".into());
+    }
+    Ok(t)
+}
+
+impl RenderArgs {
+    pub fn settings(&self) -> Settings {
+        Settings {
+            error_px: self.error_px.max(0.0),
+            mode: self.mode,
+            ewa: !self.no_ewa,
+            lod: !self.no_lod,
+            cull_back_faces: self.cull_back_faces,
+            light: DVec3::from(self.light).as_vec3().normalize_or(Vec3::Z),
+            background: self.background.map(|c| c.clamp(0.0, 1.0) as f32),
+            culling: self.culling,
+            ..Settings::default()
+        }
+    }
+
+    pub fn camera(&self, scene: &Scene) -> anyhow::Result<Camera> {
+        let fov = self.fov.to_radians();
+        if !(0.01..3.1).contains(&fov) {
+            bail!("--fov must be between 1 and 177 degrees");
+        }
+        let aspect = self.size.0 as f64 / self.size.1 as f64;
+        let meta = scene.meta();
+        Ok(match (self.orbit, self.eye, self.target) {
+            (Some([az, el, dist]), _, _) => Camera::orbit(meta, az, el, dist, fov),
+            (None, Some(eye), Some(target)) => {
+                let (eye, target) = (DVec3::from(eye), DVec3::from(target));
+                if eye == target {
+                    bail!("--eye and --target must differ");
+                }
+                Camera {
+                    eye,
+                    target,
+                    up: DVec3::Z,
+                    fov_y: fov,
+                }
+            }
+            _ => Camera::framed(meta, fov, aspect),
+        })
+    }
+}
