@@ -13,7 +13,7 @@ use serde::Serialize;
 
 use crate::io::bounds::Bounds;
 use crate::io::ply::faces::Faces;
-use crate::io::ply::fields::{VertexFields, VertexRows};
+use crate::io::ply::fields::{ColumnRows, Field, VertexFields, VertexRows};
 use crate::io::ply::scalar::Scalar;
 use crate::io::rebase;
 
@@ -37,6 +37,26 @@ pub struct Geometry {
 }
 
 impl Geometry {
+    /// The geometry of points given in file coordinates, without faces, normals or
+    /// colours, rebased as a reader rebases a file's vertices (the same drops, counted).
+    /// Fails when none can be kept.
+    pub fn from_points(points: &[[f64; 3]]) -> Result<(Geometry, GeometryStats), String> {
+        let columns = (0..3)
+            .map(|k| points.iter().map(|p| p[k]).collect())
+            .collect();
+        let fields = VertexFields {
+            fields: (0..3)
+                .map(|property| Field {
+                    property,
+                    scalar: Scalar::F64,
+                })
+                .collect(),
+            has_normals: false,
+            color_channels: 0,
+        };
+        assemble(&ColumnRows { columns }, &fields, None)
+    }
+
     /// The invariants every reader guarantees: finite origin and boxes, every position
     /// finite and within [`rebase::MAX_OFFSET`] of the origin, given normals unit or
     /// zero, colours one per vertex, triangle indices in range.

@@ -82,31 +82,10 @@ pub fn write_double(path: &Path, mesh: &PolyMesh) {
     write_ply(path, mesh, &layout).expect("write PLY");
 }
 
-/// Geometry of points given in file coordinates, without reading a file: rebased on
-/// the bounding-box centre as the reader does.
+/// Geometry of points given in file coordinates, without reading a file: rebased by
+/// the library as the reader does.
 pub fn geometry_of(points: &[[f64; 3]]) -> Geometry {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
-        }
-    }
-    let bounds = spt::io::Bounds { min: lo, max: hi };
-    let origin = bounds.center();
-    Geometry {
-        origin,
-        bounds,
-        core: bounds,
-        positions: points
-            .iter()
-            .map(|p| (DVec3::from(*p) - origin).as_vec3())
-            .collect(),
-        normals: None,
-        colors: None,
-        triangles: Vec::new(),
-    }
+    Geometry::from_points(points).expect("points that can be kept").0
 }
 
 /// The geometry back as a mesh in file coordinates (f64 positions, triangles).
