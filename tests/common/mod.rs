@@ -85,7 +85,9 @@ pub fn write_double(path: &Path, mesh: &PolyMesh) {
 /// Geometry of points given in file coordinates, without reading a file: rebased by
 /// the library as the reader does.
 pub fn geometry_of(points: &[[f64; 3]]) -> Geometry {
-    Geometry::from_points(points).expect("points that can be kept").0
+    Geometry::from_points(points)
+        .expect("points that can be kept")
+        .0
 }
 
 /// The geometry back as a mesh in file coordinates (f64 positions, triangles).
