@@ -115,3 +115,12 @@ impl CullPass {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_compaction_record_has_the_size_of_the_wgsl_struct() {
+        let wgsl = super::super::shaders::wgsl_struct_size("cull", "Compaction");
+        assert_eq!(wgsl as usize, std::mem::size_of::<super::Compaction>());
+    }
+}

@@ -134,3 +134,12 @@ impl FrameUniform {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_uniform_has_the_size_of_the_wgsl_struct() {
+        let wgsl = super::super::shaders::wgsl_struct_size("common", "Frame");
+        assert_eq!(wgsl as usize, std::mem::size_of::<super::FrameUniform>());
+    }
+}

@@ -85,6 +85,21 @@ pub fn module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
     })
 }
 
+/// The size WGSL gives struct `name` of module `name`'s composition, for the tests
+/// that check a Rust Pod type against the WGSL struct it mirrors.
+#[cfg(test)]
+pub(super) fn wgsl_struct_size(module: &str, name: &str) -> u32 {
+    let m = naga::front::wgsl::parse_str(&compose(module)).expect("parses");
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(m.to_ctx()).expect("lays out");
+    let (handle, _) = m
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no struct {name} in {module}"));
+    layouter[handle].size
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -122,34 +137,6 @@ mod tests {
         assert!(common < own);
         assert_eq!(splat.matches("struct Frame").count(), 1);
         assert!(compose("cull").contains(&format!("WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u")));
-    }
-
-    /// The size WGSL gives struct `name` in module `module`.
-    fn wgsl_size(module: &str, name: &str) -> u32 {
-        let m = naga::front::wgsl::parse_str(&compose(module)).expect("parses");
-        let mut layouter = naga::proc::Layouter::default();
-        layouter.update(m.to_ctx()).expect("lays out");
-        let (handle, _) = m
-            .types
-            .iter()
-            .find(|(_, t)| t.name.as_deref() == Some(name))
-            .unwrap_or_else(|| panic!("no struct {name} in {module}"));
-        layouter[handle].size
-    }
-
-    #[test]
-    fn rust_and_wgsl_agree_on_buffer_layouts() {
-        use super::super::cull::Compaction;
-        use super::super::frame::FrameUniform;
-        let size = |n: usize| n as u32;
-        assert_eq!(
-            wgsl_size("common", "Frame"),
-            size(std::mem::size_of::<FrameUniform>())
-        );
-        assert_eq!(
-            wgsl_size("cull", "Compaction"),
-            size(std::mem::size_of::<Compaction>())
-        );
     }
 
     #[test]
