@@ -33,3 +33,18 @@ pub fn fullscreen_pipeline(
         cache: None,
     })
 }
+
+/// Binding `binding` of a full-screen pass: a 2D float texture its fragment stage
+/// reads texel by texel (`textureLoad`, no sampler).
+pub fn fragment_texture(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}

@@ -33,7 +33,7 @@ mod upload;
 pub use crate::tree::scene::{MeshData, Scene};
 pub use camera::Camera;
 pub use counters::{CounterReadback, GpuCounters};
-pub use fullscreen::fullscreen_pipeline;
+pub use fullscreen::{fragment_texture, fullscreen_pipeline};
 pub use gpu::Gpu;
 pub use gpu_scene::{GpuScene, MeshUpload, SliceUpload};
 pub use plan::EncodedFrame;

@@ -3,7 +3,7 @@
 //! a movable light, two-sided); background where nothing contributed. Written linear
 //! into the sRGB output. WGSL: `shaders/shade.wgsl`.
 
-use super::fullscreen::fullscreen_pipeline;
+use super::fullscreen::{fragment_texture, fullscreen_pipeline};
 use super::gbuffer::{GBuffer, store};
 use super::shaders::module;
 use super::targets::{FrameTargets, OUTPUT};
@@ -16,19 +16,9 @@ pub(super) struct ShadingPass {
 
 impl ShadingPass {
     pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> ShadingPass {
-        let texture = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gbuffer"),
-            entries: &[texture(0), texture(1)],
+            entries: &[fragment_texture(0), fragment_texture(1)],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("shade"),

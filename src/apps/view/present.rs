@@ -5,7 +5,9 @@ use std::sync::Arc;
 
 use winit::window::Window;
 
-use crate::render::{FrameTargets, OUTPUT_GAMMA, Renderer, fullscreen_pipeline, shader_module};
+use crate::render::{
+    FrameTargets, OUTPUT_GAMMA, Renderer, fragment_texture, fullscreen_pipeline, shader_module,
+};
 
 pub struct Presenter {
     window: Arc<Window>,
@@ -64,16 +66,7 @@ impl Presenter {
         let device = &gpu.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("present"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            }],
+            entries: &[fragment_texture(0)],
         });
         let module = shader_module(device, "present");
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
