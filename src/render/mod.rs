@@ -20,6 +20,7 @@ pub mod gpu;
 mod gpu_scene;
 mod mesh;
 pub mod metrics;
+pub mod perceptual;
 mod plan;
 mod readback;
 pub mod renderer;
