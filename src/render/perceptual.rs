@@ -146,8 +146,8 @@ pub fn downsample(image: &Image, k: u32) -> Image {
             for dy in 0..k {
                 for dx in 0..k {
                     let i = ((y * k + dy) * image.width + x * k + dx) as usize;
-                    for c in 0..4 {
-                        sum[c] += srgb_to_linear(image.rgba[4 * i + c] as f32 / 255.0);
+                    for (s, v) in sum.iter_mut().zip(&image.rgba[4 * i..4 * i + 4]) {
+                        *s += srgb_to_linear(*v as f32 / 255.0);
                     }
                     if image.covered[i] {
                         covered += 1;
@@ -157,10 +157,8 @@ pub fn downsample(image: &Image, k: u32) -> Image {
             }
             let o = (y * w + x) as usize;
             let n = (k * k) as f32;
-            for c in 0..3 {
-                out.rgba[4 * o + c] = to_srgb(sum[c] / n);
-            }
-            out.rgba[4 * o + 3] = 255;
+            let [r, g, b, _] = sum.map(|v| to_srgb(v / n));
+            out.rgba[4 * o..4 * o + 4].copy_from_slice(&[r, g, b, 255]);
             out.covered[o] = covered > 0;
             out.depth[o] = if covered > 0 {
                 depth / covered as f32
