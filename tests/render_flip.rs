@@ -47,7 +47,7 @@ fn measure(scene: &Scene, what: &str) -> Figures {
     };
     let no_ewa = Settings {
         ewa: false,
-        ..leaves.clone()
+        ..leaves
     };
     let (mut m, mut s, mut n, mut q) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for k in 0..8 {
