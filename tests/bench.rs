@@ -39,6 +39,12 @@ fn bench_writes_results_summary_and_plot() {
         assert_eq!(r.len(), header.len(), "{r:?}");
         assert!(!r[col("adapter")].is_empty() && !r[col("machine")].is_empty());
         assert!(r[col("gpu_ms_median")].parse::<f64>().is_ok(), "{r:?}");
+        let flip: f64 = r[col("flip")].parse().unwrap();
+        let ssim: f64 = r[col("ssim")].parse().unwrap();
+        assert!(
+            flip > 0.0 && flip < 1.0 && ssim > 0.0 && ssim <= 1.0,
+            "{r:?}"
+        );
         let psnr = &r[col("psnr_db")];
         assert!(psnr == "inf" || psnr.parse::<f64>().unwrap() > 5.0, "{r:?}");
     }

@@ -1,6 +1,7 @@
 //! One configuration of `spt bench` measured over its cameras: warm-up frames, then
 //! timed frames (GPU timestamps and wall time), the splats drawn, the prefix, and the
-//! last frame's error against the reference image of the same camera.
+//! last frame's error against the reference images of the same camera: PSNR, hole and
+//! spill rates against the reference at 1×, FLIP and SSIM against it supersampled.
 
 use std::time::Instant;
 
@@ -8,6 +9,7 @@ use indicatif::ProgressBar;
 
 use crate::apps::stats::quantile;
 use crate::render::metrics::compare;
+use crate::render::perceptual::{flip_mean, ssim_mean};
 use crate::render::{Camera, FrameTargets, GpuScene, Image, Renderer, Scene, Settings};
 
 /// How many frames, and where progress goes.
@@ -15,6 +17,13 @@ pub struct Frames<'a> {
     pub warmup: u32,
     pub timed: u32,
     pub progress: &'a ProgressBar,
+}
+
+/// The reference of one camera: the mesh (or, for point clouds, the leaves) at 1×,
+/// and rendered at 4×4 the size, averaged in linear light (antialiased).
+pub struct Reference {
+    pub aliased: Image,
+    pub antialiased: Image,
 }
 
 /// What one configuration measured, over all its cameras.
@@ -33,6 +42,9 @@ pub struct Measured {
     pub psnr_db: f64,
     pub hole_rate: f64,
     pub spill_rate: f64,
+    /// Means over the cameras of FLIP and SSIM against the antialiased reference.
+    pub flip: f64,
+    pub ssim: f64,
 }
 
 /// Draws `frames` of each camera with `settings` and measures them against
@@ -43,7 +55,7 @@ pub fn measure(
     scene: (&Scene, &GpuScene),
     cameras: &[Camera],
     settings: &Settings,
-    references: &[Image],
+    references: &[Reference],
     frames: &Frames,
 ) -> anyhow::Result<Measured> {
     let runs = measure_runs(
@@ -62,7 +74,7 @@ pub fn measure_runs(
     (scene, gpu_scene): (&Scene, &GpuScene),
     cameras: &[Camera],
     settings: &Settings,
-    references: &[Image],
+    references: &[Reference],
     frames: &Frames,
     runs: usize,
 ) -> anyhow::Result<Vec<Measured>> {
@@ -87,7 +99,9 @@ pub fn measure_runs(
             let (image, stats) = frame.expect("at least one frame");
             m.splats += stats.gpu_drawn.map_or(stats.selected as f64, |d| d as f64);
             m.prefix += stats.prefix_len as f64;
-            let c = compare(&image, reference);
+            let c = compare(&image, &reference.aliased);
+            m.flip += flip_mean(&image, &reference.antialiased);
+            m.ssim += ssim_mean(&image, &reference.antialiased);
             m.psnr_db += c.psnr_db.min(PSNR_CAP_DB);
             m.hole_rate += c.hole_rate;
             m.spill_rate += c.spill_rate;
@@ -100,6 +114,8 @@ pub fn measure_runs(
         m.psnr_db /= n;
         m.hole_rate /= n;
         m.spill_rate /= n;
+        m.flip /= n;
+        m.ssim /= n;
         m.gpu_ms_median = quantile(&mut gpu_ms[run], 0.5);
         m.gpu_ms_p95 = quantile(&mut gpu_ms[run], 0.95);
         m.wall_ms_median = quantile(&mut wall_ms[run], 0.5).unwrap_or(0.0);

@@ -18,10 +18,12 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
+use crate::render::perceptual::downsample;
+
 use crate::render::{
-    Camera, Culling, FrameTargets, Gpu, GpuScene, Image, Mode, Renderer, Scene, Settings,
+    Camera, Culling, FrameTargets, Gpu, GpuScene, Mode, Renderer, Scene, Settings,
 };
-use measure::{Frames, Measured, measure};
+use measure::{Frames, Measured, Reference, measure};
 use report::{Environment, Row, Strategy, culling_name};
 
 /// Frames per camera of the stability check's runs, at least.
@@ -65,21 +67,26 @@ pub struct BenchArgs {
     pub backend: Option<String>,
 }
 
+/// How many times larger, in each direction, the antialiased reference is rendered.
+const SUPERSAMPLE: u32 = 4;
+
 /// Runs one configuration per call, with the state every run shares.
 struct Bench<'a> {
     renderer: &'a Renderer,
     targets: FrameTargets,
+    /// Targets [`SUPERSAMPLE`] times the size, for the antialiased references.
+    supersampled: FrameTargets,
     frames: Frames<'a>,
 }
 
 impl Bench<'_> {
-    /// The reference image of each camera: the mesh, or the leaves.
+    /// The references of each camera: the mesh (or the leaves), at 1× and supersampled.
     fn references(
         &self,
         scene: &Scene,
         gpu_scene: &GpuScene,
         cameras: &[Camera],
-    ) -> anyhow::Result<Vec<Image>> {
+    ) -> anyhow::Result<Vec<Reference>> {
         let settings = Settings {
             mode: if gpu_scene.mesh_triangles() > 0 {
                 Mode::Mesh
@@ -89,15 +96,21 @@ impl Bench<'_> {
             lod: false,
             ..Settings::default()
         };
+        let draw = |targets: &FrameTargets, c: &Camera| {
+            self.renderer
+                .render_into(targets, scene, gpu_scene, c, &settings)
+                .map(|f| f.0)
+        };
         cameras
             .iter()
             .map(|c| {
-                let image = self
-                    .renderer
-                    .render_into(&self.targets, scene, gpu_scene, c, &settings)
-                    .map(|f| f.0);
+                let aliased = draw(&self.targets, c)?;
+                let antialiased = downsample(&draw(&self.supersampled, c)?, SUPERSAMPLE);
                 self.frames.progress.inc(1);
-                image
+                Ok(Reference {
+                    aliased,
+                    antialiased,
+                })
             })
             .collect()
     }
@@ -106,7 +119,7 @@ impl Bench<'_> {
         &self,
         scene: (&Scene, &GpuScene),
         cameras: &[Camera],
-        references: &[Image],
+        references: &[Reference],
         eps_px: f64,
         culling: Culling,
     ) -> anyhow::Result<Measured> {
@@ -248,6 +261,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let bench = Bench {
         renderer: &renderer,
         targets: renderer.targets(args.size)?,
+        supersampled: renderer.targets((args.size.0 * SUPERSAMPLE, args.size.1 * SUPERSAMPLE))?,
         frames: Frames {
             warmup: args.warmup,
             timed: args.frames,
@@ -302,7 +316,7 @@ struct Sweep<'a> {
     leaves: &'a [crate::tree::NodeRecord],
     path: &'a str,
     cameras: &'a [Camera],
-    references: &'a [Image],
+    references: &'a [Reference],
 }
 
 impl Sweep<'_> {
@@ -390,7 +404,7 @@ fn stability_runs(
     bench: &Bench,
     scene: (&Scene, &GpuScene),
     paths: &[(String, Vec<Camera>)],
-    mid_refs: &[Image],
+    mid_refs: &[Reference],
     args: &BenchArgs,
     rows: &[Row],
 ) -> anyhow::Result<(Vec<String>, bool)> {
@@ -506,7 +520,7 @@ fn stability(swept: &Row, once: &Measured, twice: &Measured) -> (Vec<String>, bo
 
 fn print_row(r: &Row) {
     println!(
-        "{:<12} {:<7} {:<8} ε {:<5} splats {:>10.0} prefix {:>10.0} gpu {:>9} ms  psnr {:>6.2} dB  holes {:.3} %",
+        "{:<12} {:<7} {:<8} ε {:<5} splats {:>10.0} prefix {:>10.0} gpu {:>9} ms  psnr {:>6.2} dB  holes {:.3} %  flip {:.4}",
         r.path,
         r.strategy.name(),
         culling_name(r.culling),
@@ -515,6 +529,7 @@ fn print_row(r: &Row) {
         r.m.prefix,
         r.m.gpu_ms_median.map_or("–".into(), |v| format!("{v:.2}")),
         r.m.psnr_db,
-        r.m.hole_rate * 100.0
+        r.m.hole_rate * 100.0,
+        r.m.flip
     );
 }

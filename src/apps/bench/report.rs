@@ -112,13 +112,14 @@ fn field(s: &str) -> String {
 pub fn write_csv(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result<()> {
     let mut out = String::from(
         "model,path,strategy,culling,eps_px,cameras,splats,prefix,gpu_ms_median,gpu_ms_p95,\
-         wall_ms_median,psnr_db,hole_rate,spill_rate,reference,width,height,adapter,backend,driver,machine,date\n",
+         wall_ms_median,psnr_db,hole_rate,spill_rate,flip,ssim,reference,width,height,adapter,backend,driver,\
+         machine,date\n",
     );
     for r in rows {
         let m = &r.m;
         writeln!(
             out,
-            "{},{},{},{},{},{},{:.1},{:.1},{},{},{:.3},{},{:.6},{:.6},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{:.1},{:.1},{},{},{:.3},{},{:.6},{:.6},{:.5},{:.4},{},{},{},{},{},{},{},{}",
             field(&env.model),
             r.path,
             r.strategy.name(),
@@ -133,6 +134,8 @@ pub fn write_csv(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result
             psnr(m.psnr_db),
             m.hole_rate,
             m.spill_rate,
+            m.flip,
+            m.ssim,
             env.reference,
             env.size.0,
             env.size.1,
@@ -158,7 +161,9 @@ pub fn summary(env: &Environment, rows: &[Row], checks: &[String]) -> String {
     let _ = writeln!(s, "## `spt bench` on {}\n", env.model);
     let _ = writeln!(
         s,
-        "{}×{}, error against the {}. Adapter: {}.\n",
+        "{}×{}, error against the {}: PSNR, holes and spill against it at 1×, FLIP and SSIM \
+         (means over the pixels either image covers) against it rendered at 4×4 the size and \
+         averaged in linear light. Adapter: {}.\n",
         env.size.0,
         env.size.1,
         env.reference,
@@ -170,17 +175,17 @@ pub fn summary(env: &Environment, rows: &[Row], checks: &[String]) -> String {
         let _ = writeln!(s, "### {path}\n");
         let _ = writeln!(
             s,
-            "| strategy | culling | ε px | splats | prefix | GPU ms median | GPU ms p95 | wall ms | PSNR dB | holes | spill |"
+            "| strategy | culling | ε px | splats | prefix | GPU ms median | GPU ms p95 | wall ms | PSNR dB | holes | spill | FLIP | SSIM |"
         );
         let _ = writeln!(
             s,
-            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
         );
         for r in rows.iter().filter(|r| r.path == path) {
             let m = &r.m;
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {:.0} | {:.0} | {} | {} | {:.1} | {} | {:.3} % | {:.3} % |",
+                "| {} | {} | {} | {:.0} | {:.0} | {} | {} | {:.1} | {} | {:.3} % | {:.3} % | {:.4} | {:.3} |",
                 r.strategy.name(),
                 culling_name(r.culling),
                 r.eps_px,
@@ -191,7 +196,9 @@ pub fn summary(env: &Environment, rows: &[Row], checks: &[String]) -> String {
                 m.wall_ms_median,
                 psnr(m.psnr_db),
                 m.hole_rate * 100.0,
-                m.spill_rate * 100.0
+                m.spill_rate * 100.0,
+                m.flip,
+                m.ssim
             );
         }
         let _ = writeln!(s);
