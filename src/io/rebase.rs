@@ -3,9 +3,9 @@
 //!
 //! * **Core box.** Per axis, the quartiles `a`, `b` of the vertices (from an evenly
 //!   strided sample of at most [`SAMPLE`] of them), and `w` = the largest `b − a` over
-//!   the axes: robust to up to a quarter of the vertices anywhere, on any count. A vertex with a coordinate outside
-//!   `[a − K·w, b + K·w]` (K = [`OUTLIER_SPANS`]) is an *outlier*; the core box is the
-//!   bounding box of the others. On a model without outliers it is the bounding box
+//!   the axes: robust to up to a quarter of the vertices anywhere, on any count. A
+//!   vertex with a coordinate outside `[a − K·w, b + K·w]` (K = [`OUTLIER_SPANS`]) is
+//!   an *outlier*; the core box is the bounding box of the others. On a model without outliers it is the bounding box
 //!   itself. When `w` is 0 or not finite (most samples coincide, or the quantiles
 //!   span more than f64 can hold) nothing is an outlier.
 //! * **Origin** = centre of the core box, computed as `min/2 + max/2` so that it never

@@ -120,7 +120,6 @@ impl CullPass {
 mod tests {
     #[test]
     fn the_compaction_record_has_the_size_of_the_wgsl_struct() {
-        let wgsl = super::super::shaders::wgsl_struct_size("cull", "Compaction");
-        assert_eq!(wgsl as usize, std::mem::size_of::<super::Compaction>());
+        super::super::shaders::assert_wgsl_size::<super::Compaction>("cull", "Compaction");
     }
 }

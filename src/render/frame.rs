@@ -68,6 +68,15 @@ pub(super) fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
+/// The sRGB transfer function: a linear value in 0–1 to its sRGB encoding in 0–1.
+pub(super) fn linear_to_srgb(c: f32) -> f32 {
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
 impl FrameUniform {
     /// The uniform for `camera` over a `width`×`height` target, selecting with
     /// `lod_eps` (world error per unit of distance; 0: leaves only). The model offset
@@ -139,7 +148,6 @@ impl FrameUniform {
 mod tests {
     #[test]
     fn the_uniform_has_the_size_of_the_wgsl_struct() {
-        let wgsl = super::super::shaders::wgsl_struct_size("common", "Frame");
-        assert_eq!(wgsl as usize, std::mem::size_of::<super::FrameUniform>());
+        super::super::shaders::assert_wgsl_size::<super::FrameUniform>("common", "Frame");
     }
 }

@@ -4,7 +4,7 @@
 //! block averaged in linear light ([`downsample`]).
 
 use super::Image;
-use super::frame::srgb_to_linear;
+use super::frame::{linear_to_srgb, srgb_to_linear};
 
 /// Pixels per degree of visual angle FLIP assumes: a 0.7 m viewing distance from a
 /// 24-inch 4K screen (FLIP's default, 67).
@@ -132,14 +132,7 @@ pub fn downsample(image: &Image, k: u32) -> Image {
         covered: vec![false; (w * h) as usize],
         depth: vec![0.0; (w * h) as usize],
     };
-    let to_srgb = |c: f32| {
-        let s = if c <= 0.003_130_8 {
-            12.92 * c
-        } else {
-            1.055 * c.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0).round().clamp(0.0, 255.0) as u8
-    };
+    let to_srgb = |c: f32| (linear_to_srgb(c) * 255.0).round().clamp(0.0, 255.0) as u8;
     for y in 0..h {
         for x in 0..w {
             let (mut sum, mut covered, mut depth) = ([0.0f32; 4], 0u32, 0.0f32);

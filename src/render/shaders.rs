@@ -85,10 +85,10 @@ pub fn module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
     })
 }
 
-/// The size WGSL gives struct `name` of module `name`'s composition, for the tests
-/// that check a Rust Pod type against the WGSL struct it mirrors.
+/// Asserts that `T` has the size WGSL gives struct `name` in module `module`'s
+/// composition: for the tests of the Rust Pod types that mirror WGSL structs.
 #[cfg(test)]
-pub(super) fn wgsl_struct_size(module: &str, name: &str) -> u32 {
+pub(super) fn assert_wgsl_size<T>(module: &str, name: &str) {
     let m = naga::front::wgsl::parse_str(&compose(module)).expect("parses");
     let mut layouter = naga::proc::Layouter::default();
     layouter.update(m.to_ctx()).expect("lays out");
@@ -97,7 +97,8 @@ pub(super) fn wgsl_struct_size(module: &str, name: &str) -> u32 {
         .iter()
         .find(|(_, t)| t.name.as_deref() == Some(name))
         .unwrap_or_else(|| panic!("no struct {name} in {module}"));
-    layouter[handle].size
+    let wgsl = layouter[handle].size as usize;
+    assert_eq!(wgsl, std::mem::size_of::<T>(), "{name}: WGSL {wgsl} bytes");
 }
 
 #[cfg(test)]

@@ -96,7 +96,7 @@ pub fn build_from_ply(
     report: &dyn Report,
 ) -> anyhow::Result<(SequentialList, Option<MeshData>)> {
     report.step(Step::Read, 0);
-    let model = read_ply(path)?;
+    let mut model = read_ply(path)?;
     report.finished(Finished::Read(&model));
     report.step(Step::Surfels, 0);
     let leaves = leaf_surfels(&model.geometry);
@@ -105,7 +105,8 @@ pub fn build_from_ply(
         positions: leaves.surfels.iter().map(|s| s.position).collect(),
         normals: leaves.surfels.iter().map(|s| s.normal).collect(),
         colors: leaves.surfels.iter().map(|s| s.color).collect(),
-        triangles: model.geometry.triangles.clone(),
+        // The model is dropped next: its triangles move, they are not copied.
+        triangles: std::mem::take(&mut model.geometry.triangles),
     });
     drop(model);
     Ok((build_list(leaves, report), mesh))
