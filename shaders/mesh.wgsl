@@ -30,6 +30,7 @@ fn vs_mesh(v: MeshVertex) -> MeshVarying {
 struct MeshAttributes {
     @location(0) color: vec4<f32>,
     @location(1) normal: vec4<f32>,
+    @location(2) coverage: vec4<f32>,
 }
 
 @fragment
@@ -39,5 +40,6 @@ fn fs_mesh(in: MeshVarying) -> MeshAttributes {
     var out: MeshAttributes;
     out.color = vec4<f32>(in.color.rgb, 1.0);
     out.normal = vec4<f32>(n, -in.view_pos.z);
+    out.coverage = vec4<f32>(1.0);
     return out;
 }

@@ -6,6 +6,8 @@
 
 @group(1) @binding(0) var color_sum: texture_2d<f32>;
 @group(1) @binding(1) var normal_sum: texture_2d<f32>;
+// The four coverage samples of each pixel (max over the splats drawn there).
+@group(1) @binding(2) var coverage: texture_2d<f32>;
 
 @fragment
 fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
@@ -27,7 +29,11 @@ fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let diffuse = max(dot(n, l), 0.0);
     let specular = frame.specular * pow(max(dot(n, h), 0.0), 32.0) * select(0.0, 1.0, diffuse > 0.0);
     let shaded = color * (0.25 + 0.75 * diffuse) + vec3<f32>(specular);
-    // Pixels reached only by the fading rims of splats blend into the background.
-    let alpha = select(1.0, clamp(c.w / frame.coverage_weight, 0.0, 1.0), frame.coverage_weight > 0.0);
+    // The share of the pixel's samples that a splat covers; pixels reached only by the
+    // fading rims of splats also blend into the background when coverage_weight is set.
+    var alpha = dot(textureLoad(coverage, texel, 0), vec4<f32>(0.25));
+    if frame.coverage_weight > 0.0 {
+        alpha = min(alpha, clamp(c.w / frame.coverage_weight, 0.0, 1.0));
+    }
     return vec4<f32>(mix(frame.background.rgb, shaded, alpha), 1.0);
 }

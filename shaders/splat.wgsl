@@ -7,6 +7,14 @@
 
 @group(1) @binding(0) var<storage, read> nodes: array<vec4<u32>>;
 @group(1) @binding(1) var<storage, read> survivors: array<u32>;
+@group(1) @binding(2) var<storage, read> shapes: array<SplatShape>;
+
+// A splat's ellipse and normal field, as src/surfel/shape.rs packs it (12 bytes).
+struct SplatShape {
+    axis: u32,       // major axis u, octahedral snorm16 × 2
+    ratio_a: u32,    // minor / major semi-axis, a: two f16
+    b_c: u32,        // b, c: two f16
+}
 
 struct SplatVarying {
     @builtin(position) clip: vec4<f32>,
@@ -14,8 +22,14 @@ struct SplatVarying {
     @location(1) @interpolate(flat) normal: vec3<f32>,
     @location(2) @interpolate(flat) tangent_u: vec3<f32>,
     @location(3) @interpolate(flat) color: vec4<f32>,
-    // x: radius, y, z: projected centre (pixels), w: unused
+    // x: major radius R, y, z: projected centre (pixels), w: minor / major ratio
     @location(4) @interpolate(flat) extra: vec4<f32>,
+    // The normal field G = [[a, b], [b, c]] per major radius: a, b, c
+    @location(5) @interpolate(flat) gradient: vec3<f32>,
+    // The prefiltered screen-space ellipse as a conic Q (pixels⁻²): Q11, Q12, Q22
+    @location(6) @interpolate(flat) conic: vec3<f32>,
+    // The same without the prefilter (the flat ellipse's own projection)
+    @location(7) @interpolate(flat) conic0: vec3<f32>,
 }
 
 fn culled() -> SplatVarying {
@@ -35,6 +49,39 @@ fn vs_splat_compacted(@builtin(vertex_index) corner: u32, @builtin(instance_inde
     return splat_vertex(survivors[index], corner, false);
 }
 
+// The unit tangent nearest to `axis` (made ⟂ to `normal`), or any tangent when the
+// two are (numerically) parallel.
+fn major_axis(normal: vec3<f32>, axis: vec3<f32>) -> vec3<f32> {
+    let t = axis - normal * dot(axis, normal);
+    if dot(t, t) > 1e-12 {
+        return normalize(t);
+    }
+    return normalize(select(cross(normal, vec3<f32>(0.0, 0.0, 1.0)), cross(normal, vec3<f32>(1.0, 0.0, 0.0)), abs(normal.z) > 0.9));
+}
+
+// Pixels per view-space unit of a displacement `d` at view-space point `c`: the
+// Jacobian of the projection to pixels (y down), applied to d.
+fn project_delta(c: vec3<f32>, d: vec3<f32>) -> vec2<f32> {
+    let f = 0.5 * frame.viewport / frame.tan_half_fov;
+    let z = -c.z;
+    return vec2<f32>(f.x * (d.x + c.x * d.z / z) / z, -f.y * (d.y + c.y * d.z / z) / z);
+}
+
+// The EWA resampling filter (Zwicker et al. 2001): the splat's ellipse mapped to the
+// screen by the projection's Jacobian at its centre, A = [J·R u, J·ratio R v], convolved
+// with the prefilter of radius p (covariances add: M = A Aᵀ + p² I), returned as the
+// conic M⁻¹.
+fn prefiltered_conic(center: vec3<f32>, u: vec3<f32>, v: vec3<f32>, p: f32) -> vec3<f32> {
+    let a = project_delta(center, u);
+    let b = project_delta(center, v);
+    let p2 = p * p;
+    let m11 = a.x * a.x + b.x * b.x + p2;
+    let m12 = a.x * a.y + b.x * b.y;
+    let m22 = a.y * a.y + b.y * b.y + p2;
+    let det = m11 * m22 - m12 * m12;
+    return vec3<f32>(m22, -m12, m11) / det;
+}
+
 fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     let node = decode_node(nodes[2u * index], nodes[2u * index + 1u]);
     let disk = view_disk(node);
@@ -45,15 +92,19 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     let normal = disk.normal;
     let r = disk.radius;
     let near = frame.near;
-    // Footprint: the screen box of the disk's four tangent corners p ± r u ± r v. A disk
-    // crossing the near plane is skipped rather than drawn garbled.
-    let u = normalize(select(cross(normal, vec3<f32>(0.0, 0.0, 1.0)), cross(normal, vec3<f32>(1.0, 0.0, 0.0)), abs(normal.z) > 0.9));
+    let packed = shapes[index];
+    let axis = (frame.view * vec4<f32>(oct_decode(unpack2x16snorm(packed.axis)), 0.0)).xyz;
+    let u = major_axis(normal, axis);
     let v = cross(normal, u);
+    let ratio_a = unpack2x16float(packed.ratio_a);
+    let ratio = ratio_a.x;
+    // Footprint: the screen box of the ellipse's bounding rectangle p ± R u ± ratio R v.
+    // A splat crossing the near plane is skipped rather than drawn garbled.
     var lo = vec2<f32>(1e30, 1e30);
     var hi = vec2<f32>(-1e30, -1e30);
     for (var k = 0u; k < 4u; k++) {
         let s = vec2<f32>(select(-1.0, 1.0, (k & 1u) != 0u), select(-1.0, 1.0, (k & 2u) != 0u));
-        let c = center + r * (s.x * u + s.y * v);
+        let c = center + r * (s.x * u + s.y * ratio * v);
         if -c.z < near {
             return culled();
         }
@@ -80,48 +131,121 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
         default: {}
     }
     out.color = color;
-    out.extra = vec4<f32>(r, center_px, 0.0);
+    out.extra = vec4<f32>(r, center_px, ratio);
+    out.gradient = vec3<f32>(ratio_a.y, unpack2x16float(packed.b_c));
+    out.conic = prefiltered_conic(center, r * u, ratio * r * v, frame.prefilter_px);
+    out.conic0 = prefiltered_conic(center, r * u, ratio * r * v, 1e-3);
     return out;
+}
+
+// Where the ray through a framebuffer position meets a splat's patch.
+struct PatchHit {
+    // The ellipse's ρ² = x² + (y / ratio)² at the hit; 10⁹ when the ray misses the patch.
+    object2: f32,
+    // Ray parameter of the hit (view distance, as view rays have z = −1).
+    t: f32,
+    // Plane coordinates of the hit, in major radii.
+    xy: vec2<f32>,
+}
+
+// The splat is the paraboloid patch h = −½ (x, y) G (x, y)ᵀ over its plane (the surface
+// whose normals are the field), in major radii. From the plane hit (x₀, y₀) the ray
+// moves by (s du, s dv, s dn): s dn + ½ Q(x₀ + s du, y₀ + s dv) = 0, whose root nearest
+// the plane is taken. No root: the ray passes beside the curved patch's silhouette.
+fn patch_hit(in: SplatVarying, pixel: vec2<f32>) -> PatchHit {
+    let miss = PatchHit(1e9, -in.center.z, vec2<f32>(0.0));
+    let dir = view_ray(pixel);
+    let denom = dot(dir, in.normal);
+    if abs(denom) < 1e-7 * length(dir) {
+        return miss;
+    }
+    let t = dot(in.center, in.normal) / denom;
+    if t <= 0.0 {
+        return miss;
+    }
+    let r = in.extra.x;
+    let ratio = in.extra.w;
+    let v = cross(in.normal, in.tangent_u);
+    let g = in.gradient;
+    let p0 = dir * t - in.center;
+    let xy0 = vec2<f32>(dot(p0, in.tangent_u), dot(p0, v)) / r;
+    let dxy = vec2<f32>(dot(dir, in.tangent_u), dot(dir, v)) / r;
+    let qa = 0.5 * (g.x * dxy.x * dxy.x + 2.0 * g.y * dxy.x * dxy.y + g.z * dxy.y * dxy.y);
+    let qb = denom / r + g.x * xy0.x * dxy.x + g.y * (xy0.x * dxy.y + xy0.y * dxy.x) + g.z * xy0.y * dxy.y;
+    let qc = 0.5 * (g.x * xy0.x * xy0.x + 2.0 * g.y * xy0.x * xy0.y + g.z * xy0.y * xy0.y);
+    let disc = qb * qb - 4.0 * qa * qc;
+    if disc < 0.0 {
+        return miss;
+    }
+    let root = qb + select(-1.0, 1.0, qb >= 0.0) * sqrt(disc);
+    let s = select(-2.0 * qc / root, 0.0, abs(root) < 1e-30);
+    let xy = xy0 + s * dxy;
+    return PatchHit(xy.x * xy.x + xy.y * xy.y / (ratio * ratio), t + s, xy);
+}
+
+// Offsets of the coverage samples within a pixel (a rotated grid).
+const SUBSAMPLES = array<vec2<f32>, 4>(
+    vec2<f32>(0.125, -0.375), vec2<f32>(0.375, 0.125), vec2<f32>(-0.125, 0.375), vec2<f32>(-0.375, -0.125));
+
+// Which of the pixel's four coverage samples the splat's patch covers (1 or 0 each).
+// A fragment whose pixel centre the patch covers counts as covering the whole pixel:
+// coverage is only partial beside a silhouette, where the prefilter alone made the
+// fragment (the union of what such fragments cover is the pixel's share of surface).
+fn subsample_coverage(in: SplatVarying) -> vec4<f32> {
+    if patch_hit(in, in.clip.xy).object2 <= 1.0 {
+        return vec4<f32>(1.0);
+    }
+    var covered = vec4<f32>(0.0);
+    for (var k = 0u; k < 4u; k++) {
+        covered[k] = select(0.0, 1.0, patch_hit(in, in.clip.xy + SUBSAMPLES[k]).object2 <= 1.0);
+    }
+    return covered;
 }
 
 struct Hit {
     // Squared splat-space distance (object space, or screen space under the prefilter).
     rho2: f32,
-    // View distance of the ray's intersection with the splat plane.
+    // View distance of the hit.
     depth: f32,
+    // The normal field there (view space, unit).
+    normal: vec3<f32>,
 }
 
-// Ray through the pixel against the splat: outside the unit disk (and outside the
-// prefilter footprint) → discard.
+// dᵀ Q d for a conic Q = (Q11, Q12, Q22).
+fn conic_at(q: vec3<f32>, d: vec2<f32>) -> f32 {
+    return q.x * d.x * d.x + 2.0 * q.y * d.x * d.y + q.z * d.y * d.y;
+}
+
+// The pixel centre's ray against the splat: outside the patch (and outside the
+// prefiltered screen ellipse) → discard.
 fn hit(in: SplatVarying) -> Hit {
-    let dir = view_ray(in.clip.xy);
-    let denom = dot(dir, in.normal);
-    if abs(denom) < 1e-7 * length(dir) {
-        discard;
-    }
-    let t = dot(in.center, in.normal) / denom;
-    if t <= 0.0 {
-        discard;
-    }
-    let q = dir * t;
-    let r = in.extra.x;
-    let local_u = dot(q - in.center, in.tangent_u) / r;
-    let local_v = dot(q - in.center, cross(in.normal, in.tangent_u)) / r;
-    var rho2 = local_u * local_u + local_v * local_v;
+    let h = patch_hit(in, in.clip.xy);
+    var rho2 = h.object2;
     if frame.ewa > 0.0 {
-        let screen = (in.clip.xy - in.extra.yz) / frame.prefilter_px;
-        rho2 = min(rho2, dot(screen, screen));
+        // The prefilter widens the splat by a band around its projected rim; inside the
+        // rim, where the curved patch turns away from the ray, it adds nothing.
+        let d = in.clip.xy - in.extra.yz;
+        let screen2 = conic_at(in.conic, d);
+        if h.object2 > 1.0 && conic_at(in.conic0, d) > 1.0 {
+            rho2 = min(rho2, screen2);
+        }
     }
     // Both passes keep the same fragments: beyond the rim, or where the weight is too
     // small for the half-float targets (it would leave colour 0 with w > 0: black).
     if rho2 > 1.0 || kernel(rho2) < MIN_WEIGHT {
         discard;
     }
-    // Every point of the disk lies within ±r of its centre's depth. Under the prefilter
-    // a pixel near a grazing splat's projected centre meets the plane far from the disk:
-    // keep its depth in the disk's range so it cannot win the depth test wrongly.
-    let depth = clamp(-q.z, -in.center.z - r, -in.center.z + r);
-    return Hit(rho2, depth);
+    // Every point of the splat lies within ±R of its centre's depth. Under the prefilter
+    // a pixel beside a splat meets its plane far from it (or not at all): keep its depth
+    // in the splat's range so it cannot win the depth test wrongly, and read the normal
+    // field at the rim.
+    let r = in.extra.x;
+    let depth = clamp(h.t, -in.center.z - r, -in.center.z + r);
+    let xy = h.xy / max(1.0, sqrt(min(h.object2, 1e6)));
+    let g = in.gradient;
+    let v = cross(in.normal, in.tangent_u);
+    let n = in.normal + in.tangent_u * (g.x * xy.x + g.y * xy.y) + v * (g.y * xy.x + g.z * xy.y);
+    return Hit(rho2, depth, normalize(n));
 }
 
 struct DepthOnly {
@@ -135,6 +259,12 @@ struct DepthOnly {
 @fragment
 fn fs_visibility(in: SplatVarying) -> DepthOnly {
     let h = hit(in);
+    // Fragments the prefilter alone adds (the patch misses the pixel centre) do not
+    // occlude: what lies behind them shows through their partial coverage. The patches
+    // cover the surface, so a pixel centre on it always meets one.
+    if patch_hit(in, in.clip.xy).object2 > 1.0 {
+        discard;
+    }
     let dir = normalize(view_ray(in.clip.xy));
     let c = max(abs(dot(dir, in.normal)), 0.02);
     let pixel = h.depth * 2.0 * frame.tan_half_fov.y * frame.inv_viewport.y;
@@ -145,6 +275,7 @@ fn fs_visibility(in: SplatVarying) -> DepthOnly {
 struct Attributes {
     @location(0) color: vec4<f32>,    // (colour·w, w)
     @location(1) normal: vec4<f32>,   // (normal·w, view distance·w)
+    @location(2) coverage: vec4<f32>, // the four coverage samples, blended by max
     @builtin(frag_depth) depth: f32,
 }
 
@@ -162,13 +293,19 @@ const MIN_WEIGHT: f32 = 1.0 / 1024.0;
 @fragment
 fn fs_attributes(in: SplatVarying) -> Attributes {
     let h = hit(in);
-    let w = kernel(h.rho2);
+    let coverage = subsample_coverage(in);
+    // A fragment of the prefilter's band weighs by the share of the pixel it covers.
+    let w = kernel(h.rho2) * dot(coverage, vec4<f32>(0.25));
+    if w < MIN_WEIGHT {
+        discard;
+    }
     let q = view_ray(in.clip.xy) * h.depth;
     // Two-sided: a normal facing away from the eye is flipped before blending.
-    let n = select(in.normal, -in.normal, dot(in.normal, q) > 0.0);
+    let n = select(h.normal, -h.normal, dot(in.normal, q) > 0.0);
     var out: Attributes;
     out.color = vec4<f32>(in.color.rgb * w, w);
     out.normal = vec4<f32>(n * w, h.depth * w);
+    out.coverage = coverage;
     out.depth = depth_of(h.depth);
     return out;
 }
@@ -178,10 +315,11 @@ fn fs_attributes(in: SplatVarying) -> Attributes {
 fn fs_points(in: SplatVarying) -> Attributes {
     let h = hit(in);
     let q = view_ray(in.clip.xy) * h.depth;
-    let n = select(in.normal, -in.normal, dot(in.normal, q) > 0.0);
+    let n = select(h.normal, -h.normal, dot(in.normal, q) > 0.0);
     var out: Attributes;
     out.color = vec4<f32>(in.color.rgb, 1.0);
     out.normal = vec4<f32>(n, h.depth);
+    out.coverage = vec4<f32>(1.0);
     out.depth = depth_of(h.depth);
     return out;
 }

@@ -1,10 +1,13 @@
 //! The G-buffer that passes 1–2 (and the mesh, and plain points) write and pass 3 reads,
 //! for one frame size: the colour sum (colour·w, w), the normal sum (normal·w, z·w),
-//! both Rgba16Float, and the reversed-Z depth of pass 1; and how a pass attaches to it
-//! (its render pass, colour targets and depth state).
+//! both Rgba16Float, the coverage of four samples per pixel (Rgba8Unorm, blended by
+//! max: the union of what the splats cover) and the reversed-Z depth of pass 1; and how
+//! a pass attaches to it (its render pass, colour targets and depth state).
 
 /// Format of both attribute sums.
 pub(super) const GBUFFER: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Coverage of the four samples of a pixel.
+pub(super) const COVERAGE: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// Reversed-Z depth (1 at the near plane, 0 at infinity).
 pub(super) const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -35,8 +38,10 @@ pub(super) fn target(
 pub(super) struct GBuffer {
     pub color_sum: wgpu::Texture,
     pub normal_sum: wgpu::Texture,
+    pub coverage: wgpu::Texture,
     pub color_view: wgpu::TextureView,
     pub normal_view: wgpu::TextureView,
+    pub coverage_view: wgpu::TextureView,
     pub depth_view: wgpu::TextureView,
 }
 
@@ -47,6 +52,7 @@ impl GBuffer {
             | wgpu::TextureUsages::COPY_SRC;
         let color_sum = target(device, size, GBUFFER, "colour sum", usage);
         let normal_sum = target(device, size, GBUFFER, "normal sum", usage);
+        let coverage = target(device, size, COVERAGE, "coverage", usage);
         let depth = target(
             device,
             size,
@@ -57,13 +63,15 @@ impl GBuffer {
         GBuffer {
             color_view: color_sum.create_view(&Default::default()),
             normal_view: normal_sum.create_view(&Default::default()),
+            coverage_view: coverage.create_view(&Default::default()),
+            coverage,
             depth_view: depth.create_view(&Default::default()),
             color_sum,
             normal_sum,
         }
     }
 
-    /// A render pass over the G-buffer: its two colour sums (unless `depth_only`) and
+    /// A render pass over the G-buffer: its colour targets (unless `depth_only`) and
     /// the depth, cleared or loaded, with `timestamps` written at its start.
     pub fn pass<'e>(
         &self,
@@ -85,7 +93,11 @@ impl GBuffer {
                 }),
             })
         };
-        let colors = [color(&self.color_view), color(&self.normal_view)];
+        let colors = [
+            color(&self.color_view),
+            color(&self.normal_view),
+            color(&self.coverage_view),
+        ];
         encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
             color_attachments: if depth_only { &[] } else { &colors },
@@ -113,17 +125,37 @@ pub(super) fn store<V>(load: wgpu::LoadOp<V>) -> wgpu::Operations<V> {
     }
 }
 
-/// The two colour targets of a pass that writes the G-buffer, blended by `blend`.
+/// The colour targets of a pass that writes the G-buffer: the sums blended by `blend`,
+/// and the coverage by max when they blend (else written as is).
 pub(super) fn color_targets(
     blend: Option<wgpu::BlendState>,
-) -> [Option<wgpu::ColorTargetState>; 2] {
+) -> [Option<wgpu::ColorTargetState>; 3] {
     let t = wgpu::ColorTargetState {
         format: GBUFFER,
         blend,
         write_mask: wgpu::ColorWrites::ALL,
     };
-    [Some(t.clone()), Some(t)]
+    let coverage = wgpu::ColorTargetState {
+        format: COVERAGE,
+        blend: blend.map(|_| MAX),
+        write_mask: wgpu::ColorWrites::ALL,
+    };
+    [Some(t.clone()), Some(t), Some(coverage)]
 }
+
+/// Blending by the larger of source and destination: the union of coverage samples.
+pub(super) const MAX: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Max,
+    },
+    alpha: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Max,
+    },
+};
 
 /// Depth tested with `compare`, written if `write`.
 pub(super) fn depth_state(

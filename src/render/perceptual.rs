@@ -37,9 +37,9 @@ fn masked_mean(values: &[f32], mask: &[bool]) -> f64 {
     sum / n.max(1) as f64
 }
 
-/// Mean FLIP error (0: identical … 1) of `test` against `reference` (same size), over
-/// the pixels either covers.
-pub fn flip_mean(test: &Image, reference: &Image) -> f64 {
+/// The FLIP error (0: identical … 1) of each pixel of `test` against `reference` (same
+/// size), row-major.
+pub fn flip_map(test: &Image, reference: &Image) -> Vec<f32> {
     assert_eq!(
         (test.width, test.height),
         (reference.width, reference.height)
@@ -47,8 +47,12 @@ pub fn flip_mean(test: &Image, reference: &Image) -> f64 {
     let (w, h) = (test.width, test.height);
     let r = nv_flip::FlipImageRgb8::with_data(w, h, &rgb(reference));
     let t = nv_flip::FlipImageRgb8::with_data(w, h, &rgb(test));
-    let errors = nv_flip::flip(r, t, FLIP_PIXELS_PER_DEGREE).to_vec();
-    masked_mean(&errors, &union(test, reference))
+    nv_flip::flip(r, t, FLIP_PIXELS_PER_DEGREE).to_vec()
+}
+
+/// Mean FLIP error of `test` against `reference` over the pixels either covers.
+pub fn flip_mean(test: &Image, reference: &Image) -> f64 {
+    masked_mean(&flip_map(test, reference), &union(test, reference))
 }
 
 /// 8-bit luma (Rec. 601 weights on the sRGB-encoded channels), as SSIM is usually taken.

@@ -72,6 +72,15 @@ pub(super) fn coverage(data: &[u8], width: u32, height: u32, threshold: f32) -> 
         .collect()
 }
 
+/// Which pixels of a padded Rgba8 copy of the coverage samples have one covered.
+pub(super) fn any_sample(data: &[u8], width: u32, height: u32) -> Vec<bool> {
+    let row = padded_row(width, 4) as usize;
+    (0..height as usize)
+        .flat_map(|y| (0..width as usize).map(move |x| y * row + x * 4))
+        .map(|at| data[at..at + 4].iter().any(|v| *v > 0))
+        .collect()
+}
+
 /// View distance per pixel from padded Rgba16Float copies of the colour sum (weight in
 /// alpha) and the normal sum (z·w in alpha): z = Σzw / Σw, 0 where nothing was drawn.
 pub(super) fn depth(color_sum: &[u8], normal_sum: &[u8], width: u32, height: u32) -> Vec<f32> {

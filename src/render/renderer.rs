@@ -179,7 +179,7 @@ impl Renderer {
         let mut gpu_scene = self.empty_gpu_scene(nodes.len());
         for range in self.slice_plan(nodes.len()) {
             report.advance(range.len() as u64);
-            gpu_scene.push(self.upload_slice(&nodes[range]));
+            gpu_scene.push(self.upload_slice(scene, range));
         }
         if let Some(mesh) = self.upload_mesh(scene) {
             gpu_scene.set_mesh(mesh);
@@ -197,9 +197,10 @@ impl Renderer {
         upload::empty_gpu_scene(&self.gpu, total)
     }
 
-    /// Uploads one slice of the list (a range given by [`Renderer::slice_plan`]), to
-    /// be pushed in order.
-    pub fn upload_slice(&self, chunk: &[crate::tree::NodeRecord]) -> SliceUpload {
+    /// Uploads one slice of a scene's list (a range given by [`Renderer::slice_plan`]),
+    /// to be pushed in order.
+    pub fn upload_slice(&self, scene: &Scene, range: std::ops::Range<usize>) -> SliceUpload {
+        let chunk = (&scene.nodes()[range.clone()], &scene.shapes()[range]);
         upload::upload_slice(&self.gpu.device, (&self.splats, &self.cull), chunk)
     }
 
@@ -236,23 +237,30 @@ impl Renderer {
         let device = &self.gpu.device;
         let mut encoder = device.create_command_encoder(&Default::default());
         let frame = self.encode(&mut encoder, targets, scene, gpu_scene, camera, settings)?;
-        // Read back: the output, the weight channel of the colour sum (coverage) and the
-        // blended depth.
+        // Read back: the output, the weight channel of the colour sum, the coverage
+        // samples and the blended depth.
         let g = &targets.gbuffer;
         let out_buffer = readback::copy_texture(device, &mut encoder, &targets.output, 4);
         let weight_buffer = readback::copy_texture(device, &mut encoder, &g.color_sum, 8);
         let normal_buffer = readback::copy_texture(device, &mut encoder, &g.normal_sum, 8);
+        let samples_buffer = readback::copy_texture(device, &mut encoder, &g.coverage, 4);
         let counters = read_counters_now(&self.gpu, encoder, targets, gpu_scene, &frame)?;
         let (width, height) = targets.size;
         let rgba = readback::unpad_rgba8(&readback::read(device, &out_buffer)?, width, height);
-        // A pixel counts as covered once it is at least half opaque.
+        // A pixel counts as covered when a splat covers one of its samples (and, with
+        // coverage_weight, once it is at least half opaque).
         let coverage_threshold = if settings.mode == Mode::Shaded {
             0.5 * settings.coverage_weight
         } else {
             0.0
         };
         let weights = readback::read(device, &weight_buffer)?;
-        let covered = readback::coverage(&weights, width, height, coverage_threshold);
+        let samples = readback::read(device, &samples_buffer)?;
+        let covered = readback::coverage(&weights, width, height, coverage_threshold)
+            .into_iter()
+            .zip(readback::any_sample(&samples, width, height))
+            .map(|(a, b)| a && b)
+            .collect();
         let depth = readback::depth(
             &weights,
             &readback::read(device, &normal_buffer)?,

@@ -9,7 +9,7 @@ use super::shaders::module;
 use super::targets::{FrameTargets, OUTPUT};
 
 pub(super) struct ShadingPass {
-    /// Bind group 1: the colour and normal sums, as textures.
+    /// Bind group 1: the colour and normal sums and the coverage, as textures.
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::RenderPipeline,
 }
@@ -18,7 +18,7 @@ impl ShadingPass {
     pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> ShadingPass {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gbuffer"),
-            entries: &[fragment_texture(0), fragment_texture(1)],
+            entries: &[fragment_texture(0), fragment_texture(1), fragment_texture(2)],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("shade"),
@@ -39,7 +39,11 @@ impl ShadingPass {
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("gbuffer"),
             layout: &self.layout,
-            entries: &[view(0, &gbuffer.color_view), view(1, &gbuffer.normal_view)],
+            entries: &[
+                view(0, &gbuffer.color_view),
+                view(1, &gbuffer.normal_view),
+                view(2, &gbuffer.coverage_view),
+            ],
         })
     }
 

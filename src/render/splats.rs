@@ -3,11 +3,13 @@
 //! or plain points (no blending) instead of both. One instanced quad of 4 vertices per
 //! node: every node of the prefix, culled in the vertex stage ("direct"), or the
 //! survivors that `cull.rs` compacted, drawn indirectly ("compacted"). WGSL:
-//! `shaders/splat.wgsl`.
+//! `shaders/splat.wgsl`. The splat passes read each drawn node's record (32 bytes) and
+//! shape (12 bytes, [`SplatShape`]); the cull pass reads only the record.
 
 use super::gbuffer::{ADD, color_targets, depth_state};
 use super::gpu_scene::Slice;
 use super::shaders::module;
+use crate::surfel::shape::SplatShape;
 use crate::tree::NodeRecord;
 
 /// The three splat pipelines of one culling strategy.
@@ -19,9 +21,9 @@ pub(super) struct SplatPipelines {
 
 /// Layouts of bind group 1 and the pipelines of both culling strategies.
 pub(super) struct SplatPasses {
-    /// The slice's nodes (vertex culling).
+    /// The slice's nodes (binding 0) and shapes (2), for vertex culling.
     pub nodes_layout: wgpu::BindGroupLayout,
-    /// The slice's nodes and survivors (compute culling).
+    /// The slice's nodes (0), survivors (1) and shapes (2), for compute culling.
     pub compacted_layout: wgpu::BindGroupLayout,
     pub direct: SplatPipelines,
     pub compacted: SplatPipelines,
@@ -93,16 +95,24 @@ fn pipelines(
 impl SplatPasses {
     pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> SplatPasses {
         let node = std::mem::size_of::<NodeRecord>() as u64;
+        let shape = std::mem::size_of::<SplatShape>() as u64;
         let bind_layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(label),
                 entries,
             })
         };
-        let nodes_layout = bind_layout("nodes", &[vertex_storage(0, node)]);
+        let nodes_layout = bind_layout(
+            "nodes",
+            &[vertex_storage(0, node), vertex_storage(2, shape)],
+        );
         let compacted_layout = bind_layout(
             "compacted nodes",
-            &[vertex_storage(0, node), vertex_storage(1, 4)],
+            &[
+                vertex_storage(0, node),
+                vertex_storage(1, 4),
+                vertex_storage(2, shape),
+            ],
         );
         let pipeline_layout = |second: &wgpu::BindGroupLayout| {
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -155,5 +165,13 @@ impl SplatPasses {
         } else {
             &self.direct
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_shape_record_matches_its_wgsl_struct() {
+        super::super::shaders::assert_wgsl_size::<super::SplatShape>("splat", "SplatShape");
     }
 }

@@ -10,6 +10,7 @@ use super::gpu::Gpu;
 use super::gpu_scene::{GpuScene, Slice, SliceUpload};
 use super::shaders::WORKGROUP_SIZE;
 use super::splats::SplatPasses;
+use crate::surfel::shape::SplatShape;
 use crate::tree::NodeRecord;
 
 /// Nodes per slice at most: one dispatch of 65,535 workgroups covers a slice.
@@ -38,17 +39,16 @@ pub(super) fn empty_gpu_scene(gpu: &Gpu, total: usize) -> GpuScene {
     }
 }
 
-/// A bind group of `buffers` at bindings 0, 1, … of `layout`.
+/// A bind group of `layout` with each (binding, buffer) of `buffers`.
 fn bind(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
-    buffers: &[&wgpu::Buffer],
+    buffers: &[(u32, &wgpu::Buffer)],
 ) -> wgpu::BindGroup {
     let entries: Vec<wgpu::BindGroupEntry> = buffers
         .iter()
-        .enumerate()
-        .map(|(k, b)| wgpu::BindGroupEntry {
-            binding: k as u32,
+        .map(|(binding, b)| wgpu::BindGroupEntry {
+            binding: *binding,
             resource: b.as_entire_binding(),
         })
         .collect();
@@ -59,18 +59,23 @@ fn bind(
     })
 }
 
-/// Uploads one slice of the list (a range of [`slice_plan`]), bound for both culling
-/// strategies, to be pushed in order.
+/// Uploads one slice of the list (a range of [`slice_plan`]): its node records and
+/// their shapes, bound for both culling strategies, to be pushed in order.
 pub(super) fn upload_slice(
     device: &wgpu::Device,
     (splats, cull): (&SplatPasses, &CullPass),
-    chunk: &[NodeRecord],
+    (chunk, chunk_shapes): (&[NodeRecord], &[SplatShape]),
 ) -> SliceUpload {
-    let nodes = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("nodes"),
-        contents: bytemuck::cast_slice(chunk),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
+    assert_eq!(chunk.len(), chunk_shapes.len());
+    let storage = |label, contents| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+    };
+    let nodes = storage("nodes", bytemuck::cast_slice(chunk));
+    let shapes = storage("shapes", bytemuck::cast_slice(chunk_shapes));
     let survivors = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("survivors"),
         size: (std::mem::size_of::<u32>() * chunk.len()) as u64,
@@ -88,9 +93,17 @@ pub(super) fn upload_slice(
     });
     SliceUpload(Slice {
         count: chunk.len() as u32,
-        direct: bind(device, &splats.nodes_layout, &[&nodes]),
-        cull: bind(device, &cull.layout, &[&nodes, &survivors, &compaction]),
-        compacted: bind(device, &splats.compacted_layout, &[&nodes, &survivors]),
+        direct: bind(device, &splats.nodes_layout, &[(0, &nodes), (2, &shapes)]),
+        cull: bind(
+            device,
+            &cull.layout,
+            &[(0, &nodes), (1, &survivors), (2, &compaction)],
+        ),
+        compacted: bind(
+            device,
+            &splats.compacted_layout,
+            &[(0, &nodes), (1, &survivors), (2, &shapes)],
+        ),
         compaction,
     })
 }

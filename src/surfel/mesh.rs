@@ -33,7 +33,7 @@ pub const CANCELLED: f32 = 1e-5;
 /// l₀ + l₁ + l₂ > 2 L² (a² + b² > c² for the longest edge c), and then
 /// R² = l₀ l₁ l₂ / (4 |cross|²); otherwise R = L / 2.
 #[inline]
-fn triangle_terms(a: DVec3, b: DVec3, c: DVec3) -> (DVec3, f64, bool) {
+pub(super) fn triangle_terms(a: DVec3, b: DVec3, c: DVec3) -> (DVec3, f64, bool) {
     let (ab, bc, ca) = (b - a, c - b, a - c);
     let cross = ab.cross(-ca);
     let l = [
@@ -220,4 +220,5 @@ pub fn vertex_disks(
         stats.cancelled_normals = cancelled.len() as u64;
     }
     neighbour_disks(points, scale, &from_neighbours, given, surfels, stats);
+    super::ring::ring_shapes(points, scale, triangles, surfels);
 }

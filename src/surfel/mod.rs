@@ -9,7 +9,10 @@
 
 pub mod cloud;
 pub mod mesh;
+pub mod octahedral;
 pub mod pca;
+pub mod ring;
+pub mod shape;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
@@ -17,8 +20,10 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::io::Geometry;
+use shape::SplatShape;
 
-/// A disk: centre, unit normal, radius and colour. 32 bytes.
+/// A splat: centre, unit normal, radius (the major semi-axis), colour, and its ellipse
+/// and normal field ([`shape`]). 44 bytes.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Surfel {
@@ -28,6 +33,7 @@ pub struct Surfel {
     pub normal: Vec3,
     /// RGBA8; mid grey when the model has no colours.
     pub color: [u8; 4],
+    pub shape: SplatShape,
 }
 
 /// Colour of surfels of a model without colours.
@@ -139,11 +145,15 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
             radius: 0.0,
             normal: Vec3::ZERO,
             color: g.colors.as_ref().map_or(DEFAULT_COLOR, |c| c[i]),
+            shape: SplatShape::zeroed(),
         })
         .collect();
     let oriented = if g.triangles.is_empty() {
         let all: Vec<u32> = (0..surfels.len() as u32).collect();
         cloud::neighbour_disks(&g.positions, scale, &all, given, &mut surfels, &mut stats);
+        surfels
+            .par_iter_mut()
+            .for_each(|s| s.shape = SplatShape::circle(s.normal));
         given.is_some() && stats.given_normals == surfels.len() as u64
     } else {
         mesh::vertex_disks(

@@ -11,6 +11,7 @@
 
 pub mod errors;
 pub mod hierarchy;
+pub mod parent_shape;
 pub mod record;
 pub mod report;
 pub mod scene;
@@ -24,7 +25,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::io::Bounds;
-use crate::surfel::{LeafSurfels, Surfel};
+use crate::surfel::LeafSurfels;
+use crate::surfel::shape::SplatShape;
+use parent_shape::{Child, parent_shape};
 use errors::{Disk, node_error, parent_disk};
 use hierarchy::Hierarchy;
 pub use record::NodeRecord;
@@ -57,6 +60,9 @@ pub struct TreeMeta {
 pub struct SequentialList {
     pub meta: TreeMeta,
     pub nodes: Vec<NodeRecord>,
+    /// Each node's ellipse and normal field, in list order: read by the splat passes
+    /// only (the culling pass reads `nodes`).
+    pub shapes: Vec<SplatShape>,
     pub parents: Vec<u32>,
 }
 
@@ -64,6 +70,8 @@ pub struct SequentialList {
 pub struct NodeSet {
     pub hierarchy: Hierarchy,
     pub records: Vec<NodeRecord>,
+    /// Each node's ellipse and normal field, in the same order.
+    pub shapes: Vec<SplatShape>,
     /// Parent id of every node (u32::MAX for the root).
     pub parent_ids: Vec<u32>,
     pub meta: TreeMeta,
@@ -76,7 +84,7 @@ pub fn build_hierarchy(leaves: &mut LeafSurfels, report: &dyn Report) -> Hierarc
 
 /// The size errors are stored relative to: the largest extent of the box holding every
 /// leaf disk (> 0 since radii are > 0).
-fn error_scale(surfels: &[Surfel]) -> f32 {
+fn error_scale(surfels: &[crate::surfel::Surfel]) -> f32 {
     let (lo, hi) = surfels
         .par_iter()
         .map(|s| {
@@ -93,15 +101,16 @@ fn error_scale(surfels: &[Surfel]) -> f32 {
     if e > 0.0 && e.is_finite() { e } else { 1.0 }
 }
 
-/// The record of an internal node from its children's (already computed): the
-/// parent disk and colour, its radius rounded up from f64 so that it still reaches
+/// The record and shape of an internal node from its children's (already computed):
+/// the parent disk and colour, its ellipse and normal field ([`parent_shape`]), its
+/// radius (the ellipse's major semi-axis) rounded up from f64 so that it still reaches
 /// every child, and its error rounded up and never below a child's.
 fn internal_record(
     node: &hierarchy::Internal,
-    records: &[NodeRecord],
+    (records, shapes): (&[NodeRecord], &[SplatShape]),
     scale: f32,
     oriented: bool,
-) -> NodeRecord {
+) -> (NodeRecord, SplatShape) {
     let k = node.child_count as usize;
     let mut disks = [Disk::new(Vec3::ZERO, Vec3::Z, 0.0); 4];
     let mut colors = [[0u8; 4]; 4];
@@ -114,13 +123,27 @@ fn internal_record(
     }
     let (disks, colors) = (&disks[..k], &colors[..k]);
     let (disk, color) = parent_disk(disks, colors, oriented);
-    let mut rec = NodeRecord::new(disk.p.as_vec3(), disk.r as f32, disk.n.as_vec3(), color);
-    if (rec.radius() as f64) < disk.r {
+    let children: Vec<Child> = node
+        .children()
+        .iter()
+        .zip(disks)
+        .map(|(&c, d)| Child {
+            disk: *d,
+            shape: shapes[c as usize].unpack(d.n),
+        })
+        .collect();
+    let (shape, major) = parent_shape(&disk, &children);
+    let disk = Disk {
+        r: disk.r.max(major),
+        ..disk
+    };
+    let mut rec = NodeRecord::new(disk.p.as_vec3(), major as f32, disk.n.as_vec3(), color);
+    if (rec.radius() as f64) < major {
         rec.radius = f32::from_bits(rec.radius).next_up().to_bits();
     }
     let e = node_error(&disk, disks);
     rec.error = encode_up(e, scale).max(children_max);
-    rec
+    (rec, shape.pack())
 }
 
 /// Top-down: each node's parent error (a bit copy), δ rounded up and level; parents
@@ -164,16 +187,18 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Rep
     let scale = error_scale(&leaves.surfels);
     let oriented = leaves.oriented_normals;
     let bounds = leaf_bounds(&leaves);
-    // Leaf records take the surfels' memory (both 32 bytes): no second array of leaves.
-    let mut records: Vec<NodeRecord> = bytemuck::allocation::cast_vec(leaves.surfels);
-    records.par_iter_mut().for_each(|r| {
-        let s: Surfel = bytemuck::cast(*r);
-        *r = NodeRecord::new(s.position, s.radius, s.normal, s.color);
-    });
-    records.resize(
-        hierarchy.node_count(),
-        NodeRecord::new(Vec3::ZERO, 0.0, Vec3::Z, [0; 4]),
-    );
+    let (mut records, mut shapes): (Vec<NodeRecord>, Vec<SplatShape>) = leaves
+        .surfels
+        .par_iter()
+        .map(|s| {
+            let rec = NodeRecord::new(s.position, s.radius, s.normal, s.color);
+            (rec, s.shape)
+        })
+        .unzip();
+    drop(leaves.surfels);
+    let total = hierarchy.node_count();
+    records.resize(total, NodeRecord::new(Vec3::ZERO, 0.0, Vec3::Z, [0; 4]));
+    shapes.resize(total, SplatShape::circle(Vec3::Z));
 
     let levels = hierarchy.levels();
     let depth = levels.iter().copied().max().unwrap_or(0);
@@ -184,16 +209,17 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Rep
         by_level[levels[id as usize] as usize].push(id);
     }
     for ids in by_level.iter().rev() {
-        let done: Vec<(u32, NodeRecord)> = ids
+        let done: Vec<(u32, (NodeRecord, SplatShape))> = ids
             .par_iter()
             .with_min_len(256)
             .map(|&id| {
                 let node = &hierarchy.internal[id as usize - n];
-                (id, internal_record(node, &records, scale, oriented))
+                (id, internal_record(node, (&records, &shapes), scale, oriented))
             })
             .collect();
-        for (id, rec) in done {
+        for (id, (rec, shape)) in done {
             records[id as usize] = rec;
+            shapes[id as usize] = shape;
         }
         report.advance(ids.len() as u64);
     }
@@ -221,6 +247,7 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Rep
     NodeSet {
         hierarchy,
         records,
+        shapes,
         parent_ids,
         meta,
     }
@@ -250,6 +277,7 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
     let NodeSet {
         hierarchy,
         records,
+        shapes,
         parent_ids,
         meta,
     } = set;
@@ -268,6 +296,7 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
     }
     let nodes: Vec<NodeRecord> = order.par_iter().map(|&id| records[id as usize]).collect();
     drop(records);
+    let shapes: Vec<SplatShape> = order.par_iter().map(|&id| shapes[id as usize]).collect();
     let parents = order
         .par_iter()
         .map(|&id| match parent_ids[id as usize] {
@@ -278,6 +307,7 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
     SequentialList {
         meta,
         nodes,
+        shapes,
         parents,
     }
 }

@@ -11,6 +11,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
+use crate::surfel::shape::SplatShape;
 use super::report::{Finished, Report, Silent, Step};
 use super::select::PrefixIndex;
 use super::spt_file::{SptFile, is_spt};
@@ -84,6 +85,14 @@ impl Scene {
         match &self.tree {
             TreeSource::Memory(l) => &l.nodes,
             TreeSource::File(f) => f.nodes(),
+        }
+    }
+
+    /// Each node's ellipse and normal field, in list order.
+    pub fn shapes(&self) -> &[SplatShape] {
+        match &self.tree {
+            TreeSource::Memory(l) => &l.shapes,
+            TreeSource::File(f) => f.shapes(),
         }
     }
 }

@@ -3,7 +3,7 @@
 //! ```text
 //! offset  size  field (little-endian)
 //!      0     8  magic "spt-tree"
-//!      8     4  format version (1)
+//!      8     4  format version (2; version 1 had no shapes section)
 //!     12     4  header size (256)
 //!     16     4  flags: 1 = has colours, 2 = oriented normals
 //!     20     4  depth (largest level)
@@ -18,8 +18,13 @@
 //!    152     8  offset of the parent indices (u32 per node, u32::MAX for the root)
 //!    160     8  file size
 //!    168     8  checksum: XXH3-64 of the header (this field zeroed) and all sections
-//!    176    80  zero
+//!    176     8  offset of the splat shapes (12 bytes per node, after the parents)
+//!    184     4  splat shape size (12)
+//!    188    68  zero
 //! ```
+//!
+//! Sections follow the header in this order: node records (what the culling pass
+//! reads), parents (the CPU's), splat shapes (what only the splat passes read).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -31,13 +36,15 @@ use xxhash_rust::xxh3::Xxh3;
 use super::select::TreeView;
 use super::validate;
 use super::{NodeRecord, SequentialList, TreeMeta};
+use crate::surfel::shape::SplatShape;
 use crate::io::Bounds;
 use crate::io::atomic::write_atomically;
 
 pub const MAGIC: &[u8; 8] = b"spt-tree";
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 pub const HEADER_BYTES: usize = 256;
 const RECORD_BYTES: usize = std::mem::size_of::<NodeRecord>();
+const SHAPE_BYTES: usize = std::mem::size_of::<SplatShape>();
 const CHECKSUM_AT: usize = 168;
 
 #[derive(Debug, Error)]
@@ -53,6 +60,10 @@ pub enum SptError {
         "{path}: made by a newer spt (format version {version}; this build reads version {VERSION})"
     )]
     NewerVersion { path: PathBuf, version: u32 },
+    #[error(
+        "{path}: made by an older spt (format version {version}, without splat shapes): convert the model again"
+    )]
+    OlderVersion { path: PathBuf, version: u32 },
     #[error("{path}: truncated: {actual} bytes, the header says {expected}")]
     Truncated {
         path: PathBuf,
@@ -100,21 +111,25 @@ fn header_bytes(list: &SequentialList, checksum: u64) -> Vec<u8> {
     h.extend_from_slice(&(RECORD_BYTES as u32).to_le_bytes());
     let nodes_at = HEADER_BYTES as u64;
     let parents_at = nodes_at + (list.nodes.len() * RECORD_BYTES) as u64;
-    let size = parents_at + 4 * list.parents.len() as u64;
-    for v in [nodes_at, parents_at, size, checksum] {
+    let shapes_at = parents_at + 4 * list.parents.len() as u64;
+    let size = shapes_at + (list.shapes.len() * SHAPE_BYTES) as u64;
+    for v in [nodes_at, parents_at, size, checksum, shapes_at] {
         h.extend_from_slice(&v.to_le_bytes());
     }
+    h.extend_from_slice(&(SHAPE_BYTES as u32).to_le_bytes());
     h.resize(HEADER_BYTES, 0);
     h
 }
 
-fn payload_checksum(header: &[u8], nodes: &[u8], parents: &[u8]) -> u64 {
+/// XXH3-64 of the header (checksum zeroed) and the `sections` that follow it, in order.
+fn payload_checksum(header: &[u8], sections: &[&[u8]]) -> u64 {
     let mut zeroed = header.to_vec();
     zeroed[CHECKSUM_AT..CHECKSUM_AT + 8].fill(0);
     let mut hasher = Xxh3::new();
     hasher.update(&zeroed);
-    hasher.update(nodes);
-    hasher.update(parents);
+    for section in sections {
+        hasher.update(section);
+    }
     hasher.digest()
 }
 
@@ -126,19 +141,22 @@ pub fn reseal(bytes: &mut [u8]) -> bool {
         return false;
     }
     let (header, rest) = bytes.split_at(HEADER_BYTES);
-    let checksum = payload_checksum(header, rest, &[]);
+    let checksum = payload_checksum(header, &[rest]);
     bytes[CHECKSUM_AT..CHECKSUM_AT + 8].copy_from_slice(&checksum.to_le_bytes());
     true
 }
 
 /// Writes the list in `.spt` form to `w` (little-endian hosts write their memory as is).
 pub fn write_to(w: &mut dyn Write, list: &SequentialList) -> std::io::Result<()> {
-    let nodes: &[u8] = bytemuck::cast_slice(&list.nodes);
-    let parents: &[u8] = bytemuck::cast_slice(&list.parents);
-    let checksum = payload_checksum(&header_bytes(list, 0), nodes, parents);
+    let sections: [&[u8]; 3] = [
+        bytemuck::cast_slice(&list.nodes),
+        bytemuck::cast_slice(&list.parents),
+        bytemuck::cast_slice(&list.shapes),
+    ];
+    let checksum = payload_checksum(&header_bytes(list, 0), &sections);
     w.write_all(&header_bytes(list, checksum))?;
-    // Large sections in chunks, so that a progress bar could follow and writes stay short.
-    for chunk in nodes.chunks(64 << 20).chain(parents.chunks(64 << 20)) {
+    // Large sections in chunks, so that writes stay short.
+    for chunk in sections.iter().flat_map(|s| s.chunks(64 << 20)) {
         w.write_all(chunk)?;
     }
     Ok(())
@@ -158,6 +176,7 @@ pub struct SptFile {
     map: Mmap,
     nodes_at: usize,
     parents_at: usize,
+    shapes_at: usize,
 }
 
 fn u32_at(b: &[u8], at: usize) -> u32 {
@@ -210,6 +229,9 @@ impl SptFile {
         if version > VERSION {
             return Err(SptError::NewerVersion { path: p(), version });
         }
+        if version < VERSION && version > 0 {
+            return Err(SptError::OlderVersion { path: p(), version });
+        }
         if b.len() < HEADER_BYTES {
             return Err(SptError::Truncated {
                 path: p(),
@@ -221,24 +243,27 @@ impl SptFile {
         if version == 0
             || u32_at(b, 12) as usize != HEADER_BYTES
             || u32_at(b, 140) as usize != RECORD_BYTES
+            || u32_at(b, 184) as usize != SHAPE_BYTES
         {
             return Err(bad(format!(
-                "version {version}, header size {}, record size {}",
+                "version {version}, header size {}, record size {}, shape size {}",
                 u32_at(b, 12),
-                u32_at(b, 140)
+                u32_at(b, 140),
+                u32_at(b, 184)
             )));
         }
         let (leaf_count, node_count) = (u64_at(b, 24), u64_at(b, 32));
         let (nodes_at, parents_at, size) = (u64_at(b, 144), u64_at(b, 152), u64_at(b, 160));
-        let expected_parents = node_count
-            .checked_mul(RECORD_BYTES as u64)
-            .and_then(|n| n.checked_add(nodes_at));
-        let expected_size = node_count
-            .checked_mul(4)
-            .and_then(|n| n.checked_add(parents_at));
+        let shapes_at = u64_at(b, 176);
+        let after = |at: u64, bytes: usize| {
+            node_count
+                .checked_mul(bytes as u64)
+                .and_then(|n| n.checked_add(at))
+        };
         if nodes_at != HEADER_BYTES as u64
-            || Some(parents_at) != expected_parents
-            || Some(size) != expected_size
+            || Some(parents_at) != after(nodes_at, RECORD_BYTES)
+            || Some(shapes_at) != after(parents_at, 4)
+            || Some(size) != after(shapes_at, SHAPE_BYTES)
             || leaf_count > node_count
             || node_count == 0
         {
@@ -285,6 +310,7 @@ impl SptFile {
             checksum,
             nodes_at: nodes_at as usize,
             parents_at: parents_at as usize,
+            shapes_at: shapes_at as usize,
             map,
         })
     }
@@ -292,11 +318,7 @@ impl SptFile {
     /// Recomputes the checksum over the header and every section.
     pub fn verify(&self) -> Result<(), SptError> {
         let b = &self.map[..];
-        let computed = payload_checksum(
-            &b[..HEADER_BYTES],
-            &b[self.nodes_at..self.parents_at],
-            &b[self.parents_at..],
-        );
+        let computed = payload_checksum(&b[..HEADER_BYTES], &[&b[self.nodes_at..]]);
         if computed != self.checksum {
             return Err(SptError::Checksum {
                 path: self.path.clone(),
@@ -314,7 +336,12 @@ impl SptFile {
 
     /// Each node's parent as a list index (u32::MAX for the root).
     pub fn parents(&self) -> &[u32] {
-        bytemuck::cast_slice(&self.map[self.parents_at..])
+        bytemuck::cast_slice(&self.map[self.parents_at..self.shapes_at])
+    }
+
+    /// Each node's ellipse and normal field, in list order.
+    pub fn shapes(&self) -> &[SplatShape] {
+        bytemuck::cast_slice(&self.map[self.shapes_at..])
     }
 
     pub fn file_bytes(&self) -> u64 {
@@ -330,6 +357,7 @@ impl SptFile {
         SequentialList {
             meta: self.meta.clone(),
             nodes: self.nodes().to_vec(),
+            shapes: self.shapes().to_vec(),
             parents: self.parents().to_vec(),
         }
     }

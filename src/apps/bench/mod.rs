@@ -313,7 +313,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
 struct Sweep<'a> {
     bench: &'a Bench<'a>,
     scene: (&'a Scene, &'a GpuScene),
-    leaves: &'a [crate::tree::NodeRecord],
+    leaves: &'a [(crate::tree::NodeRecord, crate::surfel::shape::SplatShape)],
     path: &'a str,
     cameras: &'a [Camera],
     references: &'a [Reference],

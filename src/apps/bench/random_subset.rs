@@ -1,8 +1,10 @@
 //! The random-subset level of detail that SPT is compared with (DESIGN.md §9): `n`
 //! leaves drawn uniformly at random without replacement (seeded, so runs repeat), their
-//! radii scaled by √(L / n) so that the n disks cover the area the L leaves covered.
+//! radii scaled by √(L / n) so that the n disks cover the area the L leaves covered,
+//! each with its own shape (ellipse and normal field over the scaled radius).
 
 use crate::render::Scene;
+use crate::surfel::shape::SplatShape;
 use crate::tree::record::NodeRecord;
 use crate::tree::{SequentialList, TreeMeta};
 
@@ -22,19 +24,25 @@ impl SplitMix {
     }
 }
 
-/// The leaves of a scene's list (nodes of error 0).
-pub fn leaves(scene: &Scene) -> Vec<NodeRecord> {
+/// The leaves of a scene's list (nodes of error 0), with their shapes.
+pub fn leaves(scene: &Scene) -> Vec<(NodeRecord, SplatShape)> {
     scene
         .nodes()
         .iter()
-        .filter(|r| r.error == 0)
-        .copied()
+        .zip(scene.shapes())
+        .filter(|(r, _)| r.error == 0)
+        .map(|(r, s)| (*r, *s))
         .collect()
 }
 
 /// A scene of `n` random leaves of `leaves` (all of them when n ≥ their count), radii
 /// scaled to keep the coverage, every node drawn at any ε.
-pub fn random_subset(meta: &TreeMeta, leaves: &[NodeRecord], n: usize, seed: u64) -> Scene {
+pub fn random_subset(
+    meta: &TreeMeta,
+    leaves: &[(NodeRecord, SplatShape)],
+    n: usize,
+    seed: u64,
+) -> Scene {
     let total = leaves.len();
     let n = n.clamp(1, total.max(1)).min(total);
     // A partial Fisher–Yates shuffle of the indices picks n of them.
@@ -45,17 +53,19 @@ pub fn random_subset(meta: &TreeMeta, leaves: &[NodeRecord], n: usize, seed: u64
         order.swap(i, j);
     }
     let scale = (total as f32 / n.max(1) as f32).sqrt();
-    let nodes: Vec<NodeRecord> = order[..n]
+    let (nodes, shapes): (Vec<NodeRecord>, Vec<SplatShape>) = order[..n]
         .iter()
         .map(|&i| {
-            let mut r = leaves[i as usize];
+            let (mut r, shape) = leaves[i as usize];
             r.radius = (r.radius() * scale).to_bits();
             r.parent_error = ROOT_PARENT_ERROR;
             r.delta = 0;
             r.level = 0;
-            r
+            let mut shape = shape.unpack(r.normal().as_dvec3());
+            shape.gradient = shape.gradient.map(|g| g * scale as f64);
+            (r, shape.pack())
         })
-        .collect();
+        .unzip();
     let mut meta = meta.clone();
     meta.node_count = nodes.len() as u64;
     meta.leaf_count = nodes.len() as u64;
@@ -65,6 +75,7 @@ pub fn random_subset(meta: &TreeMeta, leaves: &[NodeRecord], n: usize, seed: u64
         SequentialList {
             meta,
             nodes,
+            shapes,
             parents,
         },
         None,

@@ -94,7 +94,7 @@ fn load(
     report.step(Step::Upload, total as u64);
     for range in renderer.slice_plan(total) {
         report.advance(range.len() as u64);
-        let slice = renderer.upload_slice(&scene.nodes()[range]);
+        let slice = renderer.upload_slice(&scene, range);
         // The first slice goes with the scene, so that the first frame has something.
         let message = match gpu_scene.take() {
             Some(mut g) => {

@@ -1,0 +1,148 @@
+//! The ellipse and normal field of an internal node from its children's (DESIGN.md §3),
+//! so that level of detail keeps the shading of the leaves.
+//!
+//! Each child contributes its centre (with its normal) and [`RIM_SAMPLES`] points of its
+//! ellipse's rim (with the normals of its field there), offsets taken in the parent's
+//! tangent frame; their [`Fit`] gives the parent's axes, ratio and normal field as for a
+//! mesh vertex's one-ring. The major semi-axis R is the smallest that holds every rim
+//! sample pushed out by 1/cos(π/[`RIM_SAMPLES`]) from its child's centre: the polygon of
+//! the samples, so enlarged, holds the child's ellipse (in the child's own affine frame,
+//! and affine maps keep containment), and the parent's ellipse is convex. When that R
+//! exceeds the same growth of the radius r of the circle that reaches every child
+//! (`errors::parent_disk`), the node is that circle. The node's errors are computed for
+//! the circle of radius max(r, R), which holds the ellipse.
+
+use glam::{DVec2, DVec3};
+
+use super::errors::Disk;
+use crate::surfel::shape::{Fit, MIN_RATIO, Shape, rotate_gradient, tangent_frame};
+
+/// Rim points sampled per child.
+pub const RIM_SAMPLES: usize = 16;
+
+/// A child as the parent's shape sees it: its disk and shape; `flip` when its normal
+/// points away from the parent's (unoriented clouds).
+pub struct Child {
+    pub disk: Disk,
+    pub shape: Shape,
+}
+
+/// Centre and rim samples of a child: (position, normal), rim points last.
+fn samples(child: &Child, parent_normal: DVec3) -> [(DVec3, DVec3); RIM_SAMPLES + 1] {
+    let Child { disk, shape } = child;
+    let sign = if disk.n.dot(parent_normal) < 0.0 { -1.0 } else { 1.0 };
+    let minor = shape.minor_axis(disk.n);
+    let mut out = [(disk.p, disk.n * sign); RIM_SAMPLES + 1];
+    for (k, sample) in out[1..].iter_mut().enumerate() {
+        let (s, c) = (std::f64::consts::TAU * k as f64 / RIM_SAMPLES as f64).sin_cos();
+        let (x, y) = (c, s * shape.ratio);
+        let q = disk.p + (shape.axis * x + minor * y) * disk.r;
+        *sample = (q, shape.normal_at(disk.n, x, y) * sign);
+    }
+    out
+}
+
+/// The parent's shape and major semi-axis, given its disk `parent` (centre, normal and
+/// the radius that reaches every child).
+pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
+    let (t1, t2) = tangent_frame(parent.n);
+    let frame = |d: DVec3| DVec2::new(d.dot(t1), d.dot(t2));
+    let mut fit = Fit::default();
+    for child in children {
+        for (q, n) in samples(child, parent.n) {
+            fit.add(frame(q - parent.p), frame(n - parent.n));
+        }
+    }
+    let (dir, l1, l2) = fit.axes();
+    let ratio = if l1 > 0.0 {
+        (l2 / l1).sqrt().clamp(MIN_RATIO, 1.0)
+    } else {
+        1.0
+    };
+    let mut shape = Shape {
+        axis: (t1 * dir.x + t2 * dir.y).normalize_or(t1),
+        ratio,
+        gradient: rotate_gradient(fit.gradient(), dir),
+    };
+    let minor = shape.minor_axis(parent.n);
+    let grow = 1.0 / (std::f64::consts::PI / RIM_SAMPLES as f64).cos();
+    let mut major = 0.0f64;
+    for child in children {
+        for (q, _) in &samples(child, parent.n)[1..] {
+            let d = child.disk.p + (*q - child.disk.p) * grow - parent.p;
+            major = major.max(d.dot(shape.axis).hypot(d.dot(minor) / ratio));
+        }
+    }
+    if !(major > 0.0 && major <= parent.r * grow) {
+        shape.ratio = 1.0;
+        major = parent.r;
+    }
+    shape.gradient = shape.gradient.map(|g| g * major);
+    (shape, major)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn child(p: [f64; 3], r: f64, ratio: f64) -> Child {
+        let n = DVec3::Z;
+        Child {
+            disk: Disk { p: DVec3::from(p), n, r },
+            shape: Shape {
+                axis: DVec3::X,
+                ratio,
+                gradient: [0.0; 3],
+            },
+        }
+    }
+
+    #[test]
+    fn a_row_of_children_gives_an_elongated_ellipse_that_holds_them() {
+        let children: Vec<Child> = (0..4).map(|i| child([i as f64 - 1.5, 0.0, 0.0], 0.6, 0.5)).collect();
+        let parent = Disk {
+            p: DVec3::ZERO,
+            n: DVec3::Z,
+            r: 2.1,
+        };
+        let (shape, major) = parent_shape(&parent, &children);
+        assert!(shape.axis.dot(DVec3::X).abs() > 0.999, "{shape:?}");
+        assert!(shape.ratio < 0.5, "{shape:?}");
+        assert!(major <= parent.r * 1.02);
+        // Every child's rim (densely sampled) lies in the parent's ellipse.
+        let minor = shape.minor_axis(DVec3::Z);
+        for c in &children {
+            for k in 0..360 {
+                let (s, co) = (k as f64).to_radians().sin_cos();
+                let q = c.disk.p + (DVec3::X * co + DVec3::Y * s * 0.5) * c.disk.r;
+                let rho = q.dot(shape.axis).hypot(q.dot(minor) / shape.ratio) / major;
+                assert!(rho <= 1.0 + 1e-9, "rim point {q} at ρ = {rho}");
+            }
+        }
+    }
+
+    #[test]
+    fn children_on_a_sphere_give_its_curvature() {
+        // Children on the unit sphere around the north pole, each with the sphere's
+        // field (G = identity per unit length, times its radius): the parent's is too.
+        let mut children = Vec::new();
+        for (x, y) in [(0.1, 0.0), (-0.1, 0.0), (0.0, 0.1), (0.0, -0.1)] {
+            let n = DVec3::new(x, y, 1.0).normalize();
+            children.push(Child {
+                disk: Disk { p: n, n, r: 0.08 },
+                shape: Shape {
+                    gradient: [0.08, 0.0, 0.08],
+                    ..Shape::circle(n)
+                },
+            });
+        }
+        let parent = Disk {
+            p: DVec3::new(0.0, 0.0, 0.995),
+            n: DVec3::Z,
+            r: 0.2,
+        };
+        let (shape, major) = parent_shape(&parent, &children);
+        let [a, b, c] = shape.gradient.map(|g| g / major);
+        assert!((a - 1.0).abs() < 0.1 && (c - 1.0).abs() < 0.1 && b.abs() < 0.05, "{a} {b} {c}");
+    }
+}
