@@ -4,8 +4,10 @@
 //! sphere radii), 512×512, median over the views; printed with `--nocapture`.
 //!
 //! What this asserts is what holds today: the metric is zero for the reference itself,
-//! the aliased 1× mesh is closer to the reference than the splats are, and the numbers
-//! are in range. The quality targets of issue 12 come with its rendering work.
+//! the numbers are in range, and the splats (elliptical, Phong-shaded, curved patches,
+//! coverage-sampled silhouettes) stay within [`MAX_RATIO`] of the aliased mesh's FLIP
+//! with SSIM ≥ [`MIN_SSIM`] (the baseline before them was 4.3–5.3× and 0.82–0.86).
+//! Issue 12's targets (2×, SSIM 0.96) are not reached yet.
 
 mod common;
 
@@ -14,6 +16,10 @@ use spt::render::perceptual::{downsample, flip_mean, ssim_mean};
 use spt::render::{Camera, Image, Mode, Scene, Settings};
 
 const SIZE: u32 = 512;
+/// Largest splat FLIP over the aliased mesh's FLIP (measured 2.9–4.3×).
+const MAX_RATIO: f64 = 4.6;
+/// Smallest SSIM of the splats (measured 0.91–0.94).
+const MIN_SSIM: f64 = 0.9;
 const SUPERSAMPLE: u32 = 4;
 
 /// Median of `values` (nearest rank, as every command reports it).
@@ -87,11 +93,12 @@ fn assert_in_range(f: &Figures, what: &str) {
         f.splat_ssim
     );
     assert!(
-        f.mesh_flip < f.splat_flip,
-        "{what}: the aliased mesh ({}) is no closer to the reference than the splats ({})",
-        f.mesh_flip,
-        f.splat_flip
+        f.splat_flip <= MAX_RATIO * f.mesh_flip,
+        "{what}: splats {} against the aliased mesh's {}",
+        f.splat_flip,
+        f.mesh_flip
     );
+    assert!(f.splat_ssim >= MIN_SSIM, "{what}: SSIM {}", f.splat_ssim);
 }
 
 #[test]

@@ -93,12 +93,21 @@ fn damaged_files_get_clear_errors() {
         "checksum mismatch",
     );
     let mut newer = good.clone();
-    newer[8..12].copy_from_slice(&2u32.to_le_bytes());
+    newer[8..12].copy_from_slice(&(spt::tree::spt_file::VERSION + 1).to_le_bytes());
     expect(
         &newer,
         "newer.spt",
-        |e| matches!(e, SptError::NewerVersion { version: 2, .. }),
+        |e| matches!(e, SptError::NewerVersion { version: 3, .. }),
         "newer spt",
+    );
+    // Version 1 had no shapes section: it is named, with what to do.
+    let mut older = good.clone();
+    older[8..12].copy_from_slice(&1u32.to_le_bytes());
+    expect(
+        &older,
+        "older.spt",
+        |e| matches!(e, SptError::OlderVersion { version: 1, .. }),
+        "convert the model again",
     );
     let mut counts = good.clone();
     counts[32] ^= 0x40; // node count

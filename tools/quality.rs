@@ -68,8 +68,17 @@ fn main() -> anyhow::Result<()> {
     let mut ssims = vec![Vec::new(); configs.len()];
     for k in 0..args.views {
         let azimuth = 360.0 * k as f64 / args.views as f64;
-        let camera = Camera::orbit(scene.meta(), azimuth, 20.0, args.distance, 45f64.to_radians());
-        let reference = downsample(&render(&camera, &mesh, args.size * SUPERSAMPLE)?, SUPERSAMPLE);
+        let camera = Camera::orbit(
+            scene.meta(),
+            azimuth,
+            20.0,
+            args.distance,
+            45f64.to_radians(),
+        );
+        let reference = downsample(
+            &render(&camera, &mesh, args.size * SUPERSAMPLE)?,
+            SUPERSAMPLE,
+        );
         let mut line = format!("view {azimuth:5.1}°:");
         for (i, (name, settings)) in configs.iter().enumerate() {
             let image = render(&camera, settings, args.size)?;

@@ -18,7 +18,11 @@ impl ShadingPass {
     pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> ShadingPass {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gbuffer"),
-            entries: &[fragment_texture(0), fragment_texture(1), fragment_texture(2)],
+            entries: &[
+                fragment_texture(0),
+                fragment_texture(1),
+                fragment_texture(2),
+            ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("shade"),

@@ -9,8 +9,8 @@
 use super::gbuffer::{ADD, color_targets, depth_state};
 use super::gpu_scene::Slice;
 use super::shaders::module;
-use crate::surfel::shape::SplatShape;
 use crate::tree::NodeRecord;
+use crate::tree::record::SplatShape;
 
 /// The three splat pipelines of one culling strategy.
 pub(super) struct SplatPipelines {

@@ -10,8 +10,8 @@ use super::gpu::Gpu;
 use super::gpu_scene::{GpuScene, Slice, SliceUpload};
 use super::shaders::WORKGROUP_SIZE;
 use super::splats::SplatPasses;
-use crate::surfel::shape::SplatShape;
 use crate::tree::NodeRecord;
+use crate::tree::record::SplatShape;
 
 /// Nodes per slice at most: one dispatch of 65,535 workgroups covers a slice.
 const MAX_SLICE_NODES: u64 = 65_535 * WORKGROUP_SIZE as u64;

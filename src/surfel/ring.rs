@@ -21,7 +21,12 @@ use super::mesh::{RADIUS_MARGIN, triangle_terms};
 use super::shape::{Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
 
 /// Offset and normal change of vertex `w` seen from vertex `v`'s tangent frame.
-fn ring_term(p: &impl Fn(u32) -> DVec3, n: &impl Fn(u32) -> DVec3, v: u32, w: u32) -> (DVec2, DVec2) {
+fn ring_term(
+    p: &impl Fn(u32) -> DVec3,
+    n: &impl Fn(u32) -> DVec3,
+    v: u32,
+    w: u32,
+) -> (DVec2, DVec2) {
     let (t1, t2) = tangent_frame(n(v));
     let d = p(w) - p(v);
     let dn = n(w) - n(v);
@@ -48,7 +53,13 @@ fn oriented(normal: DVec3, fit: &Fit) -> Option<Shape> {
 
 /// Covering radius of triangle `t` around its vertex `v` (position `at`, normal
 /// `normal`) in the metric of `shape`.
-fn covering_radius(p: &impl Fn(u32) -> DVec3, at: DVec3, normal: DVec3, shape: &Shape, t: &[u32; 3]) -> f64 {
+fn covering_radius(
+    p: &impl Fn(u32) -> DVec3,
+    at: DVec3,
+    normal: DVec3,
+    shape: &Shape,
+    t: &[u32; 3],
+) -> f64 {
     let minor = shape.minor_axis(normal);
     let map = |q: DVec3| {
         let d = q - at;

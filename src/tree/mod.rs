@@ -27,9 +27,9 @@ use serde::Serialize;
 use crate::io::Bounds;
 use crate::surfel::LeafSurfels;
 use crate::surfel::shape::SplatShape;
-use parent_shape::{Child, parent_shape};
 use errors::{Disk, node_error, parent_disk};
 use hierarchy::Hierarchy;
+use parent_shape::{Child, parent_shape};
 pub use record::NodeRecord;
 use record::encode_up;
 use report::{Finished, Report, Silent, Step};
@@ -214,7 +214,10 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Rep
             .with_min_len(256)
             .map(|&id| {
                 let node = &hierarchy.internal[id as usize - n];
-                (id, internal_record(node, (&records, &shapes), scale, oriented))
+                (
+                    id,
+                    internal_record(node, (&records, &shapes), scale, oriented),
+                )
             })
             .collect();
         for (id, (rec, shape)) in done {

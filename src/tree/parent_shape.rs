@@ -30,7 +30,11 @@ pub struct Child {
 /// Centre and rim samples of a child: (position, normal), rim points last.
 fn samples(child: &Child, parent_normal: DVec3) -> [(DVec3, DVec3); RIM_SAMPLES + 1] {
     let Child { disk, shape } = child;
-    let sign = if disk.n.dot(parent_normal) < 0.0 { -1.0 } else { 1.0 };
+    let sign = if disk.n.dot(parent_normal) < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
     let minor = shape.minor_axis(disk.n);
     let mut out = [(disk.p, disk.n * sign); RIM_SAMPLES + 1];
     for (k, sample) in out[1..].iter_mut().enumerate() {
@@ -88,7 +92,11 @@ mod tests {
     fn child(p: [f64; 3], r: f64, ratio: f64) -> Child {
         let n = DVec3::Z;
         Child {
-            disk: Disk { p: DVec3::from(p), n, r },
+            disk: Disk {
+                p: DVec3::from(p),
+                n,
+                r,
+            },
             shape: Shape {
                 axis: DVec3::X,
                 ratio,
@@ -99,7 +107,9 @@ mod tests {
 
     #[test]
     fn a_row_of_children_gives_an_elongated_ellipse_that_holds_them() {
-        let children: Vec<Child> = (0..4).map(|i| child([i as f64 - 1.5, 0.0, 0.0], 0.6, 0.5)).collect();
+        let children: Vec<Child> = (0..4)
+            .map(|i| child([i as f64 - 1.5, 0.0, 0.0], 0.6, 0.5))
+            .collect();
         let parent = Disk {
             p: DVec3::ZERO,
             n: DVec3::Z,
@@ -143,6 +153,9 @@ mod tests {
         };
         let (shape, major) = parent_shape(&parent, &children);
         let [a, b, c] = shape.gradient.map(|g| g / major);
-        assert!((a - 1.0).abs() < 0.1 && (c - 1.0).abs() < 0.1 && b.abs() < 0.05, "{a} {b} {c}");
+        assert!(
+            (a - 1.0).abs() < 0.1 && (c - 1.0).abs() < 0.1 && b.abs() < 0.05,
+            "{a} {b} {c}"
+        );
     }
 }

@@ -11,13 +11,13 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use crate::surfel::shape::SplatShape;
 use super::report::{Finished, Report, Silent, Step};
 use super::select::PrefixIndex;
 use super::spt_file::{SptFile, is_spt};
 use super::{NodeRecord, SequentialList, TreeMeta, build_list};
 use crate::io::ply::read_ply;
 use crate::surfel::leaf_surfels;
+use crate::surfel::shape::SplatShape;
 
 /// The mesh a model came from, for the reference pass: per-vertex position (relative to
 /// the same origin as the tree), unit normal (the leaf surfel's) and colour.

@@ -36,9 +36,9 @@ use xxhash_rust::xxh3::Xxh3;
 use super::select::TreeView;
 use super::validate;
 use super::{NodeRecord, SequentialList, TreeMeta};
-use crate::surfel::shape::SplatShape;
 use crate::io::Bounds;
 use crate::io::atomic::write_atomically;
+use crate::surfel::shape::SplatShape;
 
 pub const MAGIC: &[u8; 8] = b"spt-tree";
 pub const VERSION: u32 = 2;
