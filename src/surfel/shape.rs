@@ -210,7 +210,8 @@ mod tests {
         let e2 = e1.perp();
         let mut fit = Fit::default();
         for i in 0..12 {
-            let d = DVec2::from_angle(i as f64 * std::f64::consts::FRAC_PI_6) * (0.05 + 0.01 * (i % 3) as f64);
+            let d = DVec2::from_angle(i as f64 * std::f64::consts::FRAC_PI_6)
+                * (0.05 + 0.01 * (i % 3) as f64);
             fit.add(d, e1 * (-k1 * d.dot(e1)) + e2 * (-k2 * d.dot(e2)));
         }
         let g = rotate_gradient(fit.gradient(), e1);
