@@ -67,19 +67,22 @@ fn project_delta(c: vec3<f32>, d: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(f.x * (d.x + c.x * d.z / z) / z, -f.y * (d.y + c.y * d.z / z) / z);
 }
 
-// The EWA resampling filter (Zwicker et al. 2001): the splat's ellipse mapped to the
-// screen by the projection's Jacobian at its centre, A = [J·R u, J·ratio R v], convolved
-// with the prefilter of radius p (covariances add: M = A Aᵀ + p² I), returned as the
-// conic M⁻¹.
-fn prefiltered_conic(center: vec3<f32>, u: vec3<f32>, v: vec3<f32>, p: f32) -> vec3<f32> {
+// The splat's ellipse mapped to the screen by the projection's Jacobian at its centre,
+// A = [J·R u, J·ratio R v], as the covariance A Aᵀ = (M11, M12, M22), pixels².
+fn screen_covariance(center: vec3<f32>, u: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     let a = project_delta(center, u);
     let b = project_delta(center, v);
-    let p2 = p * p;
-    let m11 = a.x * a.x + b.x * b.x + p2;
-    let m12 = a.x * a.y + b.x * b.y;
-    let m22 = a.y * a.y + b.y * b.y + p2;
-    let det = m11 * m22 - m12 * m12;
-    return vec3<f32>(m22, -m12, m11) / det;
+    return vec3<f32>(a.x * a.x + b.x * b.x, a.x * a.y + b.x * b.y, a.y * a.y + b.y * b.y);
+}
+
+// The EWA resampling filter (Zwicker et al. 2001): the screen covariance `m` convolved
+// with the prefilter of radius p (covariances add: M + p² I), returned as the conic
+// (M + p² I)⁻¹.
+fn prefiltered_conic(m: vec3<f32>, p: f32) -> vec3<f32> {
+    let m11 = m.x + p * p;
+    let m22 = m.z + p * p;
+    let det = m11 * m22 - m.y * m.y;
+    return vec3<f32>(m22, -m.y, m11) / det;
 }
 
 fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
@@ -133,8 +136,9 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     out.color = color;
     out.extra = vec4<f32>(r, center_px, ratio);
     out.gradient = vec3<f32>(ratio_a.y, unpack2x16float(packed.b_c));
-    out.conic = prefiltered_conic(center, r * u, ratio * r * v, frame.prefilter_px);
-    out.conic0 = prefiltered_conic(center, r * u, ratio * r * v, 1e-3);
+    let covariance = screen_covariance(center, r * u, ratio * r * v);
+    out.conic = prefiltered_conic(covariance, frame.prefilter_px);
+    out.conic0 = prefiltered_conic(covariance, 1e-3);
     return out;
 }
 
@@ -191,8 +195,8 @@ const SUBSAMPLES = array<vec2<f32>, 4>(
 // A fragment whose pixel centre the patch covers counts as covering the whole pixel:
 // coverage is only partial beside a silhouette, where the prefilter alone made the
 // fragment (the union of what such fragments cover is the pixel's share of surface).
-fn subsample_coverage(in: SplatVarying) -> vec4<f32> {
-    if patch_hit(in, in.clip.xy).object2 <= 1.0 {
+fn subsample_coverage(in: SplatVarying, centre_inside: bool) -> vec4<f32> {
+    if centre_inside {
         return vec4<f32>(1.0);
     }
     var covered = vec4<f32>(0.0);
@@ -209,6 +213,8 @@ struct Hit {
     depth: f32,
     // The normal field there (view space, unit).
     normal: vec3<f32>,
+    // Whether the patch itself (not only the prefilter) covers the pixel centre.
+    centre_inside: bool,
 }
 
 // dᵀ Q d for a conic Q = (Q11, Q12, Q22).
@@ -245,7 +251,7 @@ fn hit(in: SplatVarying) -> Hit {
     let g = in.gradient;
     let v = cross(in.normal, in.tangent_u);
     let n = in.normal + in.tangent_u * (g.x * xy.x + g.y * xy.y) + v * (g.y * xy.x + g.z * xy.y);
-    return Hit(rho2, depth, normalize(n));
+    return Hit(rho2, depth, normalize(n), h.object2 <= 1.0);
 }
 
 struct DepthOnly {
@@ -262,7 +268,7 @@ fn fs_visibility(in: SplatVarying) -> DepthOnly {
     // Fragments the prefilter alone adds (the patch misses the pixel centre) do not
     // occlude: what lies behind them shows through their partial coverage. The patches
     // cover the surface, so a pixel centre on it always meets one.
-    if patch_hit(in, in.clip.xy).object2 > 1.0 {
+    if !h.centre_inside {
         discard;
     }
     let dir = normalize(view_ray(in.clip.xy));
@@ -293,7 +299,7 @@ const MIN_WEIGHT: f32 = 1.0 / 1024.0;
 @fragment
 fn fs_attributes(in: SplatVarying) -> Attributes {
     let h = hit(in);
-    let coverage = subsample_coverage(in);
+    let coverage = subsample_coverage(in, h.centre_inside);
     // A fragment of the prefilter's band weighs by the share of the pixel it covers.
     let w = kernel(h.rho2) * dot(coverage, vec4<f32>(0.25));
     if w < MIN_WEIGHT {

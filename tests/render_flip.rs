@@ -13,7 +13,7 @@ mod common;
 
 use spt::apps::stats::quantile;
 use spt::render::perceptual::{downsample, flip_mean, ssim_mean};
-use spt::render::{Camera, Image, Mode, Scene, Settings};
+use spt::render::{Camera, Image, Scene, Settings};
 
 const SIZE: u32 = 512;
 /// Largest splat FLIP over the aliased mesh's FLIP (measured 2.9–4.3×).
@@ -43,14 +43,7 @@ fn measure(scene: &Scene, what: &str) -> Figures {
             .unwrap()
             .0
     };
-    let mesh = Settings {
-        mode: Mode::Mesh,
-        ..Settings::default()
-    };
-    let leaves = Settings {
-        lod: false,
-        ..Settings::default()
-    };
+    let (mesh, leaves) = (Settings::mesh(), Settings::leaves());
     let no_ewa = Settings {
         ewa: false,
         ..leaves

@@ -27,10 +27,7 @@ fn far_away_level_of_detail_draws_ten_times_fewer_splats_within_a_bounded_flip()
         let camera = Camera::orbit(scene.meta(), k as f64 * 90.0 + 20.0, 20.0, distance, fov);
         let render =
             |settings: Settings| r.render(&scene, &up, &camera, &settings, 512, 512).unwrap();
-        let mesh_settings = Settings {
-            mode: Mode::Mesh,
-            ..Settings::default()
-        };
+        let mesh_settings = Settings::mesh();
         let (mesh, _) = render(mesh_settings);
         let (leaves, s0) = render(Settings {
             error_px: 0.0,

@@ -13,7 +13,7 @@ use std::path::PathBuf;
 use clap::Parser;
 use spt::apps::stats::quantile;
 use spt::render::perceptual::{downsample, flip_map, flip_mean, ssim_mean};
-use spt::render::{Camera, Gpu, Image, Mode, Renderer, Scene, Settings};
+use spt::render::{Camera, Gpu, Image, Renderer, Scene, Settings};
 
 #[derive(Parser)]
 struct Args {
@@ -45,14 +45,7 @@ fn main() -> anyhow::Result<()> {
             .render(&scene, &gpu, camera, settings, size, size)?
             .0)
     };
-    let mesh = Settings {
-        mode: Mode::Mesh,
-        ..Settings::default()
-    };
-    let leaves = Settings {
-        lod: false,
-        ..Settings::default()
-    };
+    let (mesh, leaves) = (Settings::mesh(), Settings::leaves());
     let no_ewa = Settings {
         ewa: false,
         ..leaves

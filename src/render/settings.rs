@@ -71,6 +71,24 @@ impl Default for Settings {
     }
 }
 
+impl Settings {
+    /// The mesh the model came from: the reference that image error is measured against.
+    pub fn mesh() -> Self {
+        Settings {
+            mode: Mode::Mesh,
+            ..Settings::default()
+        }
+    }
+
+    /// Every leaf splat, without level of detail.
+    pub fn leaves() -> Self {
+        Settings {
+            lod: false,
+            ..Settings::default()
+        }
+    }
+}
+
 /// Prefilter radius in pixels.
 pub const PREFILTER_PX: f32 = 1.0;
 /// Pass 1 pushes each splat back by this many radii.

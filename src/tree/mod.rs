@@ -26,7 +26,8 @@ use serde::Serialize;
 
 use crate::io::Bounds;
 use crate::surfel::LeafSurfels;
-use crate::surfel::shape::SplatShape;
+use crate::surfel::Surfel;
+use crate::surfel::shape::{Shape, SplatShape};
 use errors::{Disk, node_error, parent_disk};
 use hierarchy::Hierarchy;
 use parent_shape::{Child, parent_shape};
@@ -84,7 +85,7 @@ pub fn build_hierarchy(leaves: &mut LeafSurfels, report: &dyn Report) -> Hierarc
 
 /// The size errors are stored relative to: the largest extent of the box holding every
 /// leaf disk (> 0 since radii are > 0).
-fn error_scale(surfels: &[crate::surfel::Surfel]) -> f32 {
+fn error_scale(surfels: &[Surfel]) -> f32 {
     let (lo, hi) = surfels
         .par_iter()
         .map(|s| {
@@ -123,16 +124,17 @@ fn internal_record(
     }
     let (disks, colors) = (&disks[..k], &colors[..k]);
     let (disk, color) = parent_disk(disks, colors, oriented);
-    let children: Vec<Child> = node
-        .children()
-        .iter()
-        .zip(disks)
-        .map(|(&c, d)| Child {
+    let mut children = [Child {
+        disk,
+        shape: Shape::circle(disk.n),
+    }; 4];
+    for ((child, &c), d) in children.iter_mut().zip(node.children()).zip(disks) {
+        *child = Child {
             disk: *d,
             shape: shapes[c as usize].unpack(d.n),
-        })
-        .collect();
-    let (shape, major) = parent_shape(&disk, &children);
+        };
+    }
+    let (shape, major) = parent_shape(&disk, &children[..k]);
     let disk = Disk {
         r: disk.r.max(major),
         ..disk

@@ -20,8 +20,9 @@ use crate::surfel::shape::{Fit, MIN_RATIO, Shape, rotate_gradient, tangent_frame
 /// Rim points sampled per child.
 pub const RIM_SAMPLES: usize = 16;
 
-/// A child as the parent's shape sees it: its disk and shape; `flip` when its normal
-/// points away from the parent's (unoriented clouds).
+/// A child as the parent's shape sees it: its disk and shape (a normal pointing away
+/// from the parent's, in an unoriented cloud, is flipped where it is sampled).
+#[derive(Debug, Clone, Copy)]
 pub struct Child {
     pub disk: Disk,
     pub shape: Shape,
