@@ -9,11 +9,22 @@
 @group(1) @binding(1) var<storage, read> survivors: array<u32>;
 @group(1) @binding(2) var<storage, read> shapes: array<SplatShape>;
 
-// A splat's ellipse and normal field, as src/surfel/shape.rs packs it (12 bytes).
+// A splat's ellipse, normal field and clip line, as src/surfel/shape.rs packs it.
 struct SplatShape {
     axis: u32,       // major axis u, octahedral snorm16 × 2
     ratio_a: u32,    // minor / major semi-axis, a: two f16
     b_c: u32,        // b, c: two f16
+    clip: u32,       // clip line: angle θ (2π/65536 steps), offset d (f16; +∞: none)
+}
+
+// The clip line as (cos θ, sin θ, d): the plane points (x, y) (major radii) with
+// x cos θ + y sin θ > d are cut away. None: d = 2, beyond the ellipse.
+fn clip_line(bits: u32) -> vec3<f32> {
+    if (bits >> 16u) == 0x7C00u {
+        return vec3<f32>(1.0, 0.0, 2.0);
+    }
+    let angle = f32(bits & 0xffffu) * (6.283185307179586 / 65536.0);
+    return vec3<f32>(cos(angle), sin(angle), unpack2x16float(bits).y);
 }
 
 struct SplatVarying {
@@ -30,6 +41,10 @@ struct SplatVarying {
     @location(6) @interpolate(flat) conic: vec3<f32>,
     // The same without the prefilter (the flat ellipse's own projection)
     @location(7) @interpolate(flat) conic0: vec3<f32>,
+    // The clip line (cos θ, sin θ, d), see clip_line
+    @location(8) @interpolate(flat) clip_line: vec3<f32>,
+    // How far pass 1 pushes the splat back (view units), before the footprint term
+    @location(9) @interpolate(flat) push: f32,
 }
 
 fn culled() -> SplatVarying {
@@ -139,6 +154,10 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     let covariance = screen_covariance(center, r * u, ratio * r * v);
     out.conic = prefiltered_conic(covariance, frame.prefilter_px);
     out.conic0 = prefiltered_conic(covariance, 1e-3);
+    out.clip_line = clip_line(packed.clip);
+    // A fraction of the radius, plus the node's own error for an inner node: its patch
+    // may lie that far off the surface its neighbours draw.
+    out.push = frame.depth_push * r + node.error;
     return out;
 }
 
@@ -155,7 +174,8 @@ struct PatchHit {
 // The splat is the paraboloid patch h = −½ (x, y) G (x, y)ᵀ over its plane (the surface
 // whose normals are the field), in major radii. From the plane hit (x₀, y₀) the ray
 // moves by (s du, s dv, s dn): s dn + ½ Q(x₀ + s du, y₀ + s dv) = 0, whose root nearest
-// the plane is taken. No root: the ray passes beside the curved patch's silhouette.
+// the plane is taken. No root: the ray passes beside the curved patch's silhouette. A
+// hit beyond the clip line misses too.
 fn patch_hit(in: SplatVarying, pixel: vec2<f32>) -> PatchHit {
     let miss = PatchHit(1e9, -in.center.z, vec2<f32>(0.0));
     let dir = view_ray(pixel);
@@ -184,6 +204,9 @@ fn patch_hit(in: SplatVarying, pixel: vec2<f32>) -> PatchHit {
     let root = qb + select(-1.0, 1.0, qb >= 0.0) * sqrt(disc);
     let s = select(-2.0 * qc / root, 0.0, abs(root) < 1e-30);
     let xy = xy0 + s * dxy;
+    if dot(in.clip_line.xy, xy) > in.clip_line.z {
+        return miss;
+    }
     return PatchHit(xy.x * xy.x + xy.y * xy.y / (ratio * ratio), t + s, xy);
 }
 
@@ -259,9 +282,9 @@ struct DepthOnly {
 }
 
 // Pass 1: depth pushed back along the view ray so that the splats of one surface that
-// share a pixel pass pass 2's depth test and blend: by a fraction of the radius, plus
-// the depth range the pixel's prefilter footprint spans on the splat's plane (large
-// when the surface is seen at a grazing angle and minified).
+// share a pixel pass pass 2's depth test and blend: by a fraction of the radius and the
+// node's error, plus the depth range the pixel's prefilter footprint spans on the
+// splat's plane (large when the surface is seen at a grazing angle and minified).
 @fragment
 fn fs_visibility(in: SplatVarying) -> DepthOnly {
     let h = hit(in);
@@ -275,7 +298,7 @@ fn fs_visibility(in: SplatVarying) -> DepthOnly {
     let c = max(abs(dot(dir, in.normal)), 0.02);
     let pixel = h.depth * 2.0 * frame.tan_half_fov.y * frame.inv_viewport.y;
     let footprint = frame.prefilter_px * pixel * sqrt(1.0 - c * c) / c;
-    return DepthOnly(depth_of(h.depth + frame.depth_push * in.extra.x + footprint));
+    return DepthOnly(depth_of(h.depth + in.push + footprint));
 }
 
 struct Attributes {

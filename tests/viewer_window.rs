@@ -39,10 +39,11 @@ impl XServer {
         let n = (90..200).find(|n| !Path::new(&format!("/tmp/.X{n}-lock")).exists())?;
         let display = format!(":{n}");
         // Statics are never dropped: a shell keeps Xvfb only while this process lives.
+        // -noreset: a server resetting after its last client left refuses the next window.
         let child = Command::new("sh")
             .arg("-c")
             .arg(format!(
-                "Xvfb {display} -screen 0 1280x1024x24 -nolisten tcp > /dev/null 2>&1 & x=$!; \
+                "Xvfb {display} -screen 0 1280x1024x24 -nolisten tcp -noreset > /dev/null 2>&1 & x=$!; \
                  while kill -0 {} 2> /dev/null; do sleep 0.5; done; kill $x",
                 std::process::id()
             ))

@@ -45,7 +45,10 @@ fn main() -> anyhow::Result<()> {
             .render(&scene, &gpu, camera, settings, size, size)?
             .0)
     };
-    let (mesh, leaves) = (Settings::mesh(), Settings::leaves());
+    let (mesh, mut leaves) = (Settings::mesh(), Settings::leaves());
+    leaves.radius_scale = std::env::var("SPT_RS")
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(1.0);
     let no_ewa = Settings {
         ewa: false,
         ..leaves
@@ -92,8 +95,10 @@ fn main() -> anyhow::Result<()> {
                     image::ExtendedColorType::L8,
                 )?;
             }
+            if let Some(dir) = &args.crops {
+                save(&image, &dir.join(format!("view{k}_image{i}.png")))?;
+            }
             if let (Some(dir), 1) = (&args.crops, i) {
-                std::fs::create_dir_all(dir)?;
                 save(&image, &dir.join(format!("view{k}_splats.png")))?;
                 save(&reference, &dir.join(format!("view{k}_reference.png")))?;
                 side_by_side(&image, &reference, &dir.join(format!("view{k}_crop.png")))?;

@@ -4,7 +4,7 @@
 //! node: every node of the prefix, culled in the vertex stage ("direct"), or the
 //! survivors that `cull.rs` compacted, drawn indirectly ("compacted"). WGSL:
 //! `shaders/splat.wgsl`. The splat passes read each drawn node's record (32 bytes) and
-//! shape (12 bytes, [`SplatShape`]); the cull pass reads only the record.
+//! shape (16 bytes, [`SplatShape`]); the cull pass reads only the record.
 
 use super::gbuffer::{ADD, color_targets, depth_state};
 use super::gpu_scene::Slice;

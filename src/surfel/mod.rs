@@ -23,7 +23,7 @@ use crate::io::Geometry;
 use shape::SplatShape;
 
 /// A splat: centre, unit normal, radius (the major semi-axis), colour, and its ellipse
-/// and normal field ([`shape`]). 44 bytes.
+/// and normal field ([`shape`]). 48 bytes.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Surfel {

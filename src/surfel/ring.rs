@@ -12,13 +12,20 @@
 //!   the longest edge otherwise) around the vertex; R = max ρ is the major semi-axis.
 //!   For a round one-ring this is exactly the circle rule. Neighbours whose ellipses
 //!   differ cover a triangle only approximately; the render tests measure holes.
-//! * the normal field G is the least-squares fit of Δn ≈ G d, times R.
+//! * the normal field G is the least-squares fit of Δn ≈ G d, times R;
+//! * on the mesh's border the ellipse is clipped: in a triangle (i, j, k) vertex i has
+//!   out-neighbour j and in-neighbour k, and the chord Σ d(out) − Σ d(in) over its
+//!   triangles cancels where every edge has its twin; on the border it is the offset
+//!   from the border's previous vertex to its next, with the triangles on its left
+//!   (seen from the normal). The clip line is ⟂ to the chord, outside every ring
+//!   vertex (so it never cuts a triangle of the ring): on a convex corner it passes
+//!   through the vertex.
 
 use glam::{DVec2, DVec3, Vec3};
 
 use super::Surfel;
 use super::mesh::{RADIUS_MARGIN, triangle_terms};
-use super::shape::{Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
+use super::shape::{Clip, Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
 
 /// Offset and normal change of vertex `w` seen from vertex `v`'s tangent frame.
 fn ring_term(
@@ -48,6 +55,32 @@ fn oriented(normal: DVec3, fit: &Fit) -> Option<Shape> {
         axis: (t1 * dir.x + t2 * dir.y).normalize_or(t1),
         ratio: (l2 / l1).sqrt().clamp(MIN_RATIO, 1.0),
         gradient: rotate_gradient(fit.gradient(), dir),
+        clip: None,
+    })
+}
+
+/// The border's outward direction at a vertex, in its tangent frame, from its chord
+/// (see the module doc); zero inside the mesh, where the chord cancels to rounding.
+fn border_normal(chord: DVec2, fit: &Fit) -> DVec2 {
+    let spread = fit.moments[0] + fit.moments[2];
+    if chord.length_squared() <= 1e-12 * spread {
+        return DVec2::ZERO;
+    }
+    DVec2::new(chord.y, -chord.x).normalize_or_zero()
+}
+
+/// The clip line of a border vertex (`outward` in its tangent frame, `reach` the
+/// largest offset of a ring vertex along it) on an ellipse of major radius `r`.
+fn border_clip(normal: DVec3, outward: DVec2, reach: f64, shape: &Shape, r: f64) -> Option<Clip> {
+    if outward == DVec2::ZERO {
+        return None;
+    }
+    let (t1, t2) = tangent_frame(normal);
+    let o = t1 * outward.x + t2 * outward.y;
+    let uv = DVec2::new(o.dot(shape.axis), o.dot(shape.minor_axis(normal))).try_normalize()?;
+    Some(Clip {
+        normal: uv,
+        offset: reach.max(0.0) / r,
     })
 }
 
@@ -83,12 +116,14 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
     let normals: Vec<Vec3> = surfels.iter().map(|q| q.normal).collect();
     let n = |i: u32| normals[i as usize].as_dvec3();
     let mut fits = vec![Fit::default(); points.len()];
+    let mut chords = vec![DVec2::ZERO; points.len()];
     for t in triangles {
         for (k, &v) in t.iter().enumerate() {
-            for w in [t[(k + 1) % 3], t[(k + 2) % 3]] {
-                let (d, dn) = ring_term(&p, &n, v, w);
-                fits[v as usize].add(d, dn);
-            }
+            let (d_out, dn_out) = ring_term(&p, &n, v, t[(k + 1) % 3]);
+            let (d_in, dn_in) = ring_term(&p, &n, v, t[(k + 2) % 3]);
+            fits[v as usize].add(d_out, dn_out);
+            fits[v as usize].add(d_in, dn_in);
+            chords[v as usize] += d_out - d_in;
         }
     }
     let shapes: Vec<Option<Shape>> = fits
@@ -96,13 +131,26 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
         .enumerate()
         .map(|(v, f)| oriented(n(v as u32), f))
         .collect();
-    drop(fits);
+    let outward: Vec<DVec2> = chords
+        .iter()
+        .zip(&fits)
+        .map(|(c, f)| border_normal(*c, f))
+        .collect();
+    drop((fits, chords));
     let mut major = vec![0.0f64; points.len()];
+    let mut reach = vec![0.0f64; points.len()];
     for t in triangles {
-        for &v in t {
+        for (k, &v) in t.iter().enumerate() {
             if let Some(shape) = &shapes[v as usize] {
                 let r = covering_radius(&p, p(v), n(v), shape, t);
                 major[v as usize] = major[v as usize].max(r);
+            }
+            let out = outward[v as usize];
+            if out != DVec2::ZERO {
+                for w in [t[(k + 1) % 3], t[(k + 2) % 3]] {
+                    let along = out.dot(ring_term(&p, &n, v, w).0);
+                    reach[v as usize] = reach[v as usize].max(along);
+                }
             }
         }
     }
@@ -112,10 +160,84 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
             Some(mut shape) => {
                 let r = major[v] * (1.0 + RADIUS_MARGIN);
                 shape.gradient = shape.gradient.map(|g| g * r);
+                shape.clip = border_clip(n(v as u32), outward[v], reach[v], &shape, r);
                 surfel.radius = (r / s) as f32;
                 surfel.shape = shape.pack();
             }
             None => surfel.shape = SplatShape::circle(surfel.normal),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bytemuck::Zeroable;
+
+    /// A 3×3 grid of unit squares in the plane z = 0, two triangles each, wound
+    /// counter-clockwise seen from +z.
+    fn grid() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let points = (0..16)
+            .map(|i| Vec3::new((i % 4) as f32, (i / 4) as f32, 0.0))
+            .collect();
+        let mut triangles = Vec::new();
+        for y in 0..3u32 {
+            for x in 0..3u32 {
+                let i = 4 * y + x;
+                triangles.push([i, i + 1, i + 5]);
+                triangles.push([i, i + 5, i + 4]);
+            }
+        }
+        (points, triangles)
+    }
+
+    #[test]
+    fn border_splats_are_clipped_at_the_border_and_inner_ones_not() {
+        let (points, triangles) = grid();
+        let mut surfels: Vec<Surfel> = points
+            .iter()
+            .map(|&p| Surfel {
+                position: p,
+                normal: Vec3::Z,
+                ..Surfel::zeroed()
+            })
+            .collect();
+        ring_shapes(&points, 1.0, &triangles, &mut surfels);
+        for (i, s) in surfels.iter().enumerate() {
+            let (x, y) = ((i % 4) as f64, (i / 4) as f64);
+            let border = x == 0.0 || x == 3.0 || y == 0.0 || y == 3.0;
+            let shape = s.shape.unpack(DVec3::Z);
+            assert_eq!(shape.clip.is_some(), border, "vertex {i}: {shape:?}");
+            let Some(clip) = shape.clip else { continue };
+            // Plane coordinates of a point, in major radii.
+            let r = s.radius as f64;
+            let at = |px: f64, py: f64| {
+                let d = DVec3::new(px - x, py - y, 0.0);
+                DVec2::new(d.dot(shape.axis), d.dot(shape.minor_axis(DVec3::Z))) / r
+            };
+            let kept = |px, py| clip.normal.dot(at(px, py)) <= clip.offset + 1e-9;
+            // Every point of the grid (so every triangle of the ring) is kept; a point
+            // half a cell beyond the nearest border is cut away.
+            for q in &points {
+                assert!(kept(q.x as f64, q.y as f64), "vertex {i} cuts {q}");
+            }
+            let (ox, oy) = (
+                if x == 0.0 {
+                    -0.5
+                } else if x == 3.0 {
+                    3.5
+                } else {
+                    x
+                },
+                if y == 0.0 {
+                    -0.5
+                } else if y == 3.0 {
+                    3.5
+                } else {
+                    y
+                },
+            );
+            assert!(!kept(ox, oy), "vertex {i} keeps ({ox}, {oy}): {clip:?}");
         }
     }
 }

@@ -68,6 +68,8 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
         axis: (t1 * dir.x + t2 * dir.y).normalize_or(t1),
         ratio,
         gradient: rotate_gradient(fit.gradient(), dir),
+        // Children's clip lines are not merged: an inner node's ellipse holds them whole.
+        clip: None,
     };
     let minor = shape.minor_axis(parent.n);
     let grow = 1.0 / (std::f64::consts::PI / RIM_SAMPLES as f64).cos();
@@ -102,6 +104,7 @@ mod tests {
                 axis: DVec3::X,
                 ratio,
                 gradient: [0.0; 3],
+                clip: None,
             },
         }
     }

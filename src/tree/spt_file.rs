@@ -18,7 +18,7 @@
 //!    152     8  offset of the parent indices (u32 per node, u32::MAX for the root)
 //!    160     8  file size
 //!    168     8  checksum: XXH3-64 of the header (this field zeroed) and all sections
-//!    176     8  offset of the splat shapes (12 bytes per node, after the parents)
+//!    176     8  offset of the splat shapes (16 bytes per node, after the parents)
 //!    184     4  splat shape size (12)
 //!    188    68  zero
 //! ```

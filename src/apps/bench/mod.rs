@@ -459,11 +459,11 @@ fn write_results(
     for pair in report::equal_budget_pairs(rows) {
         if report::verdict(pair.0, pair.1) == "**no**" {
             println!(
-                "note      {} ε {}: random subset {:.2} dB > SPT {:.2} dB at {:.0} / {:.0} splats",
+                "note      {} ε {}: random subset FLIP {:.4} < SPT {:.4} at {:.0} / {:.0} splats",
                 pair.0.path,
                 pair.0.eps_px,
-                pair.1.m.psnr_db,
-                pair.0.m.psnr_db,
+                pair.1.m.flip,
+                pair.0.m.flip,
                 pair.1.m.splats,
                 pair.0.m.splats
             );

@@ -1,4 +1,4 @@
-//! `speed_vs_error.png`: GPU ms (median, log scale) against PSNR, one curve per strategy
+//! `speed_vs_error.png`: GPU ms (median, log scale) against FLIP, one curve per strategy
 //! and orbit distance, points along a curve being the ε sweep. Drawn with plotters into
 //! memory, then written atomically.
 
@@ -26,7 +26,7 @@ fn register_font() {
     });
 }
 
-/// One curve: label, colour, marker (0 near, 1 mid, 2 far), points (GPU ms, PSNR dB) in
+/// One curve: label, colour, marker (0 near, 1 mid, 2 far), points (GPU ms, FLIP) in
 /// ε order.
 type Curve = (String, RGBColor, usize, Vec<(f64, f64)>);
 
@@ -47,7 +47,7 @@ fn curves(rows: &[Row]) -> Vec<Curve> {
                         && (r.strategy == strategy
                             || (strategy == Strategy::Spt && r.strategy == Strategy::NoLod))
                 })
-                .filter_map(|r| r.m.gpu_ms_median.map(|ms| (r.eps_px, ms, r.m.psnr_db)))
+                .filter_map(|r| r.m.gpu_ms_median.map(|ms| (r.eps_px, ms, r.m.flip)))
                 .collect();
             points.sort_by(|a, b| a.0.total_cmp(&b.0));
             if !points.is_empty() {
@@ -80,7 +80,8 @@ pub fn write(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result<()>
         (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
     }
     let (x0, x1) = ((x0 * 0.8).max(1e-3), x1 * 1.25);
-    let (y0, y1) = (y0 - 1.0, y1 + 1.0);
+    // FLIP is in [0, 1], lower is better: from 0 to a margin above the worst.
+    let (y0, y1) = (0.0, (y1 * 1.1).max(y0 + 1e-3));
     let mut pixels = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut pixels, SIZE).into_drawing_area();
@@ -103,7 +104,10 @@ pub fn write(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result<()>
         chart
             .configure_mesh()
             .x_desc("GPU ms per frame (median, log scale)")
-            .y_desc(format!("PSNR against the {} (dB)", env.reference))
+            .y_desc(format!(
+                "FLIP against the {}, 4×4 supersampled (lower is better)",
+                env.reference
+            ))
             .label_style(("sans-serif", 16))
             .x_labels(8)
             .light_line_style(RGBColor(235, 235, 235))
@@ -129,7 +133,7 @@ pub fn write(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result<()>
         }
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
+            .position(SeriesLabelPosition::UpperRight)
             .label_font(("sans-serif", 15))
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)

@@ -1,7 +1,7 @@
 //! The random-subset level of detail that SPT is compared with (DESIGN.md §9): `n`
 //! leaves drawn uniformly at random without replacement (seeded, so runs repeat), their
 //! radii scaled by √(L / n) so that the n disks cover the area the L leaves covered,
-//! each with its own shape (ellipse and normal field over the scaled radius).
+//! each with its own shape (ellipse, normal field and clip line over the scaled radius).
 
 use crate::render::Scene;
 use crate::surfel::shape::SplatShape;
@@ -63,6 +63,10 @@ pub fn random_subset(
             r.level = 0;
             let mut shape = shape.unpack(r.normal().as_dvec3());
             shape.gradient = shape.gradient.map(|g| g * scale as f64);
+            // The border stays where it was: the same line, in the larger radius.
+            if let Some(clip) = &mut shape.clip {
+                clip.offset /= scale as f64;
+            }
             (r, shape.pack())
         })
         .unzip();

@@ -209,18 +209,20 @@ pub fn summary(env: &Environment, rows: &[Row], checks: &[String]) -> String {
     );
     let _ = writeln!(
         s,
-        "| path | ε px | SPT splats | SPT PSNR dB | random splats | random PSNR dB | SPT ≥ random |"
+        "| path | ε px | SPT splats | SPT FLIP | SPT PSNR dB | random splats | random FLIP | random PSNR dB | SPT better |"
     );
-    let _ = writeln!(s, "| --- | --- | --- | --- | --- | --- | --- |");
+    let _ = writeln!(s, "| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for (spt, random) in equal_budget_pairs(rows) {
         let _ = writeln!(
             s,
-            "| {} | {} | {:.0} | {} | {:.0} | {} | {} |",
+            "| {} | {} | {:.0} | {:.4} | {} | {:.0} | {:.4} | {} | {} |",
             spt.path,
             spt.eps_px,
             spt.m.splats,
+            spt.m.flip,
             psnr(spt.m.psnr_db),
             random.m.splats,
+            random.m.flip,
             psnr(random.m.psnr_db),
             verdict(spt, random)
         );
@@ -236,14 +238,14 @@ pub fn summary(env: &Environment, rows: &[Row], checks: &[String]) -> String {
     s
 }
 
-/// PSNR differences below this are reported as equal (when SPT draws every leaf, the
+/// FLIP differences below this are reported as equal (when SPT draws every leaf, the
 /// "subset" is all leaves and the images are the same but for blending order).
-pub const EQUAL_DB: f64 = 0.05;
+pub const EQUAL_FLIP: f64 = 2e-4;
 
-/// "yes", "equal" or "**no**": SPT's PSNR against the random subset's.
+/// "yes", "equal" or "**no**": whether SPT's FLIP is lower than the random subset's.
 pub fn verdict(spt: &Row, random: &Row) -> &'static str {
-    let d = spt.m.psnr_db - random.m.psnr_db;
-    if d.abs() < EQUAL_DB {
+    let d = random.m.flip - spt.m.flip;
+    if d.abs() < EQUAL_FLIP {
         "equal"
     } else if d > 0.0 {
         "yes"
