@@ -1,8 +1,9 @@
 //! Splat image quality against the mesh, view by view (issue 12): FLIP and SSIM of the
 //! splats (leaves only, without the prefilter, at ε = 1 px) and of the aliased mesh,
 //! against the mesh rendered at 4×4 the size and averaged in linear light; and, with
-//! `--crops`, side-by-side close-ups (splats | mesh reference) enlarged 3× without
-//! filtering, for the README.
+//! `--crops`, each image (`view{k}_image{i}.png`, i in the order printed), the FLIP maps,
+//! and side-by-side close-ups (splats | mesh reference) enlarged 3× without filtering,
+//! for the README.
 //!
 //! ```text
 //! cargo run --release --example quality -- data/torus_knot.ply [--views 8] [--crops DIR]
@@ -45,10 +46,7 @@ fn main() -> anyhow::Result<()> {
             .render(&scene, &gpu, camera, settings, size, size)?
             .0)
     };
-    let (mesh, mut leaves) = (Settings::mesh(), Settings::leaves());
-    leaves.radius_scale = std::env::var("SPT_RS")
-        .map(|s| s.parse().unwrap())
-        .unwrap_or(1.0);
+    let (mesh, leaves) = (Settings::mesh(), Settings::leaves());
     let no_ewa = Settings {
         ewa: false,
         ..leaves
