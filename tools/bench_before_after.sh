@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# GPU ms of `spt bench --quick` for an older commit and this checkout, alternated RUNS
+# times on one machine (the cost table of issue 12 in the README):
+#   tools/bench_before_after.sh COMMIT [MODEL]      (RUNS=3 by default)
+# Builds COMMIT in a worktree under $TMPDIR; writes $OUT/{old,new}_N/results.csv and
+# prints, per path and culling, the leaves-only GPU ms medians of each run.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+commit=${1:?usage: tools/bench_before_after.sh COMMIT [MODEL]}
+model=${2:-data/torus_knot.ply}
+runs=${RUNS:-3}
+out=${OUT:-$(mktemp -d)}
+old=${TMPDIR:-/tmp}/spt-before-$commit
+[ -d "$old" ] || git worktree add --detach "$old" "$commit" > /dev/null
+CARGO_TARGET_DIR="$old/target" cargo build --release --quiet --bin spt --manifest-path "$old/Cargo.toml"
+cargo build --release --quiet --bin spt
+for i in $(seq "$runs"); do
+  "$old/target/release/spt" bench "$model" --out "$out/old_$i" --quick --frames 5 > /dev/null
+  ./target/release/spt bench "$model" --out "$out/new_$i" --quick --frames 5 > /dev/null
+done
+for f in "$out"/*_*/results.csv; do
+  awk -F, -v run="$(basename "$(dirname "$f")")" \
+    'NR > 1 && $5 == 0 { printf "%-6s %-12s %-8s %s ms\n", run, $2, $4, $9 }' "$f"
+done | sort -k2,3 -k1
+echo "results in $out"
