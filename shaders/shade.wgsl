@@ -8,6 +8,22 @@
 @group(1) @binding(1) var normal_sum: texture_2d<f32>;
 // The four coverage samples of each pixel (max over the splats drawn there).
 @group(1) @binding(2) var coverage: texture_2d<f32>;
+// The depth of the nearest surface at the pixel centre (reversed Z; 0: none).
+@group(1) @binding(3) var depth: texture_depth_2d;
+
+// Whether a surface covers the centre of the pixel and of its four neighbours: then the
+// pixel shows no background, whatever the coverage samples that passed the depth test
+// say (beside an occluding edge, the hidden surface's samples failed it).
+fn surrounded(texel: vec2<i32>) -> bool {
+    let size = vec2<i32>(textureDimensions(depth));
+    var all = textureLoad(depth, texel, 0) > 0.0;
+    for (var k = 0; k < 4; k++) {
+        let step = select(vec2<i32>(0, 1 - 2 * (k & 1)), vec2<i32>(1 - 2 * (k & 1), 0), k < 2);
+        let at = clamp(texel + step, vec2<i32>(0), size - 1);
+        all = all && textureLoad(depth, at, 0) > 0.0;
+    }
+    return all;
+}
 
 @fragment
 fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
@@ -29,9 +45,10 @@ fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let diffuse = max(dot(n, l), 0.0);
     let specular = frame.specular * pow(max(dot(n, h), 0.0), 32.0) * select(0.0, 1.0, diffuse > 0.0);
     let shaded = color * (0.25 + 0.75 * diffuse) + vec3<f32>(specular);
-    // The share of the pixel's samples that a splat covers; pixels reached only by the
+    // The share of the pixel's samples that the splats cover (all of it where the pixel
+    // and its neighbours show a surface at their centres); pixels reached only by the
     // fading rims of splats also blend into the background when coverage_weight is set.
-    var alpha = dot(textureLoad(coverage, texel, 0), vec4<f32>(0.25));
+    var alpha = select(dot(textureLoad(coverage, texel, 0), vec4<f32>(0.25)), 1.0, surrounded(texel));
     if frame.coverage_weight > 0.0 {
         alpha = min(alpha, clamp(c.w / frame.coverage_weight, 0.0, 1.0));
     }

@@ -215,18 +215,25 @@ const SUBSAMPLES = array<vec2<f32>, 4>(
     vec2<f32>(0.125, -0.375), vec2<f32>(0.375, 0.125), vec2<f32>(-0.125, 0.375), vec2<f32>(-0.375, -0.125));
 
 // Which of the pixel's four coverage samples the splat's patch covers (1 or 0 each).
-// A fragment whose pixel centre the patch covers counts as covering the whole pixel:
-// coverage is only partial beside a silhouette, where the prefilter alone made the
-// fragment (the union of what such fragments cover is the pixel's share of surface).
-fn subsample_coverage(in: SplatVarying, centre_inside: bool) -> vec4<f32> {
-    if centre_inside {
-        return vec4<f32>(1.0);
-    }
+fn subsample_coverage(in: SplatVarying) -> vec4<f32> {
     var covered = vec4<f32>(0.0);
     for (var k = 0u; k < 4u; k++) {
         covered[k] = select(0.0, 1.0, patch_hit(in, in.clip.xy + SUBSAMPLES[k]).object2 <= 1.0);
     }
     return covered;
+}
+
+// Farthest coverage sample from the pixel centre (pixels), with a margin of 2 for the
+// patch's curvature and perspective, which the projected ellipse leaves out.
+const SUBSAMPLE_REACH: f32 = 2.0 * 0.3953;
+
+// The projected ellipse's ρ (1 on its rim) at the pixel centre, and how much ρ changes
+// at most over SUBSAMPLE_REACH pixels: √λmax of the conic times the reach.
+fn screen_rho(in: SplatVarying) -> vec2<f32> {
+    let q = in.conic0;
+    let d = in.clip.xy - in.extra.yz;
+    let lmax = 0.5 * (q.x + q.z) + sqrt(0.25 * (q.x - q.z) * (q.x - q.z) + q.y * q.y);
+    return vec2<f32>(sqrt(conic_at(q, d)), sqrt(lmax) * SUBSAMPLE_REACH);
 }
 
 struct Hit {
@@ -238,6 +245,8 @@ struct Hit {
     normal: vec3<f32>,
     // Whether the patch itself (not only the prefilter) covers the pixel centre.
     centre_inside: bool,
+    // The pixel's four coverage samples that the patch covers.
+    coverage: vec4<f32>,
 }
 
 // dᵀ Q d for a conic Q = (Q11, Q12, Q22).
@@ -245,24 +254,30 @@ fn conic_at(q: vec3<f32>, d: vec2<f32>) -> f32 {
     return q.x * d.x * d.x + 2.0 * q.y * d.x * d.y + q.z * d.y * d.y;
 }
 
-// The pixel centre's ray against the splat: outside the patch (and outside the
-// prefiltered screen ellipse) → discard.
+// The pixel centre's ray against the splat. A fragment whose centre the patch misses
+// is kept if the prefilter's band reaches it or the patch covers one of its coverage
+// samples (then with weight 0: it only adds coverage); else it is discarded.
 fn hit(in: SplatVarying) -> Hit {
     let h = patch_hit(in, in.clip.xy);
     var rho2 = h.object2;
-    if frame.ewa > 0.0 {
-        // The prefilter widens the splat by a band around its projected rim; inside the
-        // rim, where the curved patch turns away from the ray, it adds nothing.
-        let d = in.clip.xy - in.extra.yz;
-        let screen2 = conic_at(in.conic, d);
-        if h.object2 > 1.0 && conic_at(in.conic0, d) > 1.0 {
-            rho2 = min(rho2, screen2);
+    let rho = screen_rho(in);
+    // Far enough inside the projected ellipse, all four samples are covered.
+    var coverage = vec4<f32>(1.0);
+    if h.object2 > 1.0 {
+        if frame.ewa > 0.0 && rho.x > 1.0 {
+            // The prefilter widens the splat by a band around its projected rim; inside
+            // the rim, where the curved patch turns away from the ray, it adds nothing.
+            rho2 = min(rho2, conic_at(in.conic, in.clip.xy - in.extra.yz));
         }
-    }
-    // Both passes keep the same fragments: beyond the rim, or where the weight is too
-    // small for the half-float targets (it would leave colour 0 with w > 0: black).
-    if rho2 > 1.0 || kernel(rho2) < MIN_WEIGHT {
-        discard;
+        coverage = select(vec4<f32>(0.0), subsample_coverage(in), rho.x <= 1.0 + rho.y);
+        if outside(rho2) && all(coverage == vec4<f32>(0.0)) {
+            discard;
+        }
+    } else if rho.x > 1.0 - rho.y {
+        // Near the rim: samples may fall outside. A fragment whose centre the patch
+        // covers counts as covering at least one sample (the centre's share).
+        coverage = subsample_coverage(in);
+        coverage.x = select(coverage.x, 1.0, all(coverage == vec4<f32>(0.0)));
     }
     // Every point of the splat lies within ±R of its centre's depth. Under the prefilter
     // a pixel beside a splat meets its plane far from it (or not at all): keep its depth
@@ -274,7 +289,13 @@ fn hit(in: SplatVarying) -> Hit {
     let g = in.gradient;
     let v = cross(in.normal, in.tangent_u);
     let n = in.normal + in.tangent_u * (g.x * xy.x + g.y * xy.y) + v * (g.y * xy.x + g.z * xy.y);
-    return Hit(rho2, depth, normalize(n), h.object2 <= 1.0);
+    return Hit(rho2, depth, normalize(n), h.object2 <= 1.0, coverage);
+}
+
+// Beyond the rim (of the patch, or of the prefilter's band), or where the weight is too
+// small for the half-float targets (it would leave colour 0 with w > 0: black).
+fn outside(rho2: f32) -> bool {
+    return rho2 > 1.0 || kernel(rho2) < MIN_WEIGHT;
 }
 
 struct DepthOnly {
@@ -322,11 +343,10 @@ const MIN_WEIGHT: f32 = 1.0 / 1024.0;
 @fragment
 fn fs_attributes(in: SplatVarying) -> Attributes {
     let h = hit(in);
-    let coverage = subsample_coverage(in, h.centre_inside);
     // A fragment of the prefilter's band weighs by the share of the pixel it covers.
-    let w = kernel(h.rho2) * dot(coverage, vec4<f32>(0.25));
+    var w = select(kernel(h.rho2) * dot(h.coverage, vec4<f32>(0.25)), kernel(h.rho2), h.centre_inside);
     if w < MIN_WEIGHT {
-        discard;
+        w = 0.0;
     }
     let q = view_ray(in.clip.xy) * h.depth;
     // Two-sided: a normal facing away from the eye is flipped before blending.
@@ -334,7 +354,7 @@ fn fs_attributes(in: SplatVarying) -> Attributes {
     var out: Attributes;
     out.color = vec4<f32>(in.color.rgb * w, w);
     out.normal = vec4<f32>(n * w, h.depth * w);
-    out.coverage = coverage;
+    out.coverage = h.coverage;
     out.depth = depth_of(h.depth);
     return out;
 }
@@ -343,6 +363,9 @@ fn fs_attributes(in: SplatVarying) -> Attributes {
 @fragment
 fn fs_points(in: SplatVarying) -> Attributes {
     let h = hit(in);
+    if outside(h.rho2) {
+        discard;
+    }
     let q = view_ray(in.clip.xy) * h.depth;
     let n = select(h.normal, -h.normal, dot(in.normal, q) > 0.0);
     var out: Attributes;

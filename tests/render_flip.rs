@@ -8,7 +8,8 @@
 //! clipped at the mesh's border, coverage-sampled silhouettes) stay within
 //! [`MAX_RATIO`] of the aliased mesh's FLIP with SSIM ≥ [`MIN_SSIM`] (the baseline
 //! before them was 4.3–5.3× and 0.82–0.86).
-//! Issue 12's targets (2×, SSIM 0.96) are not reached yet.
+//! Issue 12's targets (2×, SSIM 0.96) are not reached; the README says why 2× of the
+//! aliased mesh is a bar that even another triangulation of the same samples misses.
 
 mod common;
 
@@ -17,10 +18,10 @@ use spt::render::perceptual::{downsample, flip_mean, ssim_mean};
 use spt::render::{Camera, Image, Scene, Settings};
 
 const SIZE: u32 = 512;
-/// Largest splat FLIP over the aliased mesh's FLIP (measured 2.8–4.1×).
-const MAX_RATIO: f64 = 4.4;
-/// Smallest SSIM of the splats (measured 0.937–0.945).
-const MIN_SSIM: f64 = 0.93;
+/// Largest splat FLIP over the aliased mesh's FLIP (measured 2.6–4.0×).
+const MAX_RATIO: f64 = 4.2;
+/// Smallest SSIM of the splats (measured 0.943–0.955).
+const MIN_SSIM: f64 = 0.94;
 const SUPERSAMPLE: u32 = 4;
 
 /// Median of `values` (nearest rank, as every command reports it).

@@ -5,8 +5,14 @@
 //! and side-by-side close-ups (splats | mesh reference) enlarged 3× without filtering,
 //! for the README.
 //!
+//! `--mesh` scores other meshes of the same surface at 1× on the same views (another
+//! triangulation of the same samples from `tools/alt_triangulation.py`, or a denser
+//! sampling); `--reference` takes the reference from another mesh of the same surface
+//! (a denser sampling: closer to the surface itself than the model's own triangles).
+//!
 //! ```text
 //! cargo run --release --example quality -- data/torus_knot.ply [--views 8] [--crops DIR]
+//!     [--mesh OTHER.ply ...] [--reference DENSER.ply]
 //! ```
 
 use std::path::PathBuf;
@@ -31,6 +37,18 @@ struct Args {
     /// Write, per view, the splats, the reference and a side-by-side crop into DIR.
     #[arg(long)]
     crops: Option<PathBuf>,
+    /// Also score this mesh of the same surface, drawn as triangles at 1× (repeatable).
+    #[arg(long)]
+    mesh: Vec<PathBuf>,
+    /// Render the reference from this mesh of the same surface instead of the model's.
+    #[arg(long)]
+    reference: Option<PathBuf>,
+}
+
+/// A model on the GPU.
+struct Model {
+    scene: Scene,
+    gpu: spt::render::GpuScene,
 }
 
 const SUPERSAMPLE: u32 = 4;
@@ -39,43 +57,63 @@ fn main() -> anyhow::Result<()> {
     let args = Args::parse();
     let renderer = Renderer::new(Gpu::new(None)?);
     eprintln!("adapter: {}", renderer.gpu.describe());
-    let scene = Scene::open(&args.model)?;
-    let gpu = renderer.upload(&scene);
-    let render = |camera: &Camera, settings: &Settings, size: u32| -> anyhow::Result<Image> {
-        Ok(renderer
-            .render(&scene, &gpu, camera, settings, size, size)?
-            .0)
+    let open = |path: &PathBuf| -> anyhow::Result<Model> {
+        let scene = Scene::open(path)?;
+        let gpu = renderer.upload(&scene);
+        Ok(Model { scene, gpu })
     };
+    let model = open(&args.model)?;
+    let others = args
+        .mesh
+        .iter()
+        .map(open)
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let reference_model = args.reference.as_ref().map(open).transpose()?;
+    let render =
+        |m: &Model, camera: &Camera, settings: &Settings, size: u32| -> anyhow::Result<Image> {
+            Ok(renderer
+                .render(&m.scene, &m.gpu, camera, settings, size, size)?
+                .0)
+        };
     let (mesh, leaves) = (Settings::mesh(), Settings::leaves());
     let no_ewa = Settings {
         ewa: false,
         ..leaves
     };
     let lod = Settings::default();
-    let configs = [
-        ("mesh 1×", mesh),
-        ("leaves", leaves),
-        ("no EWA", no_ewa),
-        ("ε=1", lod),
+    let mut configs = vec![
+        ("mesh 1×".to_string(), mesh, &model),
+        ("leaves".to_string(), leaves, &model),
+        ("no EWA".to_string(), no_ewa, &model),
+        ("ε=1".to_string(), lod, &model),
     ];
+    for (path, other) in args.mesh.iter().zip(&others) {
+        let name = path.file_name().unwrap_or_default().to_string_lossy();
+        configs.push((format!("{name} 1×"), mesh, other));
+    }
     let mut flips = vec![Vec::new(); configs.len()];
     let mut ssims = vec![Vec::new(); configs.len()];
     for k in 0..args.views {
         let azimuth = 360.0 * k as f64 / args.views as f64;
         let camera = Camera::orbit(
-            scene.meta(),
+            model.scene.meta(),
             azimuth,
             20.0,
             args.distance,
             45f64.to_radians(),
         );
         let reference = downsample(
-            &render(&camera, &mesh, args.size * SUPERSAMPLE)?,
+            &render(
+                reference_model.as_ref().unwrap_or(&model),
+                &camera,
+                &mesh,
+                args.size * SUPERSAMPLE,
+            )?,
             SUPERSAMPLE,
         );
         let mut line = format!("view {azimuth:5.1}°:");
-        for (i, (name, settings)) in configs.iter().enumerate() {
-            let image = render(&camera, settings, args.size)?;
+        for (i, (name, settings, m)) in configs.iter().enumerate() {
+            let image = render(m, &camera, settings, args.size)?;
             let (f, s) = (flip_mean(&image, &reference), ssim_mean(&image, &reference));
             let (inside, rim) = split(&flip_map(&image, &reference), &image, &reference);
             line += &format!("  {name} {f:.4} ({inside:.4}+{rim:.4})/{s:.3}");
@@ -105,7 +143,7 @@ fn main() -> anyhow::Result<()> {
         println!("{line}");
     }
     println!("median FLIP / SSIM over {} views:", args.views);
-    for (i, (name, _)) in configs.iter().enumerate() {
+    for (i, (name, _, _)) in configs.iter().enumerate() {
         let f = quantile(&mut flips[i], 0.5).unwrap_or(f64::NAN);
         let s = quantile(&mut ssims[i], 0.5).unwrap_or(f64::NAN);
         println!("  {name:8} FLIP {f:.4}  SSIM {s:.3}");

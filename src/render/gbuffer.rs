@@ -1,7 +1,8 @@
 //! The G-buffer that passes 1–2 (and the mesh, and plain points) write and pass 3 reads,
 //! for one frame size: the colour sum (colour·w, w), the normal sum (normal·w, z·w),
 //! both Rgba16Float, the coverage of four samples per pixel (Rgba8Unorm, blended by
-//! max: the union of what the splats cover) and the reversed-Z depth of pass 1; and how
+//! max: the union of what the splats cover) and the reversed-Z depth of pass 1 (which
+//! pass 3 also reads: where a surface meets the pixel centres); and how
 //! a pass attaches to it (its render pass, colour targets and depth state).
 
 /// Format of both attribute sums.
@@ -58,7 +59,7 @@ impl GBuffer {
             size,
             DEPTH,
             "depth",
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
         );
         GBuffer {
             color_view: color_sum.create_view(&Default::default()),

@@ -9,7 +9,7 @@ use super::shaders::module;
 use super::targets::{FrameTargets, OUTPUT};
 
 pub(super) struct ShadingPass {
-    /// Bind group 1: the colour and normal sums and the coverage, as textures.
+    /// Bind group 1: the colour and normal sums, the coverage and the depth, as textures.
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::RenderPipeline,
 }
@@ -22,6 +22,16 @@ impl ShadingPass {
                 fragment_texture(0),
                 fragment_texture(1),
                 fragment_texture(2),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -47,6 +57,7 @@ impl ShadingPass {
                 view(0, &gbuffer.color_view),
                 view(1, &gbuffer.normal_view),
                 view(2, &gbuffer.coverage_view),
+                view(3, &gbuffer.depth_view),
             ],
         })
     }
