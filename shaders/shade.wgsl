@@ -11,18 +11,20 @@
 // The depth of the nearest surface at the pixel centre (reversed Z; 0: none).
 @group(1) @binding(3) var depth: texture_depth_2d;
 
+// The pixel and its four neighbours.
+const CROSS = array<vec2<i32>, 5>(vec2<i32>(0, 0), vec2<i32>(1, 0), vec2<i32>(-1, 0), vec2<i32>(0, 1), vec2<i32>(0, -1));
+
 // Whether a surface covers the centre of the pixel and of its four neighbours: then the
 // pixel shows no background, whatever the coverage samples that passed the depth test
 // say (beside an occluding edge, the hidden surface's samples failed it).
 fn surrounded(texel: vec2<i32>) -> bool {
-    let size = vec2<i32>(textureDimensions(depth));
-    var all = textureLoad(depth, texel, 0) > 0.0;
-    for (var k = 0; k < 4; k++) {
-        let step = select(vec2<i32>(0, 1 - 2 * (k & 1)), vec2<i32>(1 - 2 * (k & 1), 0), k < 2);
-        let at = clamp(texel + step, vec2<i32>(0), size - 1);
-        all = all && textureLoad(depth, at, 0) > 0.0;
+    let last = vec2<i32>(textureDimensions(depth)) - 1;
+    for (var k = 0; k < 5; k++) {
+        if textureLoad(depth, clamp(texel + CROSS[k], vec2<i32>(0), last), 0) <= 0.0 {
+            return false;
+        }
     }
-    return all;
+    return true;
 }
 
 @fragment

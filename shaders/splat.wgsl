@@ -39,8 +39,9 @@ struct SplatVarying {
     @location(5) @interpolate(flat) gradient: vec3<f32>,
     // The prefiltered screen-space ellipse as a conic Q (pixels⁻²): Q11, Q12, Q22
     @location(6) @interpolate(flat) conic: vec3<f32>,
-    // The same without the prefilter (the flat ellipse's own projection)
-    @location(7) @interpolate(flat) conic0: vec3<f32>,
+    // The same without the prefilter (the flat ellipse's own projection), and in w how
+    // much its ρ changes at most over SUBSAMPLE_REACH pixels (see screen_rho)
+    @location(7) @interpolate(flat) conic0: vec4<f32>,
     // The clip line (cos θ, sin θ, d), see clip_line
     @location(8) @interpolate(flat) clip_line: vec3<f32>,
     // How far pass 1 pushes the splat back (view units), before the footprint term
@@ -153,7 +154,8 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     out.gradient = vec3<f32>(ratio_a.y, unpack2x16float(packed.b_c));
     let covariance = screen_covariance(center, r * u, ratio * r * v);
     out.conic = prefiltered_conic(covariance, frame.prefilter_px);
-    out.conic0 = prefiltered_conic(covariance, 1e-3);
+    let conic0 = prefiltered_conic(covariance, 1e-3);
+    out.conic0 = vec4<f32>(conic0, rho_reach(conic0));
     out.clip_line = clip_line(packed.clip);
     // A fraction of the radius, plus the node's own error for an inner node: its patch
     // may lie that far off the surface its neighbours draw.
@@ -227,13 +229,36 @@ fn subsample_coverage(in: SplatVarying) -> vec4<f32> {
 // patch's curvature and perspective, which the projected ellipse leaves out.
 const SUBSAMPLE_REACH: f32 = 2.0 * 0.3953;
 
-// The projected ellipse's ρ (1 on its rim) at the pixel centre, and how much ρ changes
-// at most over SUBSAMPLE_REACH pixels: √λmax of the conic times the reach.
-fn screen_rho(in: SplatVarying) -> vec2<f32> {
-    let q = in.conic0;
-    let d = in.clip.xy - in.extra.yz;
+// How much the projected ellipse's ρ changes at most over SUBSAMPLE_REACH pixels: √λmax
+// of its conic q times the reach (once per splat).
+fn rho_reach(q: vec3<f32>) -> f32 {
     let lmax = 0.5 * (q.x + q.z) + sqrt(0.25 * (q.x - q.z) * (q.x - q.z) + q.y * q.y);
-    return vec2<f32>(sqrt(conic_at(q, d)), sqrt(lmax) * SUBSAMPLE_REACH);
+    return sqrt(lmax) * SUBSAMPLE_REACH;
+}
+
+// The projected ellipse's ρ (1 on its rim) at the pixel centre.
+fn screen_rho(in: SplatVarying) -> f32 {
+    return sqrt(conic_at(in.conic0.xyz, in.clip.xy - in.extra.yz));
+}
+
+// The pixel's four coverage samples that the patch covers (pass 2 only). Far enough
+// inside the projected ellipse, all four; far enough outside, none. A fragment whose
+// centre the patch covers counts as covering at least one sample (the centre's share).
+fn pixel_coverage(in: SplatVarying, h: Hit) -> vec4<f32> {
+    let rho = screen_rho(in);
+    let reach = in.conic0.w;
+    if h.centre_inside {
+        if rho <= 1.0 - reach {
+            return vec4<f32>(1.0);
+        }
+        var covered = subsample_coverage(in);
+        covered.x = select(covered.x, 1.0, all(covered == vec4<f32>(0.0)));
+        return covered;
+    }
+    if rho > 1.0 + reach {
+        return vec4<f32>(0.0);
+    }
+    return subsample_coverage(in);
 }
 
 struct Hit {
@@ -245,8 +270,6 @@ struct Hit {
     normal: vec3<f32>,
     // Whether the patch itself (not only the prefilter) covers the pixel centre.
     centre_inside: bool,
-    // The pixel's four coverage samples that the patch covers.
-    coverage: vec4<f32>,
 }
 
 // dᵀ Q d for a conic Q = (Q11, Q12, Q22).
@@ -254,30 +277,17 @@ fn conic_at(q: vec3<f32>, d: vec2<f32>) -> f32 {
     return q.x * d.x * d.x + 2.0 * q.y * d.x * d.y + q.z * d.y * d.y;
 }
 
-// The pixel centre's ray against the splat. A fragment whose centre the patch misses
-// is kept if the prefilter's band reaches it or the patch covers one of its coverage
-// samples (then with weight 0: it only adds coverage); else it is discarded.
+// The pixel centre's ray against the splat. Whether a fragment whose centre the patch
+// misses is kept is each pass's choice: pass 2 keeps it if the prefilter's band reaches
+// it or the patch covers one of its coverage samples (with weight 0: it only adds
+// coverage).
 fn hit(in: SplatVarying) -> Hit {
     let h = patch_hit(in, in.clip.xy);
     var rho2 = h.object2;
-    let rho = screen_rho(in);
-    // Far enough inside the projected ellipse, all four samples are covered.
-    var coverage = vec4<f32>(1.0);
-    if h.object2 > 1.0 {
-        if frame.ewa > 0.0 && rho.x > 1.0 {
-            // The prefilter widens the splat by a band around its projected rim; inside
-            // the rim, where the curved patch turns away from the ray, it adds nothing.
-            rho2 = min(rho2, conic_at(in.conic, in.clip.xy - in.extra.yz));
-        }
-        coverage = select(vec4<f32>(0.0), subsample_coverage(in), rho.x <= 1.0 + rho.y);
-        if outside(rho2) && all(coverage == vec4<f32>(0.0)) {
-            discard;
-        }
-    } else if rho.x > 1.0 - rho.y {
-        // Near the rim: samples may fall outside. A fragment whose centre the patch
-        // covers counts as covering at least one sample (the centre's share).
-        coverage = subsample_coverage(in);
-        coverage.x = select(coverage.x, 1.0, all(coverage == vec4<f32>(0.0)));
+    if h.object2 > 1.0 && frame.ewa > 0.0 && screen_rho(in) > 1.0 {
+        // The prefilter widens the splat by a band around its projected rim; inside the
+        // rim, where the curved patch turns away from the ray, it adds nothing.
+        rho2 = min(rho2, conic_at(in.conic, in.clip.xy - in.extra.yz));
     }
     // Every point of the splat lies within ±R of its centre's depth. Under the prefilter
     // a pixel beside a splat meets its plane far from it (or not at all): keep its depth
@@ -289,7 +299,7 @@ fn hit(in: SplatVarying) -> Hit {
     let g = in.gradient;
     let v = cross(in.normal, in.tangent_u);
     let n = in.normal + in.tangent_u * (g.x * xy.x + g.y * xy.y) + v * (g.y * xy.x + g.z * xy.y);
-    return Hit(rho2, depth, normalize(n), h.object2 <= 1.0, coverage);
+    return Hit(rho2, depth, normalize(n), h.object2 <= 1.0);
 }
 
 // Beyond the rim (of the patch, or of the prefilter's band), or where the weight is too
@@ -343,8 +353,12 @@ const MIN_WEIGHT: f32 = 1.0 / 1024.0;
 @fragment
 fn fs_attributes(in: SplatVarying) -> Attributes {
     let h = hit(in);
+    let coverage = pixel_coverage(in, h);
+    if !h.centre_inside && outside(h.rho2) && all(coverage == vec4<f32>(0.0)) {
+        discard;
+    }
     // A fragment of the prefilter's band weighs by the share of the pixel it covers.
-    var w = select(kernel(h.rho2) * dot(h.coverage, vec4<f32>(0.25)), kernel(h.rho2), h.centre_inside);
+    var w = select(kernel(h.rho2) * dot(coverage, vec4<f32>(0.25)), kernel(h.rho2), h.centre_inside);
     if w < MIN_WEIGHT {
         w = 0.0;
     }
@@ -354,7 +368,7 @@ fn fs_attributes(in: SplatVarying) -> Attributes {
     var out: Attributes;
     out.color = vec4<f32>(in.color.rgb * w, w);
     out.normal = vec4<f32>(n * w, h.depth * w);
-    out.coverage = h.coverage;
+    out.coverage = coverage;
     out.depth = depth_of(h.depth);
     return out;
 }

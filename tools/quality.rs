@@ -115,29 +115,13 @@ fn main() -> anyhow::Result<()> {
         for (i, (name, settings, m)) in configs.iter().enumerate() {
             let image = render(m, &camera, settings, args.size)?;
             let (f, s) = (flip_mean(&image, &reference), ssim_mean(&image, &reference));
-            let (inside, rim) = split(&flip_map(&image, &reference), &image, &reference);
+            let map = flip_map(&image, &reference);
+            let (inside, rim) = split(&map, &image, &reference);
             line += &format!("  {name} {f:.4} ({inside:.4}+{rim:.4})/{s:.3}");
             flips[i].push(f);
             ssims[i].push(s);
             if let Some(dir) = &args.crops {
-                let map = flip_map(&image, &reference);
-                let grey: Vec<u8> = map.iter().map(|e| (e * 255.0).round() as u8).collect();
-                std::fs::create_dir_all(dir)?;
-                image::save_buffer(
-                    dir.join(format!("view{k}_flip{i}.png")),
-                    &grey,
-                    image.width,
-                    image.height,
-                    image::ExtendedColorType::L8,
-                )?;
-            }
-            if let Some(dir) = &args.crops {
-                save(&image, &dir.join(format!("view{k}_image{i}.png")))?;
-            }
-            if let (Some(dir), 1) = (&args.crops, i) {
-                save(&image, &dir.join(format!("view{k}_splats.png")))?;
-                save(&reference, &dir.join(format!("view{k}_reference.png")))?;
-                side_by_side(&image, &reference, &dir.join(format!("view{k}_crop.png")))?;
+                write_images(dir, (k, i), &image, &reference, &map)?;
             }
         }
         println!("{line}");
@@ -147,6 +131,33 @@ fn main() -> anyhow::Result<()> {
         let f = quantile(&mut flips[i], 0.5).unwrap_or(f64::NAN);
         let s = quantile(&mut ssims[i], 0.5).unwrap_or(f64::NAN);
         println!("  {name:8} FLIP {f:.4}  SSIM {s:.3}");
+    }
+    Ok(())
+}
+
+/// Writes view k's image of configuration i and its FLIP map into `dir`; for the
+/// splats (i = 1) also the reference and the side-by-side close-up.
+fn write_images(
+    dir: &std::path::Path,
+    (k, i): (u32, usize),
+    image: &Image,
+    reference: &Image,
+    map: &[f32],
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let grey: Vec<u8> = map.iter().map(|e| (e * 255.0).round() as u8).collect();
+    image::save_buffer(
+        dir.join(format!("view{k}_flip{i}.png")),
+        &grey,
+        image.width,
+        image.height,
+        image::ExtendedColorType::L8,
+    )?;
+    save(image, &dir.join(format!("view{k}_image{i}.png")))?;
+    if i == 1 {
+        save(image, &dir.join(format!("view{k}_splats.png")))?;
+        save(reference, &dir.join(format!("view{k}_reference.png")))?;
+        side_by_side(image, reference, &dir.join(format!("view{k}_crop.png")))?;
     }
     Ok(())
 }
