@@ -1,6 +1,7 @@
 //! The command-line applications built on the library.
 
 pub mod bench;
+pub mod cloud_quality;
 pub mod convert;
 pub mod frame_args;
 pub mod info;

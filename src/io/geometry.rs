@@ -34,6 +34,9 @@ pub struct Geometry {
     /// Colours given by the file, RGBA8 (alpha 255 when the file has none).
     pub colors: Option<Vec<[u8; 4]>>,
     pub triangles: Vec<[u32; 3]>,
+    /// The file row of each kept vertex, when some rows were dropped (`None`: vertex i
+    /// is row i). Organised clouds (an RGB-D frame's pixels) keep their grid through it.
+    pub rows: Option<Vec<u32>>,
 }
 
 impl Geometry {
@@ -156,7 +159,8 @@ pub(crate) fn assemble<R: VertexRows>(
     let n = rows.len();
     let frame = rebase::frame(rows)?;
     let origin = frame.origin;
-    let kept_rows = frame.kept.as_deref();
+    let kept = frame.kept;
+    let kept_rows = kept.as_deref();
     let map_rows = |f: &(dyn Fn(usize) -> Vec3 + Sync)| -> Vec<Vec3> {
         match kept_rows {
             None => (0..n).into_par_iter().with_min_len(CHUNK).map(f).collect(),
@@ -239,6 +243,7 @@ pub(crate) fn assemble<R: VertexRows>(
             normals,
             colors,
             triangles,
+            rows: kept,
         },
         stats,
     ))

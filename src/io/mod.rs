@@ -7,6 +7,7 @@ pub mod bounds;
 pub mod geometry;
 pub mod ply;
 pub mod rebase;
+pub mod triangulate;
 
 pub use bounds::Bounds;
 pub use geometry::{Geometry, GeometryStats};

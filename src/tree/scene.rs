@@ -15,6 +15,7 @@ use super::report::{Finished, Report, Silent, Step};
 use super::select::PrefixIndex;
 use super::spt_file::{SptFile, is_spt};
 use super::{NodeRecord, SequentialList, TreeMeta, build_list};
+use crate::io::Geometry;
 use crate::io::ply::read_ply;
 use crate::surfel::leaf_surfels;
 use crate::surfel::shape::SplatShape;
@@ -74,6 +75,12 @@ impl Scene {
         Ok(Scene::from_list(list, mesh))
     }
 
+    /// The scene of geometry already read (its mesh kept when it has triangles).
+    pub fn from_geometry(geometry: Geometry) -> Scene {
+        let (list, mesh) = build_from_geometry(geometry, true, &Silent);
+        Scene::from_list(list, mesh)
+    }
+
     pub fn meta(&self) -> &TreeMeta {
         match &self.tree {
             TreeSource::Memory(l) => &l.meta,
@@ -105,18 +112,29 @@ pub fn build_from_ply(
     report: &dyn Report,
 ) -> anyhow::Result<(SequentialList, Option<MeshData>)> {
     report.step(Step::Read, 0);
-    let mut model = read_ply(path)?;
+    let model = read_ply(path)?;
     report.finished(Finished::Read(&model));
+    Ok(build_from_geometry(model.geometry, keep_mesh, report))
+}
+
+/// Builds the sequential list of `geometry` (and with `keep_mesh`, the mesh of the
+/// reference pass, for a model with triangles), telling `report` each step from the
+/// surfels on.
+pub fn build_from_geometry(
+    mut geometry: Geometry,
+    keep_mesh: bool,
+    report: &dyn Report,
+) -> (SequentialList, Option<MeshData>) {
     report.step(Step::Surfels, 0);
-    let leaves = leaf_surfels(&model.geometry);
+    let leaves = leaf_surfels(&geometry);
     report.finished(Finished::Surfels(&leaves));
-    let mesh = (keep_mesh && !model.geometry.triangles.is_empty()).then(|| MeshData {
+    let mesh = (keep_mesh && !geometry.triangles.is_empty()).then(|| MeshData {
         positions: leaves.surfels.iter().map(|s| s.position).collect(),
         normals: leaves.surfels.iter().map(|s| s.normal).collect(),
         colors: leaves.surfels.iter().map(|s| s.color).collect(),
-        // The model is dropped next: its triangles move, they are not copied.
-        triangles: std::mem::take(&mut model.geometry.triangles),
+        // The geometry is dropped next: its triangles move, they are not copied.
+        triangles: std::mem::take(&mut geometry.triangles),
     });
-    drop(model);
-    Ok((build_list(leaves, report), mesh))
+    drop(geometry);
+    (build_list(leaves, report), mesh)
 }

@@ -1,0 +1,171 @@
+//! Triangle meshes of face-less clouds, made without normals, for reference images: what
+//! a cloud's splats are measured against (issue 13), drawn by the mesh pass.
+//!
+//! * [`sensor_grid`]: an organised cloud (an RGB-D frame: one row per pixel, row-major,
+//!   invalid pixels dropped by the reader) joins neighbouring valid pixels. Each 2×2 block
+//!   of pixels gives two triangles split along its shorter diagonal, or one when a
+//!   corner is missing; a triangle with an edge longer than [`GRID_MAX_EDGE`] of its
+//!   depth (the distance from the sensor, at the file's origin) spans a depth
+//!   discontinuity and is dropped.
+//! * [`terrain`]: an airborne tile is a height field: Delaunay in x–y, triangles with an
+//!   edge (in x–y) longer than [`TERRAIN_MAX_EDGE`] × the median edge dropped (gaps,
+//!   water, the hull's slivers).
+
+use glam::{DVec3, Vec3};
+
+use super::Geometry;
+
+/// Longest edge of a sensor-grid triangle, relative to its depth.
+pub const GRID_MAX_EDGE: f64 = 0.05;
+/// Longest edge of a terrain triangle, in median edges.
+pub const TERRAIN_MAX_EDGE: f64 = 4.0;
+
+/// Triangles of `geometry` as a `width` × `height` sensor grid, the vertex of file row
+/// `row` at pixel (row mod width, row / width). Fails when the file has more rows than
+/// the grid has pixels.
+pub fn sensor_grid(geometry: &Geometry, width: u32, height: u32) -> Result<Vec<[u32; 3]>, String> {
+    let pixels = width as usize * height as usize;
+    let n = geometry.positions.len();
+    let row_of = |i: usize| geometry.rows.as_ref().map_or(i, |r| r[i] as usize);
+    if n == 0 || row_of(n - 1) >= pixels {
+        return Err(format!(
+            "{n} points do not lie on a {width}×{height} grid (row {} is beyond it)",
+            row_of(n.saturating_sub(1))
+        ));
+    }
+    let mut vertex_at = vec![u32::MAX; pixels];
+    for i in 0..n {
+        vertex_at[row_of(i)] = i as u32;
+    }
+    let position = |v: u32| geometry.origin + geometry.positions[v as usize].as_dvec3();
+    let short_enough = |t: &[u32; 3]| {
+        let depth = t.iter().map(|&v| position(v).length()).sum::<f64>() / 3.0;
+        (0..3).all(|k| position(t[k]).distance(position(t[(k + 1) % 3])) <= GRID_MAX_EDGE * depth)
+    };
+    let mut triangles = Vec::new();
+    for y in 0..height as usize - 1 {
+        for x in 0..width as usize - 1 {
+            let at = |dx: usize, dy: usize| vertex_at[(y + dy) * width as usize + x + dx];
+            let [a, b, c, d] = [at(0, 0), at(1, 0), at(0, 1), at(1, 1)];
+            for t in block_triangles([a, b, c, d], |p, q| position(p).distance(position(q))) {
+                if short_enough(&t) {
+                    triangles.push(t);
+                }
+            }
+        }
+    }
+    Ok(triangles)
+}
+
+/// The triangles of one 2×2 block of pixels `[top-left, top-right, bottom-left,
+/// bottom-right]` (`u32::MAX`: no point there), consistently wound.
+fn block_triangles([a, b, c, d]: [u32; 4], distance: impl Fn(u32, u32) -> f64) -> Vec<[u32; 3]> {
+    let missing = |v: u32| v == u32::MAX;
+    match [a, b, c, d].iter().filter(|v| missing(**v)).count() {
+        0 if distance(a, d) <= distance(b, c) => vec![[a, d, b], [a, c, d]],
+        0 => vec![[a, c, b], [b, c, d]],
+        1 if missing(a) => vec![[b, c, d]],
+        1 if missing(b) => vec![[a, c, d]],
+        1 if missing(c) => vec![[a, d, b]],
+        1 => vec![[a, c, b]],
+        _ => Vec::new(),
+    }
+}
+
+/// Triangles of `geometry` as a height field over x–y (its 2.5D Delaunay triangulation),
+/// long triangles dropped.
+pub fn terrain(geometry: &Geometry) -> Vec<[u32; 3]> {
+    let xy = |p: &Vec3| delaunator::Point {
+        x: p.x as f64,
+        y: p.y as f64,
+    };
+    let points: Vec<delaunator::Point> = geometry.positions.iter().map(xy).collect();
+    let found = delaunator::triangulate(&points);
+    let length = |a: usize, b: usize| {
+        let (p, q) = (&geometry.positions[a], &geometry.positions[b]);
+        DVec3::new((p.x - q.x) as f64, (p.y - q.y) as f64, 0.0).length()
+    };
+    let mut edges: Vec<f64> = found
+        .triangles
+        .chunks_exact(3)
+        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+        .map(|(a, b)| length(a, b))
+        .collect();
+    if edges.is_empty() {
+        return Vec::new();
+    }
+    let mid = edges.len() / 2;
+    let median = *edges.select_nth_unstable_by(mid, f64::total_cmp).1;
+    found
+        .triangles
+        .chunks_exact(3)
+        .filter(|t| (0..3).all(|k| length(t[k], t[(k + 1) % 3]) <= TERRAIN_MAX_EDGE * median))
+        .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid_points(width: usize, height: usize, hole: Option<usize>) -> Geometry {
+        let mut points = Vec::new();
+        for y in 0..height {
+            for x in 0..width {
+                let z = if Some(y * width + x) == hole {
+                    f64::NAN
+                } else {
+                    2.0
+                };
+                points.push([x as f64 * 0.01, y as f64 * 0.01, z]);
+            }
+        }
+        Geometry::from_points(&points).unwrap().0
+    }
+
+    #[test]
+    fn a_full_grid_gives_two_triangles_per_block() {
+        let g = grid_points(4, 3, None);
+        assert_eq!(sensor_grid(&g, 4, 3).unwrap().len(), 2 * 3 * 2);
+    }
+
+    #[test]
+    fn a_missing_pixel_leaves_one_triangle_in_each_block_around_it() {
+        // Pixel (1, 1) of a 3×3 grid is a corner of all four blocks.
+        let g = grid_points(3, 3, Some(4));
+        assert_eq!(g.rows.as_ref().unwrap().len(), 8);
+        assert_eq!(sensor_grid(&g, 3, 3).unwrap().len(), 4);
+    }
+
+    #[test]
+    fn a_depth_jump_is_not_bridged() {
+        let points = [
+            [0.0, 0.0, 1.0],
+            [0.01, 0.0, 1.0],
+            [0.0, 0.01, 3.0],
+            [0.01, 0.01, 3.0],
+        ];
+        let g = Geometry::from_points(&points).unwrap().0;
+        assert!(sensor_grid(&g, 2, 2).unwrap().is_empty());
+    }
+
+    #[test]
+    fn more_rows_than_pixels_is_an_error() {
+        let g = grid_points(4, 3, None);
+        assert!(sensor_grid(&g, 3, 3).is_err());
+    }
+
+    #[test]
+    fn a_terrain_drops_the_long_triangles_across_a_gap() {
+        let mut points = Vec::new();
+        for y in 0..10 {
+            for x in (0..10).chain(30..40) {
+                points.push([x as f64, y as f64, 0.0]);
+            }
+        }
+        let g = Geometry::from_points(&points).unwrap().0;
+        let triangles = terrain(&g);
+        // Two 9×9-cell patches, two triangles a cell; nothing spans the gap.
+        assert_eq!(triangles.len(), 2 * 2 * 81);
+    }
+}

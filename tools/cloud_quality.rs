@@ -1,0 +1,104 @@
+//! A face-less cloud's splats against a triangulation of the same points (issue 13):
+//! per view and as medians, FLIP and SSIM of the splats (leaves only), FLIP of the
+//! triangulation at 1×, hole rate (see `spt::apps::cloud_quality`). With `--images DIR`,
+//! each view's splats, triangulation and reference as PNG.
+//!
+//! ```text
+//! cargo run --release --example cloud_quality -- kinect_rgb.ply --grid 640x480
+//! cargo run --release --example cloud_quality -- terrain_utm.ply --terrain [--images DIR]
+//! ```
+
+use std::path::PathBuf;
+
+use clap::Parser;
+use spt::apps::cloud_quality::{CloudAndReference, Triangulation, ViewImages, measure};
+use spt::apps::stats::quantile;
+use spt::render::{Gpu, Renderer, Settings};
+
+#[derive(Parser)]
+struct Args {
+    /// The cloud (PLY; faces, if any, are ignored).
+    cloud: PathBuf,
+    /// Triangulate on a sensor grid of W×H pixels (an RGB-D frame).
+    #[arg(long, value_parser = parse_grid, conflicts_with = "terrain")]
+    grid: Option<(u32, u32)>,
+    /// Triangulate as a height field (2.5D Delaunay).
+    #[arg(long)]
+    terrain: bool,
+    /// Orbit views at elevation 20°, azimuth every 360°/views.
+    #[arg(long, default_value_t = 4)]
+    views: u32,
+    /// Distance in bounding-sphere radii.
+    #[arg(long, default_value_t = 1.6)]
+    distance: f64,
+    #[arg(long, default_value_t = 512)]
+    size: u32,
+    /// Draw the splats without the EWA prefilter.
+    #[arg(long)]
+    no_ewa: bool,
+    /// Write each view's images (splats, triangulation at 1×, reference) into DIR.
+    #[arg(long)]
+    images: Option<PathBuf>,
+}
+
+fn parse_grid(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once('x').ok_or("expected WxH")?;
+    let n = |v: &str| v.parse::<u32>().map_err(|e| e.to_string());
+    Ok((n(w)?, n(h)?))
+}
+
+fn main() -> anyhow::Result<()> {
+    let args = Args::parse();
+    let triangulation = match (args.grid, args.terrain) {
+        (Some((width, height)), _) => Triangulation::Grid { width, height },
+        (None, true) => Triangulation::Terrain,
+        (None, false) => anyhow::bail!("say how to triangulate: --grid WxH or --terrain"),
+    };
+    let renderer = Renderer::new(Gpu::new(None)?);
+    eprintln!("adapter: {}", renderer.gpu.describe());
+    let models = CloudAndReference::open(&args.cloud, triangulation)?;
+    let settings = Settings {
+        ewa: !args.no_ewa,
+        ..Settings::leaves()
+    };
+    if let Some(dir) = &args.images {
+        std::fs::create_dir_all(dir)?;
+    }
+    let mut save = |k: u32, images: &ViewImages| {
+        if let Some(dir) = &args.images {
+            for (name, image) in [
+                ("splats", &images.splats),
+                ("mesh", &images.mesh),
+                ("reference", &images.reference),
+            ] {
+                if let Err(e) = image.save_png(&dir.join(format!("view{k}_{name}.png"))) {
+                    eprintln!("view {k}: {e:#}");
+                }
+            }
+        }
+    };
+    let shape = (args.views, args.distance, args.size);
+    let figures = measure(&renderer, &models, shape, &settings, &mut save)?;
+    println!("view  splat FLIP  SSIM   mesh 1x FLIP  holes");
+    for (k, f) in figures.iter().enumerate() {
+        println!(
+            "{k:4}  {:10.4}  {:5.3}  {:12.4}  {:.3} %",
+            f.splat_flip,
+            f.splat_ssim,
+            f.mesh_flip,
+            100.0 * f.hole_rate
+        );
+    }
+    let median = |get: fn(&spt::apps::cloud_quality::ViewFigures) -> f64| {
+        quantile(&mut figures.iter().map(get).collect::<Vec<_>>(), 0.5).unwrap_or(f64::NAN)
+    };
+    println!(
+        "median splat FLIP {:.4}, SSIM {:.3}, triangulation at 1x {:.4}, holes {:.3} % (max {:.3} %)",
+        median(|f| f.splat_flip),
+        median(|f| f.splat_ssim),
+        median(|f| f.mesh_flip),
+        100.0 * median(|f| f.hole_rate),
+        100.0 * figures.iter().map(|f| f.hole_rate).fold(0.0, f64::max),
+    );
+    Ok(())
+}
