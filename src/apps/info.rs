@@ -219,12 +219,13 @@ impl PlyInfo {
         line(
             "",
             format!(
-                "degenerate triangles {}, isolated vertices {}, cancelled normals {}, given normals {}, fallback radii {}",
+                "degenerate triangles {}, isolated vertices {}, cancelled normals {}, given normals {}, fallback radii {}, capped radii {}",
                 count(st.degenerate_triangles),
                 count(st.isolated_vertices),
                 count(st.cancelled_normals),
                 count(st.given_normals),
-                count(st.fallback_radii)
+                count(st.fallback_radii),
+                count(st.capped_radii)
             ),
         );
         let t = &self.timing;

@@ -54,6 +54,9 @@ pub struct SurfelStats {
     pub given_normals: u64,
     /// Surfels whose neighbours all coincide with them: radius from the other surfels.
     pub fallback_radii: u64,
+    /// Cloud surfels that close no gap (a boundary, a stray sample) whose radius was
+    /// capped at a few neighbourhood spacings ([`cloud::MAX_SPACINGS`]).
+    pub capped_radii: u64,
 }
 
 /// The leaf surfels of a model.
