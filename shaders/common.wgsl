@@ -8,7 +8,8 @@ struct Frame {
     proj: mat4x4<f32>,
     // Model origin − eye, computed in f64 on the CPU.
     model_offset: vec3<f32>,
-    _pad0: f32,
+    // Eye-dome lighting's strength (MODE_EDL).
+    edl_strength: f32,
     // Target size in pixels, and its inverse.
     viewport: vec2<f32>,
     inv_viewport: vec2<f32>,
@@ -38,11 +39,13 @@ struct Frame {
     // which a pixel is fully covered (silhouettes fade below it; 0: off).
     radius_scale: f32,
     coverage_weight: f32,
-    _pad1: vec2<f32>,
+    // Lowest and highest node centre z, relative to the model origin (MODE_ELEVATION).
+    elevation_range: vec2<f32>,
     // The eye the level of detail is chosen for, relative to the camera's eye
     // (world-aligned); used when lod_frozen is set.
     lod_eye: vec3<f32>,
-    _pad2: f32,
+    // Eye-dome lighting's neighbour distance, pixels (MODE_EDL).
+    edl_radius_px: f32,
 }
 
 const MODE_SHADED: u32 = 0u;
@@ -51,6 +54,21 @@ const MODE_NORMALS: u32 = 2u;
 const MODE_RADIUS: u32 = 3u;
 const MODE_POINTS: u32 = 4u;
 const MODE_MESH: u32 = 5u;
+const MODE_EDL: u32 = 6u;
+const MODE_ELEVATION: u32 = 7u;
+
+// The elevation ramp: blue (lowest) through cyan, green and yellow to red (highest),
+// linear RGB; `z` relative to the model origin. Kept in step with the viewer's legend
+// (src/apps/view/panel.rs, ELEVATION_RAMP).
+fn elevation_color(z: f32) -> vec3<f32> {
+    let span = max(frame.elevation_range.y - frame.elevation_range.x, 1e-30);
+    let t = clamp((z - frame.elevation_range.x) / span, 0.0, 1.0) * 4.0;
+    let k = min(u32(t), 3u);
+    let stops = array<vec3<f32>, 5>(
+        vec3<f32>(0.02, 0.08, 0.6), vec3<f32>(0.0, 0.55, 0.65), vec3<f32>(0.1, 0.55, 0.05),
+        vec3<f32>(0.9, 0.75, 0.02), vec3<f32>(0.7, 0.02, 0.01));
+    return mix(stops[k], stops[k + 1u], t - f32(k));
+}
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 

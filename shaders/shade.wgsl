@@ -40,6 +40,9 @@ fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     if frame.mode == MODE_NORMALS {
         return vec4<f32>(n * 0.5 + 0.5, 1.0);
     }
+    if frame.mode == MODE_EDL {
+        return vec4<f32>(mix(frame.background.rgb, color * eye_dome(texel, nz.w / c.w), coverage_alpha(texel, c.w)), 1.0);
+    }
     let q = view_ray(frag.xy) * (nz.w / c.w);
     let l = normalize(frame.light_dir);
     let v = normalize(-q);
@@ -47,12 +50,38 @@ fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let diffuse = max(dot(n, l), 0.0);
     let specular = frame.specular * pow(max(dot(n, h), 0.0), 32.0) * select(0.0, 1.0, diffuse > 0.0);
     let shaded = color * (0.25 + 0.75 * diffuse) + vec3<f32>(specular);
-    // The share of the pixel's samples that the splats cover (all of it where the pixel
-    // and its neighbours show a surface at their centres); pixels reached only by the
-    // fading rims of splats also blend into the background when coverage_weight is set.
+    return vec4<f32>(mix(frame.background.rgb, shaded, coverage_alpha(texel, c.w)), 1.0);
+}
+
+// The share of the pixel's samples that the splats cover (all of it where the pixel
+// and its neighbours show a surface at their centres); pixels reached only by the
+// fading rims of splats (total weight `w`) also blend into the background when
+// coverage_weight is set.
+fn coverage_alpha(texel: vec2<i32>, w: f32) -> f32 {
     var alpha = select(dot(textureLoad(coverage, texel, 0), vec4<f32>(0.25)), 1.0, surrounded(texel));
     if frame.coverage_weight > 0.0 {
-        alpha = min(alpha, clamp(c.w / frame.coverage_weight, 0.0, 1.0));
+        alpha = min(alpha, clamp(w / frame.coverage_weight, 0.0, 1.0));
     }
-    return vec4<f32>(mix(frame.background.rgb, shaded, alpha), 1.0);
+    return alpha;
+}
+
+// Eye-dome lighting (Boucheny 2009, as Potree draws it): with D = log₂ of the view
+// distance, the mean over 8 neighbours at edl_radius_px of max(0, D(pixel) −
+// D(neighbour)) (how far the pixel lies behind what surrounds it), as the factor
+// exp(−300 · strength · mean). Background neighbours count nothing.
+fn eye_dome(texel: vec2<i32>, distance: f32) -> f32 {
+    let here = log2(max(distance, 1e-30));
+    let last = vec2<i32>(textureDimensions(color_sum)) - 1;
+    var sum = 0.0;
+    for (var k = 0; k < 8; k++) {
+        let angle = f32(k) * 0.7853981633974483;
+        let offset = vec2<i32>(round(frame.edl_radius_px * vec2<f32>(cos(angle), sin(angle))));
+        let at = clamp(texel + offset, vec2<i32>(0), last);
+        let w = textureLoad(color_sum, at, 0).w;
+        if w > 0.0 {
+            let there = log2(max(textureLoad(normal_sum, at, 0).w / w, 1e-30));
+            sum += max(0.0, here - there);
+        }
+    }
+    return exp(-300.0 * frame.edl_strength * sum / 8.0);
 }

@@ -30,6 +30,12 @@ pub struct RenderArgs {
     pub error_px: f64,
     #[arg(long, value_enum, default_value = "shaded")]
     pub mode: Mode,
+    /// Eye-dome lighting (--mode edl): darkening per log2 depth step.
+    #[arg(long, default_value_t = 1.0)]
+    pub edl_strength: f32,
+    /// Eye-dome lighting (--mode edl): distance of the neighbours it compares, pixels.
+    #[arg(long, default_value_t = 1.5)]
+    pub edl_radius: f32,
     /// Direction toward the light in view space: x right, y up, z toward the viewer.
     #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, default_value = "0.4,0.6,1")]
     pub light: [f64; 3],
@@ -99,6 +105,8 @@ impl RenderArgs {
             light: DVec3::from(self.light).as_vec3().normalize_or(Vec3::Z),
             background: self.background.map(|c| c.clamp(0.0, 1.0) as f32),
             culling: self.culling,
+            edl_strength: self.edl_strength.max(0.0).min(100.0),
+            edl_radius_px: self.edl_radius.max(0.5).min(16.0),
             ..Settings::default()
         }
     }

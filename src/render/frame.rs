@@ -16,7 +16,7 @@ pub(super) struct FrameUniform {
     pub view: [[f32; 4]; 4],
     pub proj: [[f32; 4]; 4],
     pub model_offset: [f32; 3],
-    pub _pad0: f32,
+    pub edl_strength: f32,
     pub viewport: [f32; 2],
     pub inv_viewport: [f32; 2],
     pub eps: f32,
@@ -35,9 +35,9 @@ pub(super) struct FrameUniform {
     pub lod_frozen: u32,
     pub radius_scale: f32,
     pub coverage_weight: f32,
-    pub _pad1: [f32; 2],
+    pub elevation_range: [f32; 2],
     pub lod_eye: [f32; 3],
-    pub _pad2: f32,
+    pub edl_radius_px: f32,
 }
 
 const _: () = assert!(std::mem::size_of::<FrameUniform>() == 272);
@@ -103,6 +103,8 @@ impl FrameUniform {
             Mode::Radius => 3,
             Mode::Points => 4,
             Mode::Mesh => 5,
+            Mode::Edl => 6,
+            Mode::Elevation => 7,
         };
         let light = settings.light.normalize_or(Vec3::Z);
         let [r, g, b] = settings.background.map(srgb_to_linear);
@@ -110,7 +112,7 @@ impl FrameUniform {
             view: camera.view_rotation().to_cols_array_2d(),
             proj: camera.projection(aspect, near).to_cols_array_2d(),
             model_offset: (-eye_rel).as_vec3().to_array(),
-            _pad0: 0.0,
+            edl_strength: settings.edl_strength,
             viewport: [width as f32, height as f32],
             inv_viewport: [1.0 / width as f32, 1.0 / height as f32],
             eps: lod_eps as f32,
@@ -133,13 +135,13 @@ impl FrameUniform {
             } else {
                 0.0
             },
-            _pad1: [0.0; 2],
+            elevation_range: [meta.centre_min[2], meta.centre_max[2]],
             lod_eye: settings
                 .lod_eye
                 .map_or(DVec3::ZERO, |e| e - camera.eye)
                 .as_vec3()
                 .to_array(),
-            _pad2: 0.0,
+            edl_radius_px: settings.edl_radius_px,
         }
     }
 }

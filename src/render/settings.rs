@@ -17,6 +17,11 @@ pub enum Mode {
     Points,
     /// The mesh the model came from (reference; needs a PLY with faces).
     Mesh,
+    /// Eye-dome lighting (Boucheny 2009): the colours, unlit, darkened where the depth
+    /// steps away from the eye around a pixel; shape without normals.
+    Edl,
+    /// Colour by height over the model's range (a ramp from low blue to high red), lit.
+    Elevation,
 }
 
 /// How the splats of the prefix are culled (DESIGN.md §6).
@@ -51,6 +56,10 @@ pub struct Settings {
     /// The eye the level of detail is chosen for (file coordinates) when it is frozen
     /// while the camera moves; None: the camera's own eye.
     pub lod_eye: Option<DVec3>,
+    /// Eye-dome lighting: strength (darkening per unit of log₂ depth step) and the
+    /// distance in pixels of the neighbours it compares with.
+    pub edl_strength: f32,
+    pub edl_radius_px: f32,
 }
 
 impl Default for Settings {
@@ -67,6 +76,8 @@ impl Default for Settings {
             coverage_weight: 0.0,
             culling: Culling::Compute,
             lod_eye: None,
+            edl_strength: 1.0,
+            edl_radius_px: 1.5,
         }
     }
 }

@@ -203,6 +203,54 @@ fn median_spacing(points: &[Vec3]) -> f32 {
     *nearest.select_nth_unstable_by(mid, f32::total_cmp).1
 }
 
+/// Which way a cloud's estimated normals face, where the data tells: sign consistency
+/// lets the tree's inner nodes average their children's normals without cancelling.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Orientation {
+    /// An airborne tile (far wider than it is high): +z.
+    Up,
+    /// A sensor frame: toward the sensor, at this point (relative to the model origin).
+    Toward(Vec3),
+    /// Nothing known: drawn two-sided as they are.
+    Unknown,
+}
+
+/// A model whose core is less than a quarter as high as it is wide is a terrain.
+const TERRAIN_ASPECT: f64 = 0.25;
+
+impl Orientation {
+    /// The orientation of a cloud with core box `core`, whole box `bounds` and
+    /// `origin`: up for a terrain; toward the file's origin (where a sensor writes its
+    /// frame from) when that lies outside the box and within 100 core extents of it.
+    pub fn of(core: &crate::io::Bounds, bounds: &crate::io::Bounds, origin: glam::DVec3) -> Self {
+        let e = core.extent();
+        let width = e.x.max(e.y);
+        if width > 0.0 && e.z < TERRAIN_ASPECT * width {
+            return Orientation::Up;
+        }
+        let sensor = -origin;
+        let far = sensor.length() > 100.0 * e.max_element();
+        if bounds.contains([0.0; 3]) || far || !sensor.is_finite() {
+            return Orientation::Unknown;
+        }
+        Orientation::Toward(sensor.as_vec3())
+    }
+
+    /// `normal` flipped, if need be, to face this way from `position`.
+    pub fn apply(self, position: Vec3, normal: Vec3) -> Vec3 {
+        let facing = match self {
+            Orientation::Up => Vec3::Z,
+            Orientation::Toward(sensor) => sensor - position,
+            Orientation::Unknown => return normal,
+        };
+        if normal.dot(facing) < 0.0 {
+            -normal
+        } else {
+            normal
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -269,5 +317,32 @@ mod tests {
         near.sort_by(|a, b| a.length().total_cmp(&b.length()));
         let (r, _) = disk_radius(Vec3::ZERO, Vec3::Z, &near[..K]);
         assert!(r > 1.0 && r <= 4.0, "{r}");
+    }
+
+    #[test]
+    fn a_flat_tile_faces_up_and_a_sensor_frame_faces_its_sensor() {
+        use crate::io::Bounds;
+        let tile = Bounds {
+            min: [500.0, 700.0, 10.0],
+            max: [900.0, 1100.0, 40.0],
+        };
+        let o = Orientation::of(&tile, &tile, tile.center());
+        assert_eq!(o, Orientation::Up);
+        assert_eq!(o.apply(Vec3::ZERO, -Vec3::Z), Vec3::Z);
+        let frame = Bounds {
+            min: [-1.0, -1.0, 1.0],
+            max: [1.0, 1.0, 3.0],
+        };
+        let o = Orientation::of(&frame, &frame, frame.center());
+        assert_eq!(o, Orientation::Toward(Vec3::new(0.0, 0.0, -2.0)));
+        assert_eq!(o.apply(Vec3::ZERO, Vec3::Z), -Vec3::Z);
+        let around = Bounds {
+            min: [-1.0; 3],
+            max: [1.0; 3],
+        };
+        assert_eq!(
+            Orientation::of(&around, &around, glam::DVec3::ZERO),
+            Orientation::Unknown
+        );
     }
 }

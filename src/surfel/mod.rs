@@ -154,9 +154,13 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
     let oriented = if g.triangles.is_empty() {
         let all: Vec<u32> = (0..surfels.len() as u32).collect();
         cloud::neighbour_disks(&g.positions, scale, &all, given, &mut surfels, &mut stats);
-        surfels
-            .par_iter_mut()
-            .for_each(|s| s.shape = SplatShape::circle(s.normal));
+        let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
+        surfels.par_iter_mut().enumerate().for_each(|(i, s)| {
+            if given.is_none_or(|n| n[i] == Vec3::ZERO) {
+                s.normal = orientation.apply(s.position, s.normal);
+            }
+            s.shape = SplatShape::circle(s.normal);
+        });
         given.is_some() && stats.given_normals == surfels.len() as u64
     } else {
         mesh::vertex_disks(

@@ -19,11 +19,13 @@ pub struct PanelStatus<'a> {
     pub message: Option<(&'a str, bool)>,
 }
 
-const MODES: [(Mode, &str); 6] = [
+const MODES: [(Mode, &str); 8] = [
     (Mode::Shaded, "shaded"),
     (Mode::Levels, "tree levels"),
     (Mode::Normals, "normals"),
     (Mode::Radius, "splat radius"),
+    (Mode::Edl, "eye-dome lighting"),
+    (Mode::Elevation, "elevation"),
     (Mode::Points, "points (no blending)"),
     (Mode::Mesh, "mesh (reference)"),
 ];

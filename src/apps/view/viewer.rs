@@ -364,7 +364,9 @@ pub fn next_mode(mode: Mode, has_mesh: bool) -> Mode {
         Mode::Shaded => Mode::Levels,
         Mode::Levels => Mode::Normals,
         Mode::Normals => Mode::Radius,
-        Mode::Radius => Mode::Points,
+        Mode::Radius => Mode::Edl,
+        Mode::Edl => Mode::Elevation,
+        Mode::Elevation => Mode::Points,
         Mode::Points if has_mesh => Mode::Mesh,
         Mode::Points | Mode::Mesh => Mode::Shaded,
     }
