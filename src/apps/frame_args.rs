@@ -31,10 +31,10 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value = "shaded")]
     pub mode: Mode,
     /// Eye-dome lighting (--mode edl): darkening per log2 depth step.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = parse_finite)]
     pub edl_strength: f32,
     /// Eye-dome lighting (--mode edl): distance of the neighbours it compares, pixels.
-    #[arg(long, default_value_t = 1.5)]
+    #[arg(long, default_value_t = 1.5, value_parser = parse_finite)]
     pub edl_radius: f32,
     /// Direction toward the light in view space: x right, y up, z toward the viewer.
     #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, default_value = "0.4,0.6,1")]
@@ -94,6 +94,15 @@ fn parse_triple(s: &str) -> Result<[f64; 3], String> {
     Ok(t)
 }
 
+/// A finite number.
+fn parse_finite(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        Ok(_) => Err("must be finite".into()),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 impl RenderArgs {
     pub fn settings(&self) -> Settings {
         Settings {
@@ -105,8 +114,8 @@ impl RenderArgs {
             light: DVec3::from(self.light).as_vec3().normalize_or(Vec3::Z),
             background: self.background.map(|c| c.clamp(0.0, 1.0) as f32),
             culling: self.culling,
-            edl_strength: self.edl_strength.max(0.0).min(100.0),
-            edl_radius_px: self.edl_radius.max(0.5).min(16.0),
+            edl_strength: self.edl_strength.clamp(0.0, 100.0),
+            edl_radius_px: self.edl_radius.clamp(0.5, 16.0),
             ..Settings::default()
         }
     }
