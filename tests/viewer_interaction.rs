@@ -138,7 +138,8 @@ fn orbit_zoom_error_and_modes_change_what_is_drawn() {
     eprintln!("ε 16 px: zoomed out {drawn_far} drawn, zoomed in {drawn_near}");
     assert!(drawn_far < drawn_16px && drawn_16px < drawn_near);
 
-    // Display modes: M cycles shaded → levels → normals → radius → points → mesh →
+    // Display modes: M cycles shaded → levels → normals → radius → edl → elevation →
+    // points → mesh →
     // shaded (the knot has faces); each changes the picture.
     send(&mut v, Input::Command(Command::Reset));
     let (_, _, shaded) = frame(&mut v);
@@ -146,6 +147,8 @@ fn orbit_zoom_error_and_modes_change_what_is_drawn() {
         Mode::Levels,
         Mode::Normals,
         Mode::Radius,
+        Mode::Edl,
+        Mode::Elevation,
         Mode::Points,
         Mode::Mesh,
     ] {

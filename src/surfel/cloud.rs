@@ -74,10 +74,14 @@ fn distinct_positions(points: &[Vec3], scale: f32) -> Vec<[f32; 3]> {
 /// among all `points` (unit-scaled by `scale` for the search), written into `surfels`.
 /// Non-zero `given` normals are kept; a radius already set (from faces) is only grown.
 /// Afterwards every listed surfel whose radius is still 0 gets [`fallback_radius`].
+/// With `surround` off (a mesh's isolated vertices, which lie among the mesh's own
+/// vertices), the radius is the distance to the [`RADIUS_RANK`]-th distinct neighbour.
+#[allow(clippy::too_many_arguments)]
 pub fn neighbour_disks(
     points: &[Vec3],
     scale: f32,
     which: &[u32],
+    surround: bool,
     given: Option<&[Vec3]>,
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
@@ -105,7 +109,11 @@ pub fn neighbour_disks(
                 } else {
                     plane_normal(near.iter().copied())
                 };
-                let (radius, capped) = disk_radius(p, normal, &near);
+                let (radius, capped) = if surround {
+                    disk_radius(p, normal, &near)
+                } else {
+                    (ranked_radius(p, &near), false)
+                };
                 (normal, radius / scale, capped)
             })
             .collect(),
@@ -158,6 +166,20 @@ fn disk_radius(p: Vec3, normal: Vec3, near: &[Vec3]) -> (f32, bool) {
             (rank.min(cap), rank > cap)
         }
     }
+}
+
+/// The distance from `p` to the [`RADIUS_RANK`]-th distinct point of `near` (sorted
+/// nearest first), or to the farthest when there are fewer; 0 when all coincide with it.
+fn ranked_radius(p: Vec3, near: &[Vec3]) -> f32 {
+    let distinct: Vec<f32> = near
+        .iter()
+        .map(|q| q.distance(p))
+        .filter(|d| *d > 0.0)
+        .collect();
+    distinct
+        .get(RADIUS_RANK.min(distinct.len()).wrapping_sub(1))
+        .copied()
+        .unwrap_or(0.0)
 }
 
 /// The least distance of `neighbours` ((distance, angle in the tangent plane), nearest

@@ -219,6 +219,14 @@ pub fn vertex_disks(
         }
         stats.cancelled_normals = cancelled.len() as u64;
     }
-    neighbour_disks(points, scale, &from_neighbours, given, surfels, stats);
+    neighbour_disks(
+        points,
+        scale,
+        &from_neighbours,
+        false,
+        given,
+        surfels,
+        stats,
+    );
     super::ring::ring_shapes(points, scale, triangles, surfels);
 }

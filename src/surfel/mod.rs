@@ -153,7 +153,15 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
         .collect();
     let oriented = if g.triangles.is_empty() {
         let all: Vec<u32> = (0..surfels.len() as u32).collect();
-        cloud::neighbour_disks(&g.positions, scale, &all, given, &mut surfels, &mut stats);
+        cloud::neighbour_disks(
+            &g.positions,
+            scale,
+            &all,
+            true,
+            given,
+            &mut surfels,
+            &mut stats,
+        );
         let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
         surfels.par_iter_mut().enumerate().for_each(|(i, s)| {
             if given.is_none_or(|n| n[i] == Vec3::ZERO) {
