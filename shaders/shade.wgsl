@@ -65,6 +65,11 @@ fn coverage_alpha(texel: vec2<i32>, w: f32) -> f32 {
     return alpha;
 }
 
+// The eight unit directions eye-dome lighting looks in, every 45°.
+const EDL_DIRECTIONS = array<vec2<f32>, 8>(
+    vec2<f32>(1.0, 0.0), vec2<f32>(0.70710678, 0.70710678), vec2<f32>(0.0, 1.0), vec2<f32>(-0.70710678, 0.70710678),
+    vec2<f32>(-1.0, 0.0), vec2<f32>(-0.70710678, -0.70710678), vec2<f32>(0.0, -1.0), vec2<f32>(0.70710678, -0.70710678));
+
 // Eye-dome lighting (Boucheny 2009, as Potree draws it): with D = log₂ of the view
 // distance, the mean over 8 neighbours at edl_radius_px of max(0, D(pixel) −
 // D(neighbour)) (how far the pixel lies behind what surrounds it), as the factor
@@ -74,8 +79,7 @@ fn eye_dome(texel: vec2<i32>, distance: f32) -> f32 {
     let last = vec2<i32>(textureDimensions(color_sum)) - 1;
     var sum = 0.0;
     for (var k = 0; k < 8; k++) {
-        let angle = f32(k) * 0.7853981633974483;
-        let offset = vec2<i32>(round(frame.edl_radius_px * vec2<f32>(cos(angle), sin(angle))));
+        let offset = vec2<i32>(round(frame.edl_radius_px * EDL_DIRECTIONS[k]));
         let at = clamp(texel + offset, vec2<i32>(0), last);
         let w = textureLoad(color_sum, at, 0).w;
         if w > 0.0 {

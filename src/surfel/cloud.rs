@@ -74,14 +74,11 @@ fn distinct_positions(points: &[Vec3], scale: f32) -> Vec<[f32; 3]> {
 /// among all `points` (unit-scaled by `scale` for the search), written into `surfels`.
 /// Non-zero `given` normals are kept; a radius already set (from faces) is only grown.
 /// Afterwards every listed surfel whose radius is still 0 gets [`fallback_radius`].
-/// With `surround` off (a mesh's isolated vertices, which lie among the mesh's own
-/// vertices), the radius is the distance to the [`RADIUS_RANK`]-th distinct neighbour.
-#[allow(clippy::too_many_arguments)]
 pub fn neighbour_disks(
     points: &[Vec3],
     scale: f32,
     which: &[u32],
-    surround: bool,
+    rule: RadiusRule,
     given: Option<&[Vec3]>,
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
@@ -109,11 +106,7 @@ pub fn neighbour_disks(
                 } else {
                     plane_normal(near.iter().copied())
                 };
-                let (radius, capped) = if surround {
-                    disk_radius(p, normal, &near)
-                } else {
-                    (ranked_radius(p, &near), false)
-                };
+                let (radius, capped) = disk_radius(p, normal, &near, rule);
                 (normal, radius / scale, capped)
             })
             .collect(),
@@ -141,10 +134,20 @@ pub fn neighbour_disks(
     }
 }
 
+/// How a neighbour disk's radius is found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RadiusRule {
+    /// A cloud's: the surrounding distance, or a capped ranked distance (module doc).
+    Surrounding,
+    /// A mesh's isolated vertices, which lie among the mesh's own vertices: the distance
+    /// to the [`RADIUS_RANK`]-th distinct neighbour.
+    Ranked,
+}
+
 /// The radius of the disk at `p` of unit `normal` among its neighbours `near` (sorted
-/// nearest first, `p` and its duplicates included), and whether it was capped (see the
-/// module doc). 0 when every neighbour coincides with `p`.
-fn disk_radius(p: Vec3, normal: Vec3, near: &[Vec3]) -> (f32, bool) {
+/// nearest first, `p` and its duplicates included) by `rule`, and whether it was capped
+/// (see the module doc). 0 when every neighbour coincides with `p`.
+fn disk_radius(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> (f32, bool) {
     let (t1, t2) = normal.any_orthonormal_pair();
     let distinct: Vec<(f32, f32)> = near
         .iter()
@@ -155,31 +158,20 @@ fn disk_radius(p: Vec3, normal: Vec3, near: &[Vec3]) -> (f32, bool) {
     let Some(&(nearest, _)) = distinct.first() else {
         return (0.0, false);
     };
+    let ranked = distinct[RADIUS_RANK.min(distinct.len()) - 1].0;
+    if rule == RadiusRule::Ranked {
+        return (ranked, false);
+    }
     let spacing = median_spacing(near);
     let stray = nearest > MAX_SPACINGS * spacing;
     let surrounding = (!stray).then(|| surrounding_distance(&distinct)).flatten();
     match surrounding {
         Some(r) => (SURROUND_GROWTH * r, false),
         None => {
-            let rank = distinct[RADIUS_RANK.min(distinct.len()) - 1].0;
             let cap = MAX_SPACINGS * spacing;
-            (rank.min(cap), rank > cap)
+            (ranked.min(cap), ranked > cap)
         }
     }
-}
-
-/// The distance from `p` to the [`RADIUS_RANK`]-th distinct point of `near` (sorted
-/// nearest first), or to the farthest when there are fewer; 0 when all coincide with it.
-fn ranked_radius(p: Vec3, near: &[Vec3]) -> f32 {
-    let distinct: Vec<f32> = near
-        .iter()
-        .map(|q| q.distance(p))
-        .filter(|d| *d > 0.0)
-        .collect();
-    distinct
-        .get(RADIUS_RANK.min(distinct.len()).wrapping_sub(1))
-        .copied()
-        .unwrap_or(0.0)
 }
 
 /// The least distance of `neighbours` ((distance, angle in the tangent plane), nearest
@@ -293,7 +285,7 @@ mod tests {
         .iter()
         .map(|&(x, y)| Vec3::new(x as f32, y as f32, 0.0))
         .collect();
-        let (r, capped) = disk_radius(Vec3::ZERO, Vec3::Z, &near);
+        let (r, capped) = disk_radius(Vec3::ZERO, Vec3::Z, &near, RadiusRule::Surrounding);
         assert!(
             (r - std::f32::consts::SQRT_2).abs() < 1e-6 && !capped,
             "{r}"
@@ -311,7 +303,7 @@ mod tests {
             }
         }
         near.sort_by(|a, b| a.length().total_cmp(&b.length()));
-        let (r, capped) = disk_radius(Vec3::ZERO, Vec3::Z, &near[..K]);
+        let (r, capped) = disk_radius(Vec3::ZERO, Vec3::Z, &near[..K], RadiusRule::Surrounding);
         assert!(r >= 4.0 && !capped, "{r}");
     }
 
@@ -323,7 +315,7 @@ mod tests {
                 near.push(Vec3::new(100.0 + x as f32, y as f32, 0.0));
             }
         }
-        let (r, capped) = disk_radius(Vec3::ZERO, Vec3::Z, &near);
+        let (r, capped) = disk_radius(Vec3::ZERO, Vec3::Z, &near, RadiusRule::Surrounding);
         assert!(capped && r <= 4.0, "{r}");
     }
 
@@ -337,7 +329,7 @@ mod tests {
             }
         }
         near.sort_by(|a, b| a.length().total_cmp(&b.length()));
-        let (r, _) = disk_radius(Vec3::ZERO, Vec3::Z, &near[..K]);
+        let (r, _) = disk_radius(Vec3::ZERO, Vec3::Z, &near[..K], RadiusRule::Surrounding);
         assert!(r > 1.0 && r <= 4.0, "{r}");
     }
 

@@ -15,7 +15,7 @@ use std::collections::HashMap;
 
 use glam::{DVec3, Vec3};
 
-use super::cloud::neighbour_disks;
+use super::cloud::{RadiusRule, neighbour_disks};
 use super::{Surfel, SurfelStats};
 use crate::io::geometry::unit_vector;
 use rayon::prelude::*;
@@ -223,7 +223,7 @@ pub fn vertex_disks(
         points,
         scale,
         &from_neighbours,
-        false,
+        RadiusRule::Ranked,
         given,
         surfels,
         stats,

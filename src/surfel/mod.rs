@@ -157,7 +157,7 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
             &g.positions,
             scale,
             &all,
-            true,
+            cloud::RadiusRule::Surrounding,
             given,
             &mut surfels,
             &mut stats,
