@@ -41,7 +41,7 @@ fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
         return vec4<f32>(n * 0.5 + 0.5, 1.0);
     }
     if frame.mode == MODE_EDL {
-        return vec4<f32>(mix(frame.background.rgb, color * eye_dome(texel, nz.w / c.w), coverage_alpha(texel, c.w)), 1.0);
+        return vec4<f32>(mix(frame.background.rgb, color * eye_dome(texel), coverage_alpha(texel, c.w)), 1.0);
     }
     let q = view_ray(frag.xy) * (nz.w / c.w);
     let l = normalize(frame.light_dir);
@@ -73,18 +73,22 @@ const EDL_DIRECTIONS = array<vec2<f32>, 8>(
 // Eye-dome lighting (Boucheny 2009, as Potree draws it): with D = log₂ of the view
 // distance, the mean over 8 neighbours at edl_radius_px of max(0, D(pixel) −
 // D(neighbour)) (how far the pixel lies behind what surrounds it), as the factor
-// exp(−300 · strength · mean). Background neighbours count nothing.
-fn eye_dome(texel: vec2<i32>, distance: f32) -> f32 {
-    let here = log2(max(distance, 1e-30));
-    let last = vec2<i32>(textureDimensions(color_sum)) - 1;
+// exp(−300 · strength · mean). D comes from pass 1's f32 depth (reversed Z: depth =
+// near / distance, so D(p) − D(n) = log₂ depth(n) − log₂ depth(p)): the blended depth
+// of pass 2 is a half-float sum, whose rounding the factor 300 would make visible.
+// Background neighbours count nothing.
+fn eye_dome(texel: vec2<i32>) -> f32 {
+    let here = textureLoad(depth, texel, 0);
+    if here <= 0.0 {
+        return 1.0;
+    }
+    let last = vec2<i32>(textureDimensions(depth)) - 1;
     var sum = 0.0;
     for (var k = 0; k < 8; k++) {
         let offset = vec2<i32>(round(frame.edl_radius_px * EDL_DIRECTIONS[k]));
-        let at = clamp(texel + offset, vec2<i32>(0), last);
-        let w = textureLoad(color_sum, at, 0).w;
-        if w > 0.0 {
-            let there = log2(max(textureLoad(normal_sum, at, 0).w / w, 1e-30));
-            sum += max(0.0, here - there);
+        let there = textureLoad(depth, clamp(texel + offset, vec2<i32>(0), last), 0);
+        if there > 0.0 {
+            sum += max(0.0, log2(there) - log2(here));
         }
     }
     return exp(-300.0 * frame.edl_strength * sum / 8.0);
