@@ -46,6 +46,9 @@ struct Args {
     /// Leave colours out (on by default for the default preset only).
     #[arg(long)]
     no_colors: bool,
+    /// Write the vertices only: the same samples as a point cloud.
+    #[arg(long)]
+    no_faces: bool,
     #[arg(long, value_enum, default_value = "binary-little-endian")]
     format: Format,
     /// Output file (default: data/torus_knot.ply, or data/large/lucy_knot.ply for lucy).
@@ -141,7 +144,10 @@ fn main() -> anyhow::Result<()> {
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
     }
-    let mesh = torus_knot(segments, sides, colors);
+    let mut mesh = torus_knot(segments, sides, colors);
+    if args.no_faces {
+        mesh.faces = FaceList::default();
+    }
     let encoding = match args.format {
         Format::Ascii => Encoding::Ascii,
         Format::BinaryLittleEndian => Encoding::BinaryLittleEndian,

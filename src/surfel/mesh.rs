@@ -15,7 +15,8 @@ use std::collections::HashMap;
 
 use glam::{DVec3, Vec3};
 
-use super::cloud::{RadiusRule, neighbour_disks};
+use super::cloud::neighbour_disks;
+use super::covering::RadiusRule;
 use super::{Surfel, SurfelStats};
 use crate::io::geometry::unit_vector;
 use rayon::prelude::*;

@@ -8,6 +8,7 @@
 //! on the model's units, and a stray sample far away changes neither.
 
 pub mod cloud;
+pub mod covering;
 pub mod mesh;
 pub mod octahedral;
 pub mod pca;
@@ -55,7 +56,7 @@ pub struct SurfelStats {
     /// Surfels whose neighbours all coincide with them: radius from the other surfels.
     pub fallback_radii: u64,
     /// Cloud surfels that close no gap (a boundary, a stray sample) whose radius was
-    /// capped at a few neighbourhood spacings ([`cloud::MAX_SPACINGS`]).
+    /// capped at a few neighbourhood spacings ([`covering::MAX_SPACINGS`]).
     pub capped_radii: u64,
 }
 
@@ -157,7 +158,7 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
             &g.positions,
             scale,
             &all,
-            cloud::RadiusRule::Surrounding,
+            covering::RadiusRule::Surrounding,
             given,
             &mut surfels,
             &mut stats,
@@ -167,7 +168,6 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
             if given.is_none_or(|n| n[i] == Vec3::ZERO) {
                 s.normal = orientation.apply(s.position, s.normal);
             }
-            s.shape = SplatShape::circle(s.normal);
         });
         given.is_some() && stats.given_normals == surfels.len() as u64
     } else {

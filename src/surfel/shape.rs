@@ -125,6 +125,17 @@ impl Shape {
         }
     }
 
+    /// A constant-normal ellipse of major axis `axis` (made ⟂ `normal`) and `ratio`.
+    pub fn ellipse(normal: DVec3, axis: DVec3, ratio: f64) -> Shape {
+        Shape {
+            axis: (axis - normal * axis.dot(normal))
+                .try_normalize()
+                .unwrap_or_else(|| normal.any_orthonormal_vector()),
+            ratio,
+            ..Shape::circle(normal)
+        }
+    }
+
     /// The minor axis v = n × u.
     pub fn minor_axis(&self, normal: DVec3) -> DVec3 {
         normal.cross(self.axis)

@@ -1,0 +1,405 @@
+//! The covering ellipse of a cloud's sample among its neighbours (DESIGN.md §2): the
+//! splat that closes the gaps of the sampling around the point without growing into a
+//! blob, however anisotropic the sampling (an RGB-D frame's depth steps, a LiDAR
+//! swath's scan lines).
+//!
+//! With n the unit normal, (t₁, t₂) a tangent frame and o = q − p a neighbour's offset:
+//!
+//! * **axes**: the *ring* is the nearest distinct neighbour in each of [`SECTORS`] equal
+//!   angular sectors of the tangent plane, a stand-in for a mesh's one-ring; the ellipse
+//!   takes the principal axes of the ring's second moment Σ o oᵀ (projected): major u,
+//!   ratio = √(λ₂/λ₁) clamped to [[`MIN_RATIO`], 1]. A sampling dense along its rows
+//!   and sparse across them puts few ring members on the row, so u runs across the rows.
+//!   A ring of fewer than [`MIN_RING`] sectors (the neighbourhood is one scan line, with
+//!   nothing seen across it) says nothing of the other direction: the splat stays round.
+//!   The sectors and distances are taken again in the metric of the last estimate,
+//!   [`AXIS_ROUNDS`] times, which sharpens the ratio toward the sampling's own.
+//! * **size**: in the ellipse's metric m(o) = √((o·u)² + (o·v / ratio)² + (o·n)²)
+//!   (v = n × u; the plain distance when ratio = 1), the *surrounding distance* r_s is
+//!   the least m within which the distinct neighbours, taken nearest first, leave no
+//!   angular gap (angles in the metric) wider than [`MAX_GAP`]. The major semi-axis is
+//!   [`SURROUND_GROWTH`] · r_s. In the metric every triangle that the point makes with two
+//!   angularly consecutive surrounding neighbours has a circumradius ≤ r_s (an angle
+//!   ≤ 120° between sides ≤ r_s), so the ellipse covers every gap of the sampling (on a
+//!   square grid of spacing h: a circle of radius h√2, through the diagonal neighbours).
+//! * **cap**: a point that no neighbourhood surrounds (a boundary) or whose nearest
+//!   neighbour lies more than [`MAX_SPACINGS`] times the neighbourhood's median spacing
+//!   away (a stray sample) closes no gap; it gets a circle of the distance to its
+//!   [`RADIUS_RANK`]-th distinct neighbour, capped at [`MAX_SPACINGS`] spacings, and is
+//!   counted. The spacing is the median, over the neighbourhood, of each member's
+//!   distance to its nearest other member.
+
+use arrayvec::ArrayVec;
+use glam::{DVec2, Vec2, Vec3};
+
+use super::shape::{Fit, MIN_RATIO};
+
+/// Most neighbours a covering looks at (more are ignored).
+pub const MAX_NEIGHBOURS: usize = 64;
+/// Widest angular gap (radians) that the surrounding neighbours may leave: 120°.
+pub const MAX_GAP: f32 = 2.0 * std::f32::consts::FRAC_PI_3;
+/// Major semi-axis over the surrounding distance.
+pub const SURROUND_GROWTH: f32 = std::f32::consts::SQRT_2;
+/// Which distinct neighbour sets the radius of a point no neighbourhood surrounds.
+pub const RADIUS_RANK: usize = 6;
+/// Largest radius of a point that closes no gap, in neighbourhood spacings.
+pub const MAX_SPACINGS: f32 = 4.0;
+/// Angular sectors of the ring.
+pub const SECTORS: usize = 6;
+const _: () = assert!(SECTORS == 6, "sector() splits by the lines at ±60°");
+/// A ring whose axes differ by less than this ratio is taken as round.
+pub const ROUND_ENOUGH: f32 = 0.9;
+/// Fewest filled sectors of a ring whose axes are taken (fewer: a line, kept round).
+pub const MIN_RING: usize = 5;
+/// Estimates of the axes, each in the metric of the one before.
+pub const AXIS_ROUNDS: usize = 3;
+
+/// How a covering is found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RadiusRule {
+    /// A cloud's: the covering ellipse, or a capped ranked circle (module doc).
+    Surrounding,
+    /// A mesh's isolated vertices, which lie among the mesh's own vertices: a circle
+    /// through the [`RADIUS_RANK`]-th distinct neighbour.
+    Ranked,
+}
+
+/// A splat's ellipse in its tangent plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Covering {
+    /// The major semi-axis; 0 when every neighbour coincides with the point.
+    pub radius: f32,
+    /// The major axis: unit, ⟂ the normal.
+    pub axis: Vec3,
+    /// Minor over major semi-axis, in [[`MIN_RATIO`], 1].
+    pub ratio: f32,
+    /// Whether the radius was capped (a boundary or stray point).
+    pub capped: bool,
+}
+
+/// The ellipse's metric: offsets in (major, minor / ratio, normal) coordinates.
+#[derive(Debug, Clone, Copy)]
+struct Metric {
+    u: Vec3,
+    v: Vec3,
+    n: Vec3,
+    ratio: f32,
+}
+
+impl Metric {
+    fn circle(n: Vec3) -> Metric {
+        let (u, v) = n.any_orthonormal_pair();
+        Metric {
+            u,
+            v,
+            n,
+            ratio: 1.0,
+        }
+    }
+
+    /// The offset's in-plane coordinates, minor one stretched, and its metric length.
+    fn map(&self, o: Vec3) -> (Vec2, f32) {
+        let xy = Vec2::new(o.dot(self.u), o.dot(self.v) / self.ratio);
+        (xy, (xy.length_squared() + o.dot(self.n).powi(2)).sqrt())
+    }
+}
+
+/// The covering of the point `p` of unit `normal` among its neighbours `near` (sorted
+/// nearest first, `p` and its duplicates included; the first [`MAX_NEIGHBOURS`]) by
+/// `rule` (see the module doc).
+pub fn covering(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> Covering {
+    let offsets: ArrayVec<Vec3, MAX_NEIGHBOURS> = near
+        .iter()
+        .map(|q| *q - p)
+        .filter(|o| o.length_squared() > 0.0)
+        .take(MAX_NEIGHBOURS)
+        .collect();
+    let circle = Metric::circle(normal);
+    let round = |radius: f32, capped: bool| Covering {
+        radius,
+        axis: circle.u,
+        ratio: 1.0,
+        capped,
+    };
+    let Some(nearest) = offsets.first().map(|o| o.length()) else {
+        return round(0.0, false);
+    };
+    let ranked = offsets[RADIUS_RANK.min(offsets.len()) - 1].length();
+    if rule == RadiusRule::Ranked {
+        return round(ranked, false);
+    }
+    let cap = MAX_SPACINGS * median_spacing(near);
+    let metric = axes(&offsets, circle);
+    match (nearest <= cap)
+        .then(|| surrounding_distance(&offsets, &metric))
+        .flatten()
+    {
+        Some(r) => Covering {
+            radius: SURROUND_GROWTH * r,
+            axis: metric.u,
+            ratio: metric.ratio,
+            capped: false,
+        },
+        None => round(ranked.min(cap), ranked > cap),
+    }
+}
+
+/// The ellipse's axes from [`AXIS_ROUNDS`] rings, starting from `circle`; a ring found
+/// round ([`ROUND_ENOUGH`]) or spanning no plane ends the search.
+fn axes(offsets: &[Vec3], circle: Metric) -> Metric {
+    let mut m = circle;
+    for _ in 0..AXIS_ROUNDS {
+        match ring_axes(offsets, m) {
+            Some(next) if next.ratio < ROUND_ENOUGH => m = next,
+            Some(_) => return circle,
+            None => return m,
+        }
+    }
+    m
+}
+
+/// The axes of the ring of `offsets` found in the metric `m` (module doc); `None`
+/// when the ring spans no plane or fills fewer than [`MIN_RING`] sectors.
+fn ring_axes(offsets: &[Vec3], m: Metric) -> Option<Metric> {
+    let mut ring = [None::<(f32, Vec3)>; SECTORS];
+    for &o in offsets {
+        let (xy, d) = m.map(o);
+        let slot = &mut ring[sector(xy)];
+        if slot.is_none_or(|(best, _)| d < best) {
+            *slot = Some((d, o));
+        }
+    }
+    let (t1, t2) = (m.u, m.n.cross(m.u));
+    let mut fit = Fit::default();
+    for (_, o) in ring.iter().flatten() {
+        let d = DVec2::new(o.dot(t1) as f64, o.dot(t2) as f64);
+        fit.add(d, DVec2::ZERO);
+    }
+    let (dir, l1, l2) = fit.axes();
+    if l1 <= 0.0 || l2 <= 0.0 || ring.iter().flatten().count() < MIN_RING {
+        return None;
+    }
+    let u = (t1 * dir.x as f32 + t2 * dir.y as f32).normalize_or(t1);
+    Some(Metric {
+        u,
+        v: m.n.cross(u),
+        n: m.n,
+        ratio: ((l2 / l1).sqrt() as f32).clamp(MIN_RATIO as f32, 1.0),
+    })
+}
+
+/// The least metric distance of `offsets` within which, taken nearest first, they
+/// leave no angular gap wider than [`MAX_GAP`]; `None` when even all of them do.
+fn surrounding_distance(offsets: &[Vec3], m: &Metric) -> Option<f32> {
+    let mut mapped: ArrayVec<(f32, f32), MAX_NEIGHBOURS> = offsets
+        .iter()
+        .map(|&o| {
+            let (xy, d) = m.map(o);
+            (d, angle(xy))
+        })
+        .collect();
+    mapped.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    let mut angles: ArrayVec<f32, MAX_NEIGHBOURS> = ArrayVec::new();
+    for (d, angle) in mapped {
+        let at = angles.partition_point(|a| *a < angle);
+        angles.insert(at, angle);
+        if angles.len() >= 3 && widest_gap(&angles) <= MAX_GAP {
+            return Some(d);
+        }
+    }
+    None
+}
+
+/// Which of the [`SECTORS`] = 6 sectors of 60° around the origin holds `xy`: 0–2 above
+/// the x axis counter-clockwise from it, 3–5 below, by the lines at ±60° (y = ±√3 x).
+fn sector(xy: Vec2) -> usize {
+    let s = 3f32.sqrt() * xy.x;
+    let (above, y) = (xy.y >= 0.0, xy.y.abs());
+    let side = if y < s {
+        0
+    } else if y < -s {
+        2
+    } else {
+        1
+    };
+    if above { side } else { 3 + side }
+}
+
+/// The angle of `xy` from the x axis, in [−π, π], within 10⁻⁵ rad (a polynomial for
+/// atan on [0, 1], Abramowitz and Stegun 4.4.49 form): libm's `atan2` was a third of the
+/// covering's time.
+fn angle(xy: Vec2) -> f32 {
+    use std::f32::consts::{FRAC_PI_2, PI};
+    let (ax, ay) = (xy.x.abs(), xy.y.abs());
+    let (lo, hi) = (ax.min(ay), ax.max(ay));
+    if hi == 0.0 {
+        return 0.0;
+    }
+    let t = lo / hi;
+    let t2 = t * t;
+    let mut a = t
+        * (0.999_866
+            + t2 * (-0.330_299_5 + t2 * (0.180_141 + t2 * (-0.085_133 + t2 * 0.020_835_1))));
+    if ay > ax {
+        a = FRAC_PI_2 - a;
+    }
+    if xy.x < 0.0 {
+        a = PI - a;
+    }
+    if xy.y < 0.0 { -a } else { a }
+}
+
+/// The widest gap between consecutive sorted angles (radians in (−π, π]), around the
+/// circle.
+fn widest_gap(sorted: &[f32]) -> f32 {
+    let wrap = sorted[0] + std::f32::consts::TAU - sorted[sorted.len() - 1];
+    sorted.windows(2).map(|w| w[1] - w[0]).fold(wrap, f32::max)
+}
+
+/// The median, over `points` (the first [`MAX_NEIGHBOURS`]), of each one's distance to
+/// its nearest other distinct member: the sampling's spacing there, which a stray
+/// sample beside it does not change.
+fn median_spacing(points: &[Vec3]) -> f32 {
+    let points = &points[..points.len().min(MAX_NEIGHBOURS)];
+    let mut nearest: ArrayVec<f32, MAX_NEIGHBOURS> = points
+        .iter()
+        .map(|a| {
+            points
+                .iter()
+                .map(|b| a.distance_squared(*b))
+                .filter(|d| *d > 0.0)
+                .fold(f32::INFINITY, f32::min)
+        })
+        .filter(|d| d.is_finite())
+        .collect();
+    if nearest.is_empty() {
+        return 0.0;
+    }
+    let mid = nearest.len() / 2;
+    nearest.select_nth_unstable_by(mid, f32::total_cmp).1.sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(
+        cols: std::ops::RangeInclusive<i32>,
+        rows: std::ops::RangeInclusive<i32>,
+        row_gap: f32,
+    ) -> Vec<Vec3> {
+        let mut near = Vec::new();
+        for row in rows {
+            for col in cols.clone() {
+                near.push(Vec3::new(col as f32, row_gap * row as f32, 0.0));
+            }
+        }
+        near.sort_by(|a, b| a.length().total_cmp(&b.length()));
+        near
+    }
+
+    /// Whether the ellipse of `c` at the origin, normal +z, holds the in-plane point `q`.
+    fn holds(c: &Covering, q: Vec3) -> bool {
+        let v = Vec3::Z.cross(c.axis);
+        let (x, y) = (q.dot(c.axis) / c.radius, q.dot(v) / (c.radius * c.ratio));
+        x * x + y * y <= 1.0 + 1e-5
+    }
+
+    #[test]
+    fn a_square_grid_point_gets_the_circle_through_its_diagonal_neighbours() {
+        let c = covering(
+            Vec3::ZERO,
+            Vec3::Z,
+            &grid(-1..=1, -1..=1, 1.0),
+            RadiusRule::Surrounding,
+        );
+        assert!((c.radius - std::f32::consts::SQRT_2).abs() < 1e-5, "{c:?}");
+        assert!(c.ratio > 0.99 && !c.capped, "{c:?}");
+    }
+
+    #[test]
+    fn rows_sparser_than_columns_get_an_ellipse_across_the_rows() {
+        // Columns 1 apart, rows 4 apart: the 25 nearest neighbours (within distance 5)
+        // are mostly the point's own row.
+        let near = grid(-6..=6, -1..=1, 4.0);
+        let c = covering(Vec3::ZERO, Vec3::Z, &near[..25], RadiusRule::Surrounding);
+        assert!(
+            c.axis.y.abs() > 0.99 && !c.capped,
+            "major axis across the rows: {c:?}"
+        );
+        assert!(
+            holds(&c, Vec3::new(0.0, 4.0, 0.0)),
+            "reaches the next row: {c:?}"
+        );
+        // Smaller than the circle that the same rule draws without the axes.
+        let area = c.radius * c.radius * c.ratio;
+        assert!(area < 0.5 * 2.0 * 16.0, "{c:?}");
+    }
+
+    #[test]
+    fn a_neighbourhood_on_its_own_row_stays_round() {
+        // The 16 nearest: the row and the next rows' nearest few, in 4 sectors of 6.
+        let near = grid(-6..=6, -1..=1, 4.0);
+        let c = covering(Vec3::ZERO, Vec3::Z, &near[..16], RadiusRule::Surrounding);
+        assert!(c.ratio == 1.0 && c.radius >= 4.0, "{c:?}");
+    }
+
+    #[test]
+    fn a_stray_sample_is_capped_at_four_spacings() {
+        let mut near = vec![Vec3::ZERO];
+        for x in 0..4 {
+            for y in 0..4 {
+                near.push(Vec3::new(100.0 + x as f32, y as f32, 0.0));
+            }
+        }
+        let c = covering(Vec3::ZERO, Vec3::Z, &near, RadiusRule::Surrounding);
+        assert!(c.capped && c.radius <= 4.0 && c.ratio == 1.0, "{c:?}");
+    }
+
+    #[test]
+    fn a_boundary_point_keeps_a_circle_of_its_neighbours_spacing() {
+        // A half-plane: every neighbour lies at x ≥ 0.
+        let near: Vec<Vec3> = grid(0..=3, -2..=2, 1.0);
+        let c = covering(Vec3::ZERO, Vec3::Z, &near[..16], RadiusRule::Surrounding);
+        assert!(c.radius > 1.0 && c.radius <= 4.0 && c.ratio == 1.0, "{c:?}");
+    }
+
+    #[test]
+    fn the_fast_angle_is_atan2() {
+        for k in 0..3600 {
+            let t = k as f32 * 0.1f32.to_radians() - std::f32::consts::PI;
+            for r in [1e-3f32, 1.0, 7e4] {
+                let xy = Vec2::new(t.cos(), t.sin()) * r;
+                assert!(
+                    (angle(xy) - xy.y.atan2(xy.x)).abs() < 2e-5,
+                    "{t}: {}",
+                    angle(xy)
+                );
+            }
+        }
+        assert_eq!(angle(Vec2::ZERO), 0.0);
+    }
+
+    #[test]
+    fn sectors_are_sixty_degrees_wide() {
+        for k in 0..360 {
+            let t = (k as f32 + 0.5).to_radians();
+            let expected = if k < 180 {
+                k / 60
+            } else {
+                3 + (360 - k - 1) / 60
+            };
+            assert_eq!(
+                sector(Vec2::new(t.cos(), t.sin())),
+                expected as usize,
+                "{k}°"
+            );
+        }
+    }
+
+    #[test]
+    fn coinciding_neighbours_give_no_radius() {
+        let c = covering(Vec3::ONE, Vec3::Z, &[Vec3::ONE; 5], RadiusRule::Surrounding);
+        assert_eq!(c.radius, 0.0);
+    }
+}
