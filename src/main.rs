@@ -17,7 +17,7 @@ struct ViewOnly {
     name = "spt",
     version,
     about = "Point-based rendering engine: sequential point trees and EWA splatting",
-    long_about = "spt turns scanned meshes and point clouds (PLY) into disks (surfels) for \
+    long_about = "spt turns scanned meshes and point clouds (PLY, LAS, LAZ) into disks (surfels) for \
                   point-based rendering, and builds their sequential point trees.\n\nStart with \
                   `spt info MODEL.ply` to see what a file holds and how it loads, then \
                   `spt convert MODEL.ply MODEL.spt`."
@@ -32,19 +32,22 @@ struct Cli {
 enum Command {
     /// What a model file holds. PLY: format, elements, counts, bounding box (exact f64),
     /// what was dropped and why, leaf surfels (count, radii), load time and throughput.
+    /// LAS/LAZ: version, point format, counts by return and by class, intensity range,
+    /// scale, offset, CRS, and the same bounds, surfels and timing.
     /// .spt: nodes, depth, bounds, errors, and whether its checksum holds.
     Info {
-        /// A PLY file (ASCII or binary, mesh or point cloud) or an .spt file.
+        /// A PLY file (ASCII or binary, mesh or point cloud), a LAS or LAZ file, or an
+        /// .spt file.
         file: PathBuf,
         /// Print the report as JSON instead of text.
         #[arg(long)]
         json: bool,
     },
-    /// Renders one frame of a model (PLY or .spt) to PNG, headless, by three-pass EWA
+    /// Renders one frame of a model (PLY, LAS, LAZ or .spt) to PNG, headless, by three-pass EWA
     /// splatting of its sequential point tree; prints splats drawn, prefix length and GPU
     /// time. `--mode mesh` draws the mesh itself as the reference.
     Render {
-        /// The model: a PLY file or an .spt file.
+        /// The model: a PLY, LAS or LAZ file, or an .spt file.
         model: PathBuf,
         /// The PNG to write.
         #[arg(short, long)]
@@ -52,9 +55,9 @@ enum Command {
         #[command(flatten)]
         args: Box<spt::apps::render::RenderArgs>,
     },
-    /// Opens the viewer: a window that draws the model (PLY or .spt; default
+    /// Opens the viewer: a window that draws the model (PLY, LAS, LAZ or .spt; default
     /// data/torus_knot.ply) and turns under the mouse, with a panel for the level of detail,
-    /// display modes and statistics. PLY files are converted in the background with a
+    /// display modes and statistics. PLY, LAS and LAZ files are converted in the background with a
     /// progress bar; .spt files open by memory map. Drop a file on the window or press
     /// Ctrl+O to open another. `--screenshot out.png` draws --frames frames, saves the
     /// picture and exits.
@@ -66,12 +69,12 @@ enum Command {
     /// summary.md and speed_vs_error.png to --out, and checks that a repeated
     /// configuration gives the same numbers.
     Bench(Box<spt::apps::bench::BenchArgs>),
-    /// Builds the sequential point tree of a PLY model and writes it as an .spt file,
+    /// Builds the sequential point tree of a PLY, LAS or LAZ model and writes it as an .spt file,
     /// which opens instantly (memory-mapped). Shows each stage (load, surfels, tree,
     /// errors, sort, write) with its time, then a summary. The output is written to a
     /// temporary file and renamed: a failed convert never leaves a partial file.
     Convert {
-        /// The model: a PLY file.
+        /// The model: a PLY, LAS or LAZ file.
         input: PathBuf,
         /// The .spt file to write (replaced if it exists).
         output: PathBuf,

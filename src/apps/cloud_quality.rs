@@ -10,7 +10,7 @@ use std::path::Path;
 use anyhow::Context;
 
 use crate::io::Geometry;
-use crate::io::ply::read_ply;
+use crate::io::model::read_model;
 use crate::io::triangulate::{sensor_grid, terrain};
 use crate::render::metrics::compare;
 use crate::render::perceptual::{downsample, flip_mean, ssim_mean};
@@ -36,7 +36,7 @@ pub struct CloudAndReference {
 
 impl CloudAndReference {
     pub fn open(path: &Path, triangulation: Triangulation) -> anyhow::Result<Self> {
-        let mut geometry: Geometry = read_ply(path)?.geometry;
+        let mut geometry: Geometry = read_model(path)?.geometry;
         geometry.triangles.clear();
         let triangles = match triangulation {
             Triangulation::Grid { width, height } => sensor_grid(&geometry, width, height)

@@ -16,7 +16,7 @@ use crate::io::GeometryStats;
 use crate::io::atomic::write_atomically;
 use crate::tree::NodeRecord;
 use crate::tree::report::{Finished, Report, Step};
-use crate::tree::scene::build_from_ply;
+use crate::tree::scene::build_from_file;
 use crate::tree::spt_file::{HEADER_BYTES, write_to};
 
 /// A writer that reports the bytes it passes on to a stage.
@@ -124,7 +124,7 @@ fn dropped(st: &GeometryStats) -> String {
 
 pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
     let start = Instant::now();
-    let (list, _) = build_from_ply(input, false, &Steps::default())?;
+    let (list, _) = build_from_file(input, false, &Steps::default())?;
     let points = list.meta.leaf_count;
     let scale = list.meta.error_scale;
 

@@ -1,10 +1,13 @@
-//! Model files in: PLY reading and writing, and the rebased [`Geometry`] they produce.
+//! Model files in: PLY reading and writing, LAS and LAZ reading ([`model::read_model`]
+//! takes any of them), and the rebased [`Geometry`] they produce.
 //! This layer imports no other module of the crate (`.spt` files, which hold trees,
 //! live in [`crate::tree::spt_file`]).
 
 pub mod atomic;
 pub mod bounds;
 pub mod geometry;
+pub mod las;
+pub mod model;
 pub mod ply;
 pub mod rebase;
 pub mod triangulate;

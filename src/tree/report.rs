@@ -1,7 +1,7 @@
 //! How opening a model tells its progress: one trait for every step, from reading the
 //! file to uploading it, heard by `spt convert`'s progress bars and the viewer's loader.
 
-use crate::io::ply::PlyModel;
+use crate::io::model::Model;
 use crate::surfel::LeafSurfels;
 
 use super::TreeMeta;
@@ -48,7 +48,7 @@ impl Step {
 
 /// What a step made, told when it ends.
 pub enum Finished<'a> {
-    Read(&'a PlyModel),
+    Read(&'a Model),
     Surfels(&'a LeafSurfels),
     Hierarchy { leaves: u64, internal: u64 },
     Errors(&'a TreeMeta),

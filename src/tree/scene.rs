@@ -16,7 +16,7 @@ use super::select::PrefixIndex;
 use super::spt_file::{SptFile, is_spt};
 use super::{NodeRecord, SequentialList, TreeMeta, build_list};
 use crate::io::Geometry;
-use crate::io::ply::read_ply;
+use crate::io::model::read_model;
 use crate::surfel::leaf_surfels;
 use crate::surfel::shape::SplatShape;
 
@@ -57,7 +57,7 @@ impl Scene {
     }
 
     /// [`Scene::open`], telling `report` each step: for an `.spt` file, its check and
-    /// prefix index; for a PLY file, reading, surfels, tree, errors, sort and index.
+    /// prefix index; for a model file (PLY, LAS, LAZ), reading, surfels, tree, errors, sort and index.
     pub fn open_reporting(path: &Path, report: &dyn Report) -> anyhow::Result<Scene> {
         if is_spt(path) {
             report.step(Step::Check, 0);
@@ -70,7 +70,7 @@ impl Scene {
                 mesh: None,
             });
         }
-        let (list, mesh) = build_from_ply(path, true, report)?;
+        let (list, mesh) = build_from_file(path, true, report)?;
         report.step(Step::Index, 0);
         Ok(Scene::from_list(list, mesh))
     }
@@ -104,15 +104,15 @@ impl Scene {
     }
 }
 
-/// Reads a PLY file and builds its sequential list, telling `report` each step; with
+/// Reads a model file (PLY, LAS or LAZ) and builds its sequential list, telling `report` each step; with
 /// `keep_mesh`, also the mesh of the reference pass (for a model with triangles).
-pub fn build_from_ply(
+pub fn build_from_file(
     path: &Path,
     keep_mesh: bool,
     report: &dyn Report,
 ) -> anyhow::Result<(SequentialList, Option<MeshData>)> {
     report.step(Step::Read, 0);
-    let model = read_ply(path)?;
+    let model = read_model(path)?;
     report.finished(Finished::Read(&model));
     Ok(build_from_geometry(model.geometry, keep_mesh, report))
 }

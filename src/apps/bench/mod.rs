@@ -36,7 +36,7 @@ const STABILITY_SAMPLES: u32 = 120;
 /// The options of `spt bench`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct BenchArgs {
-    /// The model: a PLY file (mesh or point cloud) or an .spt file.
+    /// The model: a PLY file (mesh or point cloud), a LAS or LAZ file, or an .spt file.
     pub model: PathBuf,
     /// Folder for results.csv, summary.md and speed_vs_error.png (made if missing).
     #[arg(long)]

@@ -156,7 +156,7 @@ impl App {
             .spawn(move || {
                 let picked = rfd::FileDialog::new()
                     .set_title("Open a model")
-                    .add_filter("models (PLY, spt)", &["ply", "spt"])
+                    .add_filter("models (PLY, LAS, LAZ, spt)", &["ply", "las", "laz", "spt"])
                     .pick_file();
                 let _ = send.send(picked);
                 let _ = proxy.send_event(Wake);

@@ -29,7 +29,8 @@ pub const DEFAULT_MODEL: &str = "data/torus_knot.ply";
 /// The options of `spt view`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct ViewArgs {
-    /// The model: a PLY file (converted in the background) or an .spt file (memory-mapped).
+    /// The model: a PLY, LAS or LAZ file (converted in the background) or an .spt file
+    /// (memory-mapped).
     /// Default: data/torus_knot.ply.
     pub model: Option<PathBuf>,
     #[command(flatten)]

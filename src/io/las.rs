@@ -1,0 +1,298 @@
+//! LAS 1.0–1.4 and LAZ files in, with the `las` crate (LAZ decoded in parallel across
+//! cores by `laz`): positions (scaled integers, to f64, then rebased as PLY vertices are,
+//! [`super::geometry`]), RGB, and what LiDAR users read a tile by: counts by ASPRS class
+//! and by return number, intensity range, scale, offset and CRS ([`LasSummary`]).
+//!
+//! Bad files get an error that names the file and what is wrong, and nothing is
+//! allocated from a header's word alone: the header's point count and record length must
+//! fit in the file (uncompressed), a LAZ chunk table may hold no more chunks than its
+//! compressed bytes, an extended VLR no more bytes than the file, and points are decoded
+//! in batches of [`BATCH`], so memory follows the points a file really holds.
+//!
+//! Colours: LAS stores 16-bit channels, but many writers put 0–255 values in them;
+//! when no channel of any point exceeds 255, the values are taken as 8-bit.
+
+use std::io::{Cursor, Read, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use las::{PointData, PointDataBuilder, Reader};
+use serde::Serialize;
+
+use super::geometry::{Geometry, GeometryStats, assemble};
+use super::ply::fields::{Field, VertexFields, VertexRows};
+use super::ply::scalar::Scalar;
+
+/// Points decoded at a time.
+pub const BATCH: u64 = 1 << 20;
+
+/// A LAS or LAZ file that cannot be read, and why.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{}: {message}", path.display())]
+pub struct LasError {
+    pub path: PathBuf,
+    pub message: String,
+}
+
+/// What a LAS file says of itself, and counts over its points.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LasSummary {
+    /// "1.2", "1.4"…
+    pub version: String,
+    pub point_format: u8,
+    pub compressed: bool,
+    pub points: u64,
+    /// (return number, points), ascending, for the numbers present.
+    pub by_return: Vec<(u8, u64)>,
+    /// (ASPRS class, points), ascending, for the classes present.
+    pub by_class: Vec<(u8, u64)>,
+    /// (min, max) intensity.
+    pub intensity: Option<(u16, u16)>,
+    pub scale: [f64; 3],
+    pub offset: [f64; 3],
+    /// "WKT" or "GeoTIFF keys" when the file carries a CRS.
+    pub crs: Option<String>,
+    /// "16-bit" or "8-bit (in 16-bit fields)" when the points have RGB.
+    pub colors: Option<String>,
+    pub system_identifier: String,
+    pub generating_software: String,
+}
+
+/// A LAS file read: its summary and its geometry.
+#[derive(Debug, Clone)]
+pub struct LasModel {
+    pub summary: LasSummary,
+    pub geometry: Geometry,
+    pub stats: GeometryStats,
+    pub file_bytes: u64,
+    pub load_time: Duration,
+}
+
+/// Whether `bytes` (a file's first bytes) start as a LAS file does.
+pub fn is_las(bytes: &[u8]) -> bool {
+    bytes.starts_with(b"LASF")
+}
+
+/// Reads a LAS or LAZ file.
+pub fn read_las(path: &Path) -> Result<LasModel, LasError> {
+    let start = Instant::now();
+    let fail = |message: String| LasError {
+        path: path.to_owned(),
+        message,
+    };
+    let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read: {e}")))?;
+    let file_bytes = bytes.len() as u64;
+    check_layout(&bytes).map_err(fail)?;
+    let mut reader = Reader::new(Cursor::new(bytes)).map_err(|e| fail(format!("{e}")))?;
+    let points = decode(&mut reader).map_err(fail)?;
+    let summary = summarize(reader.header(), &points);
+    let (geometry, stats) = assemble(&points, &points.fields(), None).map_err(fail)?;
+    Ok(LasModel {
+        summary,
+        geometry,
+        stats,
+        file_bytes,
+        load_time: start.elapsed(),
+    })
+}
+
+/// Checks that the header's sizes fit in the file (see the module doc).
+fn check_layout(bytes: &[u8]) -> Result<(), String> {
+    let len = bytes.len() as u64;
+    let raw = las::raw::Header::read_from(Cursor::new(bytes))
+        .map_err(|e| format!("not a readable LAS header ({len} bytes): {e}"))?;
+    for (axis, s) in ["x", "y", "z"].iter().zip([raw.x_scale_factor, raw.y_scale_factor, raw.z_scale_factor]) {
+        if s == 0.0 || !s.is_finite() {
+            return Err(format!("the {axis} scale factor is {s}: coordinates cannot be decoded"));
+        }
+    }
+    let data = u64::from(raw.offset_to_point_data);
+    if data > len {
+        return Err(format!("the point data would start at byte {data}, past the end ({len} bytes)"));
+    }
+    let count = raw
+        .large_file
+        .map_or(u64::from(raw.number_of_point_records), |l| l.number_of_point_records);
+    let compressed = raw.point_data_record_format & 0x80 != 0;
+    if !compressed {
+        let record = u64::from(raw.point_data_record_length);
+        let room = (len - data) / record.max(1);
+        if count > room {
+            return Err(format!(
+                "the header says {count} points of {record} bytes, but the file holds at most {room} (truncated?)"
+            ));
+        }
+    } else {
+        check_chunk_table(bytes, data)?;
+    }
+    if let Some(evlr) = raw.evlr {
+        check_evlr(bytes, evlr.start_of_first_evlr)?;
+    }
+    Ok(())
+}
+
+/// A LAZ chunk table (its offset is the first 8 bytes of the point data) may list no
+/// more chunks than there are compressed bytes before it.
+fn check_chunk_table(bytes: &[u8], data: u64) -> Result<(), String> {
+    let len = bytes.len() as u64;
+    let mut at = Cursor::new(bytes);
+    let mut word = [0u8; 8];
+    at.seek(SeekFrom::Start(data)).and_then(|_| at.read_exact(&mut word)).map_err(|_| {
+        "the LAZ point data is cut short before its chunk table offset".to_owned()
+    })?;
+    let table = i64::from_le_bytes(word);
+    if table == -1 {
+        // Written by a streaming encoder: the table's offset is at the end of the file.
+        return Ok(());
+    }
+    if table <= data as i64 || table as u64 + 8 > len {
+        return Err(format!("the LAZ chunk table offset {table} lies outside the file ({len} bytes)"));
+    }
+    let table = table as u64;
+    let chunks = u32::from_le_bytes(bytes[table as usize + 4..table as usize + 8].try_into().unwrap_or_default());
+    if u64::from(chunks) > table - data {
+        return Err(format!(
+            "the LAZ chunk table lists {chunks} chunks in {} compressed bytes",
+            table - data
+        ));
+    }
+    Ok(())
+}
+
+/// An extended VLR's header (60 bytes) and its data must lie within the file.
+fn check_evlr(bytes: &[u8], start: u64) -> Result<(), String> {
+    let len = bytes.len() as u64;
+    let header_end = start.checked_add(60).filter(|e| *e <= len).ok_or_else(|| {
+        format!("the extended VLRs would start at byte {start}, past the end ({len} bytes)")
+    })?;
+    let at = start as usize + 20;
+    let length = u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap_or_default());
+    if length > len - header_end {
+        return Err(format!("an extended VLR says it holds {length} bytes; the file has {len}"));
+    }
+    Ok(())
+}
+
+/// The decoded points: f64 positions and, when the format has them, 16-bit RGB.
+struct LasPoints {
+    xyz: Vec<[f64; 3]>,
+    rgb: Option<Vec<[u16; 3]>>,
+    intensity: Vec<u16>,
+    classification: Vec<u8>,
+    return_number: Vec<u8>,
+}
+
+impl LasPoints {
+    /// The fields for [`assemble`]: x y z, then red green blue, 8- or 16-bit.
+    fn fields(&self) -> VertexFields {
+        let field = |property, scalar| Field { property, scalar };
+        let mut fields: Vec<Field> = (0..3).map(|k| field(k, Scalar::F64)).collect();
+        let eight_bit = self.rgb.as_ref().is_some_and(|c| c.iter().flatten().all(|v| *v <= 255));
+        if self.rgb.is_some() {
+            let scalar = if eight_bit { Scalar::U8 } else { Scalar::U16 };
+            fields.extend((3..6).map(|k| field(k, scalar)));
+        }
+        VertexFields {
+            fields,
+            has_normals: false,
+            color_channels: if self.rgb.is_some() { 3 } else { 0 },
+        }
+    }
+}
+
+impl VertexRows for LasPoints {
+    fn len(&self) -> usize {
+        self.xyz.len()
+    }
+
+    #[inline(always)]
+    fn get(&self, i: usize, f: usize) -> f64 {
+        match f {
+            0..3 => self.xyz[i][f],
+            _ => self.rgb.as_ref().map_or(0.0, |c| f64::from(c[i][f - 3])),
+        }
+    }
+}
+
+/// Decodes every point, [`BATCH`] at a time.
+fn decode(reader: &mut Reader) -> Result<LasPoints, String> {
+    let header = reader.header();
+    let expected = header.number_of_points();
+    let has_rgb = header.point_format().has_color;
+    let mut batch: PointData = PointDataBuilder::new().for_header(header).build();
+    let mut points = LasPoints {
+        xyz: Vec::new(),
+        rgb: has_rgb.then(Vec::new),
+        intensity: Vec::new(),
+        classification: Vec::new(),
+        return_number: Vec::new(),
+    };
+    while (points.xyz.len() as u64) < expected {
+        let n = reader.fill_points(BATCH, &mut batch).map_err(|e| {
+            format!(
+                "point {} of the {expected} the header announces cannot be decoded: {e}",
+                points.xyz.len()
+            )
+        })?;
+        if n == 0 {
+            break;
+        }
+        points.xyz.extend(batch.x().zip(batch.y()).zip(batch.z()).map(|((x, y), z)| [x, y, z]));
+        if let (Some(rgb), Some(colors)) = (&mut points.rgb, batch.rgb()) {
+            rgb.extend(colors.map(|(r, g, b)| [r, g, b]));
+        }
+        points.intensity.extend(batch.intensity());
+        points.classification.extend(batch.classification());
+        points.return_number.extend(batch.return_number());
+    }
+    if points.xyz.is_empty() {
+        return Err("the file holds no points".to_owned());
+    }
+    Ok(points)
+}
+
+/// (value, count) of each value present, ascending.
+fn histogram(values: &[u8]) -> Vec<(u8, u64)> {
+    let mut counts = [0u64; 256];
+    for v in values {
+        counts[*v as usize] += 1;
+    }
+    (0..=255u8).zip(counts).filter(|(_, n)| *n > 0).collect()
+}
+
+fn summarize(header: &las::Header, points: &LasPoints) -> LasSummary {
+    let t = header.transforms();
+    let crs = if header.has_wkt_crs() && header.has_crs_vlrs() {
+        Some("WKT".to_owned())
+    } else if header.has_crs_vlrs() {
+        Some("GeoTIFF keys".to_owned())
+    } else {
+        None
+    };
+    let colors = points.rgb.as_ref().map(|c| {
+        if c.iter().flatten().all(|v| *v <= 255) {
+            "8-bit (in 16-bit fields)".to_owned()
+        } else {
+            "16-bit".to_owned()
+        }
+    });
+    let intensity = points.intensity.iter().fold(None, |range: Option<(u16, u16)>, &v| {
+        Some(range.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))))
+    });
+    let format = header.point_format();
+    LasSummary {
+        version: header.version().to_string(),
+        point_format: format.to_u8().unwrap_or(0),
+        compressed: format.is_compressed,
+        points: points.xyz.len() as u64,
+        by_return: histogram(&points.return_number),
+        by_class: histogram(&points.classification),
+        intensity,
+        scale: [t.x.scale, t.y.scale, t.z.scale],
+        offset: [t.x.offset, t.y.offset, t.z.offset],
+        crs,
+        colors,
+        system_identifier: header.system_identifier().to_owned(),
+        generating_software: header.generating_software().to_owned(),
+    }
+}
