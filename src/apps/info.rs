@@ -1,5 +1,5 @@
-//! `spt info FILE [--json]`: what a PLY file holds, how it loads and the leaf surfels
-//! it gives; or what an `.spt` file holds and whether its checksum holds.
+//! `spt info FILE [--json]`: what a model file (PLY, LAS, LAZ) holds, how it loads and
+//! the leaf surfels it gives; or what an `.spt` file holds and whether its checksum holds.
 
 use std::path::Path;
 use std::time::Instant;
@@ -8,7 +8,8 @@ use serde::Serialize;
 
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::{bytes, count, readable};
-use crate::io::ply::{PlyModel, read_ply};
+use crate::io::las::LasSummary;
+use crate::io::model::{Model, Source, read_model};
 use crate::io::rebase::MAX_OFFSET;
 use crate::io::{Bounds, GeometryStats};
 use crate::surfel::{LeafSurfels, SurfelStats, leaf_surfels};
@@ -48,14 +49,16 @@ pub struct Timing {
     pub surfels_per_second: f64,
 }
 
-/// Everything `spt info` reports on a PLY file.
+/// Everything `spt info` reports on a model file.
 #[derive(Debug, Serialize)]
-pub struct PlyInfo {
+pub struct ModelInfo {
     pub file: String,
     pub bytes: u64,
     pub format: String,
     pub comments: Vec<String>,
     pub obj_info: Vec<String>,
+    /// What a LAS or LAZ file says of itself.
+    pub las: Option<LasSummary>,
     pub elements: Vec<ElementInfo>,
     /// Bounding box of the finite vertices, in the file's coordinates (exact f64).
     pub bounds: Bounds,
@@ -71,31 +74,50 @@ pub struct PlyInfo {
     pub peak_memory_bytes: Option<u64>,
 }
 
-impl PlyInfo {
-    pub fn gather(path: &Path) -> anyhow::Result<PlyInfo> {
-        let model: PlyModel = read_ply(path)?;
+impl ModelInfo {
+    pub fn gather(path: &Path) -> anyhow::Result<ModelInfo> {
+        let model: Model = read_model(path)?;
         let start = Instant::now();
         let leaves: LeafSurfels = leaf_surfels(&model.geometry);
         let surfels_seconds = start.elapsed().as_secs_f64();
         let (radius_min, radius_median, radius_max) = leaves.radius_range().unwrap_or_default();
         let load_seconds = model.load_time.as_secs_f64();
         let g = &model.geometry;
-        let h = &model.header;
-        Ok(PlyInfo {
+        let (format, comments, obj_info, elements, las) = match &model.source {
+            Source::Ply(h) => (
+                format!("PLY {} {}", h.encoding.name(), h.version),
+                h.comments.clone(),
+                h.obj_info.clone(),
+                h.elements
+                    .iter()
+                    .map(|e| ElementInfo {
+                        name: e.name.clone(),
+                        count: e.count,
+                        properties: e.properties.iter().map(|p| p.declaration()).collect(),
+                    })
+                    .collect(),
+                None,
+            ),
+            Source::Las(s) => {
+                let kind = if s.compressed { "LAZ" } else { "LAS" };
+                let format = format!("{kind} {}, point format {}", s.version, s.point_format);
+                (
+                    format,
+                    Vec::new(),
+                    Vec::new(),
+                    Vec::new(),
+                    Some((**s).clone()),
+                )
+            }
+        };
+        Ok(ModelInfo {
             file: path.display().to_string(),
             bytes: model.file_bytes,
-            format: format!("{} {}", h.encoding.name(), h.version),
-            comments: h.comments.clone(),
-            obj_info: h.obj_info.clone(),
-            elements: h
-                .elements
-                .iter()
-                .map(|e| ElementInfo {
-                    name: e.name.clone(),
-                    count: e.count,
-                    properties: e.properties.iter().map(|p| p.declaration()).collect(),
-                })
-                .collect(),
+            format,
+            comments,
+            obj_info,
+            elements,
+            las,
             bounds: g.bounds,
             core: g.core,
             origin: g.origin.to_array(),
@@ -139,6 +161,9 @@ impl PlyInfo {
             for p in &e.properties {
                 line("", format!("property {p}"));
             }
+        }
+        if let Some(las) = &self.las {
+            las_lines(las, out);
         }
     }
 
@@ -232,9 +257,10 @@ impl PlyInfo {
         line(
             "load",
             format!(
-                "{:.1} ms, {:.0} MB/s",
+                "{:.1} ms, {:.0} MB/s, {:.2} M points/s",
                 t.load_seconds * 1e3,
-                t.load_mb_per_s
+                t.load_mb_per_s,
+                self.geometry.vertices_in_file as f64 / 1e6 / t.load_seconds.max(1e-9)
             ),
         );
         line(
@@ -249,6 +275,70 @@ impl PlyInfo {
             line("peak memory", bytes(m));
         }
         out
+    }
+}
+
+/// What a LAS file says of itself: software, points by return and class, intensity,
+/// scale and offset, CRS, colours.
+fn las_lines(s: &LasSummary, out: &mut String) {
+    let mut line = |k: &str, v: String| field(out, k, v);
+    line(
+        "software",
+        format!("{} / {}", s.generating_software, s.system_identifier),
+    );
+    line("points", count(s.points));
+    let counts = |pairs: &[(u8, u64)], name: &dyn Fn(u8) -> String| {
+        pairs
+            .iter()
+            .map(|(k, n)| format!("{} {}", name(*k), count(*n)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    line("by return", counts(&s.by_return, &|r| format!("#{r}")));
+    line(
+        "by class",
+        counts(&s.by_class, &|c| format!("{c} ({})", asprs_class(c))),
+    );
+    if let Some((lo, hi)) = s.intensity {
+        line("intensity", format!("{lo} – {hi}"));
+    }
+    line("scale", xyz(s.scale));
+    line("offset", xyz(s.offset));
+    line(
+        "CRS",
+        s.crs
+            .clone()
+            .unwrap_or_else(|| "none in the file".to_owned()),
+    );
+    if let Some(c) = &s.colors {
+        line("colours", c.clone());
+    }
+}
+
+/// The ASPRS name of standard point class `c` (LAS 1.4, table 17).
+pub fn asprs_class(c: u8) -> &'static str {
+    match c {
+        0 => "never classified",
+        1 => "unclassified",
+        2 => "ground",
+        3 => "low vegetation",
+        4 => "medium vegetation",
+        5 => "high vegetation",
+        6 => "building",
+        7 => "low point (noise)",
+        8 => "model key point",
+        9 => "water",
+        10 => "rail",
+        11 => "road surface",
+        12 => "overlap",
+        13 => "wire guard",
+        14 => "wire conductor",
+        15 => "transmission tower",
+        16 => "wire connector",
+        17 => "bridge deck",
+        18 => "high noise",
+        19..=63 => "reserved",
+        _ => "user defined",
     }
 }
 
@@ -387,7 +477,7 @@ impl SptInfo {
     }
 }
 
-/// Runs `spt info` on a PLY or `.spt` file: prints the report as text or JSON. A
+/// Runs `spt info` on a model file (PLY, LAS, LAZ) or an `.spt` file: prints the report as text or JSON. A
 /// corrupt `.spt` is reported, then the command fails.
 pub fn run(path: &Path, json: bool) -> anyhow::Result<()> {
     if is_spt(path) {
@@ -405,7 +495,7 @@ pub fn run(path: &Path, json: bool) -> anyhow::Result<()> {
         }
         return Ok(());
     }
-    let info = PlyInfo::gather(path)?;
+    let info = ModelInfo::gather(path)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&info)?);
     } else {

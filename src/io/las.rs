@@ -23,8 +23,11 @@ use super::geometry::{Geometry, GeometryStats, assemble};
 use super::ply::fields::{Field, VertexFields, VertexRows};
 use super::ply::scalar::Scalar;
 
-/// Points decoded at a time.
+/// Most points decoded at a time.
 pub const BATCH: u64 = 1 << 20;
+/// Fewest points decoded at a time; a batch holds at most as many points as the file
+/// has bytes, so that a small file with a huge point count never asks for more.
+pub const MIN_BATCH: u64 = 4096;
 
 /// A LAS or LAZ file that cannot be read, and why.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -84,7 +87,8 @@ pub fn read_las(path: &Path) -> Result<LasModel, LasError> {
     let file_bytes = bytes.len() as u64;
     check_layout(&bytes).map_err(fail)?;
     let mut reader = Reader::new(Cursor::new(bytes)).map_err(|e| fail(format!("{e}")))?;
-    let points = decode(&mut reader).map_err(fail)?;
+    let batch = (file_bytes / 8).clamp(MIN_BATCH, BATCH);
+    let points = decode(&mut reader, batch).map_err(fail)?;
     let summary = summarize(reader.header(), &points);
     let (geometry, stats) = assemble(&points, &points.fields(), None).map_err(fail)?;
     Ok(LasModel {
@@ -101,18 +105,28 @@ fn check_layout(bytes: &[u8]) -> Result<(), String> {
     let len = bytes.len() as u64;
     let raw = las::raw::Header::read_from(Cursor::new(bytes))
         .map_err(|e| format!("not a readable LAS header ({len} bytes): {e}"))?;
-    for (axis, s) in ["x", "y", "z"].iter().zip([raw.x_scale_factor, raw.y_scale_factor, raw.z_scale_factor]) {
+    for (axis, s) in
+        ["x", "y", "z"]
+            .iter()
+            .zip([raw.x_scale_factor, raw.y_scale_factor, raw.z_scale_factor])
+    {
         if s == 0.0 || !s.is_finite() {
-            return Err(format!("the {axis} scale factor is {s}: coordinates cannot be decoded"));
+            return Err(format!(
+                "the {axis} scale factor is {s}: coordinates cannot be decoded"
+            ));
         }
     }
     let data = u64::from(raw.offset_to_point_data);
     if data > len {
-        return Err(format!("the point data would start at byte {data}, past the end ({len} bytes)"));
+        return Err(format!(
+            "the point data would start at byte {data}, past the end ({len} bytes)"
+        ));
     }
     let count = raw
         .large_file
-        .map_or(u64::from(raw.number_of_point_records), |l| l.number_of_point_records);
+        .map_or(u64::from(raw.number_of_point_records), |l| {
+            l.number_of_point_records
+        });
     let compressed = raw.point_data_record_format & 0x80 != 0;
     if !compressed {
         let record = u64::from(raw.point_data_record_length);
@@ -137,19 +151,25 @@ fn check_chunk_table(bytes: &[u8], data: u64) -> Result<(), String> {
     let len = bytes.len() as u64;
     let mut at = Cursor::new(bytes);
     let mut word = [0u8; 8];
-    at.seek(SeekFrom::Start(data)).and_then(|_| at.read_exact(&mut word)).map_err(|_| {
-        "the LAZ point data is cut short before its chunk table offset".to_owned()
-    })?;
+    at.seek(SeekFrom::Start(data))
+        .and_then(|_| at.read_exact(&mut word))
+        .map_err(|_| "the LAZ point data is cut short before its chunk table offset".to_owned())?;
     let table = i64::from_le_bytes(word);
     if table == -1 {
         // Written by a streaming encoder: the table's offset is at the end of the file.
         return Ok(());
     }
     if table <= data as i64 || table as u64 + 8 > len {
-        return Err(format!("the LAZ chunk table offset {table} lies outside the file ({len} bytes)"));
+        return Err(format!(
+            "the LAZ chunk table offset {table} lies outside the file ({len} bytes)"
+        ));
     }
     let table = table as u64;
-    let chunks = u32::from_le_bytes(bytes[table as usize + 4..table as usize + 8].try_into().unwrap_or_default());
+    let chunks = u32::from_le_bytes(
+        bytes[table as usize + 4..table as usize + 8]
+            .try_into()
+            .unwrap_or_default(),
+    );
     if u64::from(chunks) > table - data {
         return Err(format!(
             "the LAZ chunk table lists {chunks} chunks in {} compressed bytes",
@@ -168,7 +188,9 @@ fn check_evlr(bytes: &[u8], start: u64) -> Result<(), String> {
     let at = start as usize + 20;
     let length = u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap_or_default());
     if length > len - header_end {
-        return Err(format!("an extended VLR says it holds {length} bytes; the file has {len}"));
+        return Err(format!(
+            "an extended VLR says it holds {length} bytes; the file has {len}"
+        ));
     }
     Ok(())
 }
@@ -187,7 +209,10 @@ impl LasPoints {
     fn fields(&self) -> VertexFields {
         let field = |property, scalar| Field { property, scalar };
         let mut fields: Vec<Field> = (0..3).map(|k| field(k, Scalar::F64)).collect();
-        let eight_bit = self.rgb.as_ref().is_some_and(|c| c.iter().flatten().all(|v| *v <= 255));
+        let eight_bit = self
+            .rgb
+            .as_ref()
+            .is_some_and(|c| c.iter().flatten().all(|v| *v <= 255));
         if self.rgb.is_some() {
             let scalar = if eight_bit { Scalar::U8 } else { Scalar::U16 };
             fields.extend((3..6).map(|k| field(k, scalar)));
@@ -214,8 +239,8 @@ impl VertexRows for LasPoints {
     }
 }
 
-/// Decodes every point, [`BATCH`] at a time.
-fn decode(reader: &mut Reader) -> Result<LasPoints, String> {
+/// Decodes every point, `batch` at a time.
+fn decode(reader: &mut Reader, batch_points: u64) -> Result<LasPoints, String> {
     let header = reader.header();
     let expected = header.number_of_points();
     let has_rgb = header.point_format().has_color;
@@ -228,16 +253,23 @@ fn decode(reader: &mut Reader) -> Result<LasPoints, String> {
         return_number: Vec::new(),
     };
     while (points.xyz.len() as u64) < expected {
-        let n = reader.fill_points(BATCH, &mut batch).map_err(|e| {
+        let n = reader.fill_points(batch_points, &mut batch).map_err(|e| {
             format!(
-                "point {} of the {expected} the header announces cannot be decoded: {e}",
+                "the header announces {expected} points; decoding failed after {} ({e}): \
+                 the file is damaged or truncated",
                 points.xyz.len()
             )
         })?;
         if n == 0 {
             break;
         }
-        points.xyz.extend(batch.x().zip(batch.y()).zip(batch.z()).map(|((x, y), z)| [x, y, z]));
+        points.xyz.extend(
+            batch
+                .x()
+                .zip(batch.y())
+                .zip(batch.z())
+                .map(|((x, y), z)| [x, y, z]),
+        );
         if let (Some(rgb), Some(colors)) = (&mut points.rgb, batch.rgb()) {
             rgb.extend(colors.map(|(r, g, b)| [r, g, b]));
         }
@@ -276,9 +308,12 @@ fn summarize(header: &las::Header, points: &LasPoints) -> LasSummary {
             "16-bit".to_owned()
         }
     });
-    let intensity = points.intensity.iter().fold(None, |range: Option<(u16, u16)>, &v| {
-        Some(range.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))))
-    });
+    let intensity = points
+        .intensity
+        .iter()
+        .fold(None, |range: Option<(u16, u16)>, &v| {
+            Some(range.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))))
+        });
     let format = header.point_format();
     LasSummary {
         version: header.version().to_string(),
@@ -289,7 +324,8 @@ fn summarize(header: &las::Header, points: &LasPoints) -> LasSummary {
         by_class: histogram(&points.classification),
         intensity,
         scale: [t.x.scale, t.y.scale, t.z.scale],
-        offset: [t.x.offset, t.y.offset, t.z.offset],
+        // + 0.0: a −0 offset reads as 0.
+        offset: [t.x.offset + 0.0, t.y.offset + 0.0, t.z.offset + 0.0],
         crs,
         colors,
         system_identifier: header.system_identifier().to_owned(),

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod bad_files;
+pub mod las_files;
 
 use std::path::{Path, PathBuf};
 
