@@ -12,7 +12,8 @@
 //! Colours: LAS stores 16-bit channels, but many writers put 0–255 values in them;
 //! when no channel of any point exceeds 255, the values are taken as 8-bit.
 
-use std::io::{Cursor, Read, Seek, SeekFrom};
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -23,11 +24,17 @@ use super::geometry::{Geometry, GeometryStats, assemble};
 use super::ply::fields::{Field, VertexFields, VertexRows};
 use super::ply::scalar::Scalar;
 
-/// Most points decoded at a time.
-pub const BATCH: u64 = 1 << 20;
-/// Fewest points decoded at a time; a batch holds at most as many points as the file
-/// has bytes, so that a small file with a huge point count never asks for more.
-pub const MIN_BATCH: u64 = 4096;
+/// LAS points decoded at a time: a batch's records (about 2 MB) stay in cache while each
+/// field is taken out of them.
+pub const BATCH: u64 = 1 << 16;
+/// LAZ points decoded at a time (at most; and no more than the file could hold at
+/// [`RESERVED_BYTES_PER_POINT`]): enough chunks of the usual 50,000 points for the
+/// parallel decoder to keep every core busy.
+pub const LAZ_BATCH: u64 = 1 << 20;
+/// Bytes of file per point reserved before decoding (a LAS record takes 20 or more, LAZ
+/// packs one in about 4–10): a file that holds more points grows its vectors as it
+/// decodes, and a header's count alone reserves nothing beyond the file's size.
+pub const RESERVED_BYTES_PER_POINT: u64 = 4;
 
 /// A LAS or LAZ file that cannot be read, and why.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -83,12 +90,13 @@ pub fn read_las(path: &Path) -> Result<LasModel, LasError> {
         path: path.to_owned(),
         message,
     };
-    let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read: {e}")))?;
-    let file_bytes = bytes.len() as u64;
-    check_layout(&bytes).map_err(fail)?;
-    let mut reader = Reader::new(Cursor::new(bytes)).map_err(|e| fail(format!("{e}")))?;
-    let batch = (file_bytes / 8).clamp(MIN_BATCH, BATCH);
-    let points = decode(&mut reader, batch).map_err(fail)?;
+    let io = |e: std::io::Error| fail(format!("cannot read: {e}"));
+    let mut file = File::open(path).map_err(io)?;
+    let file_bytes = file.metadata().map_err(io)?.len();
+    check_layout(&mut file, file_bytes).map_err(fail)?;
+    file.seek(SeekFrom::Start(0)).map_err(io)?;
+    let mut reader = Reader::new(BufReader::new(file)).map_err(|e| fail(format!("{e}")))?;
+    let points = decode(&mut reader, file_bytes).map_err(fail)?;
     let summary = summarize(reader.header(), &points);
     let (geometry, stats) = assemble(&points, &points.fields(), None).map_err(fail)?;
     Ok(LasModel {
@@ -100,10 +108,17 @@ pub fn read_las(path: &Path) -> Result<LasModel, LasError> {
     })
 }
 
+/// `n` bytes of `file` from `at`, or `None` past its end.
+fn bytes_at(file: &mut File, at: u64, n: usize) -> Option<Vec<u8>> {
+    let mut buf = vec![0; n];
+    file.seek(SeekFrom::Start(at)).ok()?;
+    file.read_exact(&mut buf).ok()?;
+    Some(buf)
+}
+
 /// Checks that the header's sizes fit in the file (see the module doc).
-fn check_layout(bytes: &[u8]) -> Result<(), String> {
-    let len = bytes.len() as u64;
-    let raw = las::raw::Header::read_from(Cursor::new(bytes))
+fn check_layout(file: &mut File, len: u64) -> Result<(), String> {
+    let raw = las::raw::Header::read_from(BufReader::new(&mut *file))
         .map_err(|e| format!("not a readable LAS header ({len} bytes): {e}"))?;
     for (axis, s) in
         ["x", "y", "z"]
@@ -137,24 +152,21 @@ fn check_layout(bytes: &[u8]) -> Result<(), String> {
             ));
         }
     } else {
-        check_chunk_table(bytes, data)?;
+        check_chunk_table(file, len, data)?;
     }
     if let Some(evlr) = raw.evlr {
-        check_evlr(bytes, evlr.start_of_first_evlr)?;
+        check_evlr(file, len, evlr.start_of_first_evlr)?;
     }
     Ok(())
 }
 
 /// A LAZ chunk table (its offset is the first 8 bytes of the point data) may list no
 /// more chunks than there are compressed bytes before it.
-fn check_chunk_table(bytes: &[u8], data: u64) -> Result<(), String> {
-    let len = bytes.len() as u64;
-    let mut at = Cursor::new(bytes);
-    let mut word = [0u8; 8];
-    at.seek(SeekFrom::Start(data))
-        .and_then(|_| at.read_exact(&mut word))
-        .map_err(|_| "the LAZ point data is cut short before its chunk table offset".to_owned())?;
-    let table = i64::from_le_bytes(word);
+fn check_chunk_table(file: &mut File, len: u64, data: u64) -> Result<(), String> {
+    let mut word = |at: u64, n: usize| bytes_at(file, at, n);
+    let table = word(data, 8)
+        .map(|b| i64::from_le_bytes(b.try_into().unwrap_or_default()))
+        .ok_or("the LAZ point data is cut short before its chunk table offset")?;
     if table == -1 {
         // Written by a streaming encoder: the table's offset is at the end of the file.
         return Ok(());
@@ -165,11 +177,9 @@ fn check_chunk_table(bytes: &[u8], data: u64) -> Result<(), String> {
         ));
     }
     let table = table as u64;
-    let chunks = u32::from_le_bytes(
-        bytes[table as usize + 4..table as usize + 8]
-            .try_into()
-            .unwrap_or_default(),
-    );
+    let chunks = word(table + 4, 4)
+        .map(|b| u32::from_le_bytes(b.try_into().unwrap_or_default()))
+        .unwrap_or(0);
     if u64::from(chunks) > table - data {
         return Err(format!(
             "the LAZ chunk table lists {chunks} chunks in {} compressed bytes",
@@ -180,13 +190,13 @@ fn check_chunk_table(bytes: &[u8], data: u64) -> Result<(), String> {
 }
 
 /// An extended VLR's header (60 bytes) and its data must lie within the file.
-fn check_evlr(bytes: &[u8], start: u64) -> Result<(), String> {
-    let len = bytes.len() as u64;
+fn check_evlr(file: &mut File, len: u64, start: u64) -> Result<(), String> {
     let header_end = start.checked_add(60).filter(|e| *e <= len).ok_or_else(|| {
         format!("the extended VLRs would start at byte {start}, past the end ({len} bytes)")
     })?;
-    let at = start as usize + 20;
-    let length = u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap_or_default());
+    let length = bytes_at(file, start + 20, 8)
+        .map(|b| u64::from_le_bytes(b.try_into().unwrap_or_default()))
+        .unwrap_or(u64::MAX);
     if length > len - header_end {
         return Err(format!(
             "an extended VLR says it holds {length} bytes; the file has {len}"
@@ -239,18 +249,26 @@ impl VertexRows for LasPoints {
     }
 }
 
-/// Decodes every point, `batch` at a time.
-fn decode(reader: &mut Reader, batch_points: u64) -> Result<LasPoints, String> {
+/// Decodes every point of a file of `file_bytes`, [`BATCH`] (LAZ: up to [`LAZ_BATCH`])
+/// at a time.
+fn decode(reader: &mut Reader, file_bytes: u64) -> Result<LasPoints, String> {
     let header = reader.header();
     let expected = header.number_of_points();
     let has_rgb = header.point_format().has_color;
     let mut batch: PointData = PointDataBuilder::new().for_header(header).build();
+    // Bounded by the file's size, whatever the header says.
+    let n = expected.min(file_bytes / RESERVED_BYTES_PER_POINT) as usize;
+    let batch_points = if header.point_format().is_compressed {
+        LAZ_BATCH.min(n as u64).max(BATCH)
+    } else {
+        BATCH
+    };
     let mut points = LasPoints {
-        xyz: Vec::new(),
-        rgb: has_rgb.then(Vec::new),
-        intensity: Vec::new(),
-        classification: Vec::new(),
-        return_number: Vec::new(),
+        xyz: Vec::with_capacity(n),
+        rgb: has_rgb.then(|| Vec::with_capacity(n)),
+        intensity: Vec::with_capacity(n),
+        classification: Vec::with_capacity(n),
+        return_number: Vec::with_capacity(n),
     };
     while (points.xyz.len() as u64) < expected {
         let n = reader.fill_points(batch_points, &mut batch).map_err(|e| {
