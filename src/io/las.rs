@@ -95,6 +95,11 @@ pub fn read_las(path: &Path) -> Result<LasModel, LasError> {
     let file_bytes = file.metadata().map_err(io)?.len();
     check_layout(&mut file, file_bytes).map_err(fail)?;
     file.seek(SeekFrom::Start(0)).map_err(io)?;
+    let header = las::Header::new(BufReader::new(&mut file)).map_err(|e| fail(format!("{e}")))?;
+    if header.point_format().is_compressed {
+        check_laz(&mut file, &header).map_err(fail)?;
+    }
+    file.seek(SeekFrom::Start(0)).map_err(io)?;
     let mut reader = Reader::new(BufReader::new(file)).map_err(|e| fail(format!("{e}")))?;
     let points = decode(&mut reader, file_bytes).map_err(fail)?;
     let summary = summarize(reader.header(), &points);
@@ -203,6 +208,65 @@ fn check_evlr(file: &mut File, len: u64, start: u64) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// The largest decompressed LAZ chunk accepted: LASzip writes chunks of 50,000 points
+/// (1.7 MB at 34 bytes, 3.4 MB at the largest standard record), and the decoder
+/// allocates a whole chunk at once, however few points the file holds.
+pub const MAX_CHUNK_BYTES: u64 = 8 << 20;
+
+/// What the LAZ decoder would trust without checking: its VLR's record size must be the
+/// header's, its chunks no larger than [`MAX_CHUNK_BYTES`], and its chunk table's byte
+/// counts must add up to no more than the compressed data.
+fn check_laz(file: &mut File, header: &las::Header) -> Result<(), String> {
+    let vlr = header
+        .all_vlrs()
+        .find(|v| v.user_id == laz::LazVlr::USER_ID && v.record_id == laz::LazVlr::RECORD_ID)
+        .ok_or("compressed, but without the LASzip VLR that says how")?;
+    let laz_vlr =
+        laz::LazVlr::from_buffer(&vlr.data).map_err(|e| format!("the LASzip VLR: {e}"))?;
+    let record = u64::from(header.point_format().len());
+    if laz_vlr.items_size() != record || record == 0 {
+        return Err(format!(
+            "the LASzip VLR describes {}-byte points, the header {record}-byte ones",
+            laz_vlr.items_size()
+        ));
+    }
+    let chunk = u64::from(laz_vlr.chunk_size());
+    if !laz_vlr.uses_variable_size_chunks() && chunk * record > MAX_CHUNK_BYTES {
+        return Err(format!(
+            "LAZ chunks of {chunk} points are larger than any writer makes"
+        ));
+    }
+    let data = header_offset_to_points(file)?;
+    file.seek(SeekFrom::Start(data))
+        .map_err(|e| e.to_string())?;
+    let table = laz::laszip::ChunkTable::read_from(BufReader::new(&mut *file), &laz_vlr)
+        .map_err(|e| format!("the LAZ chunk table cannot be read: {e}"))?;
+    let room = file
+        .metadata()
+        .map_err(|e| e.to_string())?
+        .len()
+        .saturating_sub(data);
+    let (mut bytes, mut largest) = (0u64, 0u64);
+    for entry in &table {
+        bytes = bytes.saturating_add(entry.byte_count);
+        largest = largest.max(entry.point_count);
+    }
+    if bytes > room || largest.saturating_mul(record) > MAX_CHUNK_BYTES {
+        return Err(format!(
+            "the LAZ chunk table lists {bytes} compressed bytes (the file has {room} after the \
+             header) or a chunk of {largest} points: it is damaged"
+        ));
+    }
+    Ok(())
+}
+
+/// The offset to the point data, from the header's fixed part.
+fn header_offset_to_points(file: &mut File) -> Result<u64, String> {
+    bytes_at(file, 96, 4)
+        .map(|b| u64::from(u32::from_le_bytes(b.try_into().unwrap_or_default())))
+        .ok_or_else(|| "the header is cut short".to_owned())
 }
 
 /// The decoded points: f64 positions and, when the format has them, 16-bit RGB.

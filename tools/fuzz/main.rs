@@ -1,4 +1,5 @@
-//! A mutation fuzzer for spt's readers (PLY and `.spt`), on the stable toolchain.
+//! A mutation fuzzer for spt's readers (PLY, LAS, LAZ and `.spt`), on the stable
+//! toolchain.
 //!
 //! ```text
 //! cargo run --release --example fuzz -- --seconds 60
@@ -37,8 +38,15 @@ static ALLOC: largest_allocation::Largest = largest_allocation::Largest;
 /// byte (a vertex of three `char`s becomes a 32-byte surfel and about 1.3 node records;
 /// a face of `char` indices, 12 bytes per triangle; vectors grow by doubling) and 1 MiB
 /// of fixed buffers.
-pub fn justified(len: usize) -> usize {
-    64 * len + (1 << 20)
+/// A LAZ input also justifies one decompressed chunk, which the decoder allocates
+/// whole ([`spt::io::las::MAX_CHUNK_BYTES`]).
+pub fn justified(kind: Kind, len: usize) -> usize {
+    let chunk = if kind == Kind::Laz {
+        spt::io::las::MAX_CHUNK_BYTES as usize
+    } else {
+        0
+    };
+    64 * len + (1 << 20) + chunk
 }
 
 #[derive(Parser)]
@@ -65,8 +73,8 @@ struct Args {
 struct Tally {
     executions: u64,
     /// Per reader (PLY, .spt): inputs accepted and refused.
-    accepted: [u64; 2],
-    refused: [u64; 2],
+    accepted: [u64; 4],
+    refused: [u64; 4],
     panics: u64,
     violations: u64,
     slow: u64,
@@ -129,11 +137,7 @@ fn watchdog(started_ms: &'static AtomicU64, origin: Instant, out: PathBuf) {
 }
 
 fn replay(path: &Path) -> i32 {
-    let kind = if path.extension().is_some_and(|e| e == "spt") {
-        Kind::Spt
-    } else {
-        Kind::Ply
-    };
+    let kind = Kind::of(path);
     let start = Instant::now();
     let result = execute(kind, path);
     let took = start.elapsed();
@@ -221,11 +225,11 @@ fn main() {
                 &note(&format!("{took:?}")),
             );
         }
-        let fraction = largest as f64 / justified(bytes.len()) as f64;
+        let fraction = largest as f64 / justified(seed.kind, bytes.len()) as f64;
         if fraction > tally.worst.0 {
             tally.worst = (fraction, largest, bytes.len());
         }
-        if largest > justified(bytes.len()) {
+        if largest > justified(seed.kind, bytes.len()) {
             tally.oversized += 1;
             let what = format!("one allocation of {largest} bytes");
             save(&args.out, n, "allocation", seed.kind, &bytes, &note(&what));
@@ -235,26 +239,28 @@ fn main() {
             report(&tally, origin.elapsed(), false);
         }
     }
-    let _ = std::fs::remove_file(args.out.join("current.ply"));
-    let _ = std::fs::remove_file(args.out.join("current.spt"));
+    for kind in [Kind::Ply, Kind::Spt, Kind::Las, Kind::Laz] {
+        let _ = std::fs::remove_file(args.out.join(format!("current.{}", kind.extension())));
+    }
     report(&tally, origin.elapsed(), true);
     std::process::exit(if tally.failures() == 0 { 0 } else { 1 });
 }
 
 fn report(t: &Tally, elapsed: Duration, last: bool) {
     let s = elapsed.as_secs_f64();
+    let readers: Vec<String> = Kind::NAMES
+        .iter()
+        .enumerate()
+        .map(|(k, name)| format!("{name} accepted {} refused {}", t.accepted[k], t.refused[k]))
+        .collect();
     println!(
-        "{}executions {} in {s:.0} s ({:.0}/s): PLY accepted {} refused {}, .spt accepted {} \
-         refused {}; panics {}, invariant violations {}, slower than the limit {}, oversized \
-         allocations {}; slowest input {:.1} ms; largest allocation {:.0} % of what its input \
-         justified ({} bytes for {} input bytes)",
+        "{}executions {} in {s:.0} s ({:.0}/s): {}; panics {}, invariant violations {}, slower \
+         than the limit {}, oversized allocations {}; slowest input {:.1} ms; largest \
+         allocation {:.0} % of what its input justified ({} bytes for {} input bytes)",
         if last { "fuzz: " } else { "      " },
         t.executions,
         t.executions as f64 / s.max(1e-9),
-        t.accepted[0],
-        t.refused[0],
-        t.accepted[1],
-        t.refused[1],
+        readers.join(", "),
         t.panics,
         t.violations,
         t.slow,

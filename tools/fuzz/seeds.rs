@@ -1,5 +1,6 @@
 //! The fuzzer's seeds, made by the project's own writers: small meshes and clouds in
-//! every encoding, the inputs of issue 10's defects, and `.spt` files built from them.
+//! every encoding, the inputs of issue 10's defects, `.spt` files built from them, and
+//! small LAS and LAZ tiles written by the `las` crate (the tests' fixtures).
 
 use std::path::Path;
 
@@ -13,6 +14,8 @@ use spt::tree::spt_file::write_to;
 pub enum Kind {
     Ply = 0,
     Spt = 1,
+    Las = 2,
+    Laz = 3,
 }
 
 impl Kind {
@@ -20,8 +23,23 @@ impl Kind {
         match self {
             Kind::Ply => "ply",
             Kind::Spt => "spt",
+            Kind::Las => "las",
+            Kind::Laz => "laz",
         }
     }
+
+    /// The kind of a saved input, by its extension (PLY when it has none known).
+    pub fn of(path: &Path) -> Kind {
+        match path.extension().and_then(|e| e.to_str()) {
+            Some("spt") => Kind::Spt,
+            Some("las") => Kind::Las,
+            Some("laz") => Kind::Laz,
+            _ => Kind::Ply,
+        }
+    }
+
+    /// Names for the report, in `Kind as usize` order.
+    pub const NAMES: [&'static str; 4] = ["PLY", ".spt", "LAS", "LAZ"];
 }
 
 pub struct Seed {
@@ -119,7 +137,26 @@ fn ascii_points(header_extra: &str, rows: &[&str]) -> Vec<u8> {
     s.into_bytes()
 }
 
-/// Every seed, PLY first, then `.spt` files built from some of them.
+#[path = "../../tests/common/las_files.rs"]
+#[allow(dead_code)]
+mod las_files;
+
+/// LAS and LAZ tiles of 1, 70 and 500 points (a grid of rows of 64).
+fn las_seeds() -> Vec<Seed> {
+    let mut seeds = Vec::new();
+    for n in [1, 70, 500] {
+        for (kind, compressed) in [(Kind::Las, false), (Kind::Laz, true)] {
+            seeds.push(Seed {
+                name: format!("tile{n}_{}", kind.extension()),
+                kind,
+                bytes: las_files::sample(n, compressed),
+            });
+        }
+    }
+    seeds
+}
+
+/// Every seed, PLY first, then `.spt` files built from some of them, then LAS and LAZ.
 pub fn all(dir: &Path) -> Vec<Seed> {
     let square = {
         let mut m = grid(2, false);
@@ -215,5 +252,6 @@ pub fn all(dir: &Path) -> Vec<Seed> {
             bytes: spt,
         });
     }
+    seeds.extend(las_seeds());
     seeds
 }

@@ -4,6 +4,7 @@
 //! * PLY: read → [`Geometry::check`] → leaf surfels → [`LeafSurfels::check`] → tree →
 //!   meta, node and structure checks → `.spt` written and reopened (which validates it
 //!   again) → the same list back → a prefix search from a few eyes.
+//! * LAS and LAZ: read, then as PLY from [`Geometry::check`] on.
 //! * `.spt`: open (checksum, header, nodes) → meta and node checks → a prefix search →
 //!   written again and reopened → the same list back.
 //!
@@ -15,6 +16,8 @@
 use std::path::Path;
 
 use glam::DVec3;
+use spt::io::Geometry;
+use spt::io::las::read_las;
 use spt::io::ply::read_ply;
 use spt::surfel::leaf_surfels;
 use spt::tree::select::PrefixIndex;
@@ -64,12 +67,10 @@ fn select(list: &SequentialList) -> Result<(), Outcome> {
     Ok(())
 }
 
-fn ply(path: &Path) -> Result<Outcome, Outcome> {
-    let Ok(model) = read_ply(path) else {
-        return Ok(Outcome::Refused);
-    };
-    model.geometry.check().map_err(violation("geometry"))?;
-    let leaves = leaf_surfels(&model.geometry);
+/// Geometry read from the input at `path`, through surfels, tree, search and `.spt`.
+fn build(geometry: &Geometry, path: &Path) -> Result<Outcome, Outcome> {
+    geometry.check().map_err(violation("geometry"))?;
+    let leaves = leaf_surfels(geometry);
     leaves.check().map_err(violation("surfels"))?;
     let list = build_sequential_list(leaves);
     check_meta(&list.meta).map_err(violation("tree meta"))?;
@@ -78,6 +79,20 @@ fn ply(path: &Path) -> Result<Outcome, Outcome> {
     select(&list)?;
     round_trip(&list, path)?;
     Ok(Outcome::Accepted)
+}
+
+fn ply(path: &Path) -> Result<Outcome, Outcome> {
+    match read_ply(path) {
+        Ok(model) => build(&model.geometry, path),
+        Err(_) => Ok(Outcome::Refused),
+    }
+}
+
+fn las(path: &Path) -> Result<Outcome, Outcome> {
+    match read_las(path) {
+        Ok(model) => build(&model.geometry, path),
+        Err(_) => Ok(Outcome::Refused),
+    }
 }
 
 fn spt(path: &Path) -> Result<Outcome, Outcome> {
@@ -97,6 +112,7 @@ pub fn run(kind: Kind, path: &Path) -> Outcome {
     let result = match kind {
         Kind::Ply => ply(path),
         Kind::Spt => spt(path),
+        Kind::Las | Kind::Laz => las(path),
     };
     result.unwrap_or_else(|o| o)
 }
