@@ -10,6 +10,8 @@ use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::{bytes, count, readable};
 use crate::io::las::LasSummary;
 use crate::io::model::{Model, Source, read_model};
+use crate::io::ply::Header;
+use crate::io::ply::fields::Plan;
 use crate::io::rebase::MAX_OFFSET;
 use crate::io::{Bounds, GeometryStats};
 use crate::surfel::{LeafSurfels, SurfelStats, leaf_surfels};
@@ -59,6 +61,9 @@ pub struct ModelInfo {
     pub obj_info: Vec<String>,
     /// What a LAS or LAZ file says of itself.
     pub las: Option<LasSummary>,
+    /// Elements of a PLY file that the reader skips (neither the vertices nor the faces
+    /// or triangle strips it reads).
+    pub skipped_elements: Vec<String>,
     pub elements: Vec<ElementInfo>,
     /// Bounding box of the finite vertices, in the file's coordinates (exact f64).
     pub bounds: Bounds,
@@ -83,6 +88,10 @@ impl ModelInfo {
         let (radius_min, radius_median, radius_max) = leaves.radius_range().unwrap_or_default();
         let load_seconds = model.load_time.as_secs_f64();
         let g = &model.geometry;
+        let skipped_elements = match &model.source {
+            Source::Ply(h) => skipped_elements(h),
+            Source::Las(_) => Vec::new(),
+        };
         let (format, comments, obj_info, elements, las) = match &model.source {
             Source::Ply(h) => (
                 format!("PLY {} {}", h.encoding.name(), h.version),
@@ -118,6 +127,7 @@ impl ModelInfo {
             obj_info,
             elements,
             las,
+            skipped_elements,
             bounds: g.bounds,
             core: g.core,
             origin: g.origin.to_array(),
@@ -162,6 +172,12 @@ impl ModelInfo {
                 line("", format!("property {p}"));
             }
         }
+        if !self.skipped_elements.is_empty() {
+            line(
+                "skipped",
+                format!("elements {}", self.skipped_elements.join(", ")),
+            );
+        }
         if let Some(las) = &self.las {
             las_lines(las, out);
         }
@@ -188,7 +204,18 @@ impl ModelInfo {
             );
         }
         field(out, "vertices", vertices);
-        if self.present.faces || g.faces_in_file > 0 {
+        if g.triangle_strips > 0 {
+            field(
+                out,
+                "strips",
+                format!(
+                    "{} rows of triangle strips (tristrips) read → {} triangles, {} on dropped vertices",
+                    count(g.triangle_strips),
+                    count(g.triangles),
+                    count(g.triangles_dropped_nonfinite)
+                ),
+            );
+        } else if self.present.faces || g.faces_in_file > 0 {
             field(
                 out,
                 "faces",
@@ -276,6 +303,20 @@ impl ModelInfo {
         }
         out
     }
+}
+
+/// The names of the elements of `h` that the PLY reader does not use.
+fn skipped_elements(h: &Header) -> Vec<String> {
+    let Ok(plan) = Plan::new(h) else {
+        return Vec::new();
+    };
+    let used = [Some(plan.vertex_element), plan.faces.map(|(f, _)| f)];
+    h.elements
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !used.contains(&Some(*i)))
+        .map(|(_, e)| e.name.clone())
+        .collect()
 }
 
 /// What a LAS file says of itself: software, points by return and class, intensity,

@@ -114,6 +114,8 @@ pub struct GeometryStats {
     pub outliers: u64,
     pub faces_in_file: u64,
     pub faces_with_fewer_than_3_vertices: u64,
+    /// Rows of a `tristrips` element read (its triangles are counted in `triangles`).
+    pub triangle_strips: u64,
     pub triangles: u64,
     /// Triangles that use a dropped vertex (non-finite or out of range).
     pub triangles_dropped_nonfinite: u64,
@@ -217,6 +219,7 @@ pub(crate) fn assemble<R: VertexRows>(
     if let Some(f) = faces {
         stats.faces_in_file = f.polygons;
         stats.faces_with_fewer_than_3_vertices = f.too_short;
+        stats.triangle_strips = f.strips;
         triangles = f.triangles;
         if let Some(k) = kept_rows {
             let mut new_index = vec![u32::MAX; n];

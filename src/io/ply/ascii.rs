@@ -159,7 +159,7 @@ pub fn decode(
                 Ok(())
             })?;
             if let Some(f) = element_faces.as_mut() {
-                f.push_polygon(&indices, vertex_count, row)
+                f.push_row(plan.strips, &indices, vertex_count, row)
                     .map_err(|p| p.at_line(tokens.line))?;
             }
         }

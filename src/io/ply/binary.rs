@@ -249,7 +249,7 @@ fn faces_fixed_triangles(
             Faces {
                 triangles,
                 polygons: rows as u64,
-                too_short: 0,
+                ..Faces::default()
             },
             end,
         ))),
@@ -264,7 +264,7 @@ fn faces_by_row(
     pos: &mut usize,
     e: &Element,
     list: usize,
-    vertex_count: u64,
+    (vertex_count, strips): (u64, bool),
     big: bool,
 ) -> Result<Faces, Problem> {
     let PropertyKind::List { item, .. } = e.properties[list].kind else {
@@ -284,7 +284,7 @@ fn faces_by_row(
             }
             Ok(())
         })?;
-        faces.push_polygon(&indices, vertex_count, row)?;
+        faces.push_row(strips, &indices, vertex_count, row)?;
     }
     Ok(faces)
 }
@@ -321,12 +321,20 @@ pub fn decode<'a>(data: &'a [u8], header: &Header, plan: &Plan) -> Result<Decode
                 data, &mut pos, e, plan, big,
             )?));
         } else if let Some(list) = face_list {
-            match faces_fixed_triangles(data, pos, e, list, vertex_count, big)? {
+            let fixed = if plan.strips {
+                None
+            } else {
+                faces_fixed_triangles(data, pos, e, list, vertex_count, big)?
+            };
+            match fixed {
                 Some((f, end)) => {
                     faces = Some(f);
                     pos = end;
                 }
-                None => faces = Some(faces_by_row(data, &mut pos, e, list, vertex_count, big)?),
+                None => {
+                    let what = (vertex_count, plan.strips);
+                    faces = Some(faces_by_row(data, &mut pos, e, list, what, big)?);
+                }
             }
         } else {
             for row in 0..e.count {

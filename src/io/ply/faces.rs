@@ -1,4 +1,5 @@
-//! Face lists: validation of indices and fan triangulation, shared by both encodings.
+//! Face lists: validation of indices, fan triangulation of polygons and the triangles of
+//! triangle strips, shared by both encodings.
 
 use super::error::Problem;
 
@@ -10,6 +11,8 @@ pub struct Faces {
     pub polygons: u64,
     /// Face rows with fewer than three indices, skipped.
     pub too_short: u64,
+    /// Triangle-strip rows read (a `tristrips` element instead of `face`).
+    pub strips: u64,
 }
 
 impl Faces {
@@ -41,6 +44,48 @@ impl Faces {
             self.triangles.push([first, pair[0] as u32, pair[1] as u32]);
         }
         Ok(())
+    }
+
+    /// Adds the triangles of one row of triangle strips: −1 ends a strip and starts the
+    /// next. In a strip s, triangle k is (s_k, s_k+1, s_k+2) for even k and
+    /// (s_k+1, s_k, s_k+2) for odd k, so that all keep the first one's winding;
+    /// triangles with a repeated vertex (the joins that strippers insert) are skipped.
+    pub fn push_strips(
+        &mut self,
+        indices: &[i64],
+        vertex_count: u64,
+        row: u64,
+    ) -> Result<(), Problem> {
+        self.strips += 1;
+        for strip in indices.split(|&i| i == -1) {
+            for &i in strip {
+                check_index(i, vertex_count, row)?;
+            }
+            for (k, w) in strip.windows(3).enumerate() {
+                let [a, b, c] = [w[0] as u32, w[1] as u32, w[2] as u32];
+                if a == b || b == c || a == c {
+                    continue;
+                }
+                self.triangles
+                    .push(if k % 2 == 0 { [a, b, c] } else { [b, a, c] });
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds one row of the face element: a polygon, or strips when `strips`.
+    pub fn push_row(
+        &mut self,
+        strips: bool,
+        indices: &[i64],
+        vertex_count: u64,
+        row: u64,
+    ) -> Result<(), Problem> {
+        if strips {
+            self.push_strips(indices, vertex_count, row)
+        } else {
+            self.push_polygon(indices, vertex_count, row)
+        }
     }
 }
 

@@ -51,6 +51,9 @@ pub struct Plan {
     pub vertex_fields: VertexFields,
     /// The face element and the index of its vertex-index list property.
     pub faces: Option<(usize, usize)>,
+    /// Whether that element holds triangle strips (`tristrips`, −1 restarts a strip)
+    /// rather than polygons (`face`).
+    pub strips: bool,
 }
 
 fn scalar_field(e: &Element, names: &[&str]) -> Result<Option<Field>, Problem> {
@@ -107,29 +110,12 @@ impl Plan {
                 color_channels = 4;
             }
         }
-        let faces = match header.elements.iter().position(|e| e.name == "face") {
+        let face_element = header.elements.iter().position(|e| e.name == "face");
+        let strip_element = header.elements.iter().position(|e| e.name == "tristrips");
+        let strips = face_element.is_none() && strip_element.is_some();
+        let faces = match face_element.or(strip_element) {
             None => None,
-            Some(fi) => {
-                let f = &header.elements[fi];
-                match f.property(FACE_INDICES) {
-                    Some((pi, p)) => match p.kind {
-                        PropertyKind::List { item, .. } if !item.is_float() => Some((fi, pi)),
-                        _ => {
-                            return Err(Problem::file(format!(
-                                "element 'face': property '{}' must be a list of integers, found {}",
-                                p.name,
-                                p.declaration()
-                            )));
-                        }
-                    },
-                    None if f.count == 0 => None,
-                    None => {
-                        return Err(Problem::file(
-                            "element 'face' has no list property 'vertex_indices' or 'vertex_index'",
-                        ));
-                    }
-                }
-            }
+            Some(fi) => index_list(&header.elements[fi])?.map(|pi| (fi, pi)),
         };
         Ok(Plan {
             vertex_element,
@@ -139,7 +125,29 @@ impl Plan {
                 color_channels,
             },
             faces,
+            strips,
         })
+    }
+}
+
+/// The vertex-index list property of a face or strip element `e`; `None` for an empty
+/// element without one.
+fn index_list(e: &Element) -> Result<Option<usize>, Problem> {
+    match e.property(FACE_INDICES) {
+        Some((pi, p)) => match p.kind {
+            PropertyKind::List { item, .. } if !item.is_float() => Ok(Some(pi)),
+            _ => Err(Problem::file(format!(
+                "element '{}': property '{}' must be a list of integers, found {}",
+                e.name,
+                p.name,
+                p.declaration()
+            ))),
+        },
+        None if e.count == 0 => Ok(None),
+        None => Err(Problem::file(format!(
+            "element '{}' has no list property 'vertex_indices' or 'vertex_index'",
+            e.name
+        ))),
     }
 }
 
