@@ -97,7 +97,7 @@ fn damaged_files_get_clear_errors() {
     expect(
         &newer,
         "newer.spt",
-        |e| matches!(e, SptError::NewerVersion { version: 3, .. }),
+        |e| matches!(e, SptError::NewerVersion { version, .. } if *version == spt::tree::spt_file::VERSION + 1),
         "newer spt",
     );
     // Version 1 had no shapes section: it is named, with what to do.
@@ -199,4 +199,41 @@ fn spt_convert_then_info() {
     let (code, _, _) = common::run_spt(&["convert".as_ref(), bad.as_os_str(), out2.as_os_str()]);
     assert_eq!(code, Some(1));
     assert!(!out2.exists());
+}
+
+#[test]
+fn version_2_files_read_as_files_without_attributes() {
+    let list = default_list();
+    let mut bytes = Vec::new();
+    write_to(&mut bytes, &list).unwrap();
+    // A model without LiDAR attributes pays nothing for them: header and three sections.
+    let n = list.nodes.len();
+    assert_eq!(bytes.len(), 256 + n * (32 + 4 + 16));
+    bytes[8..12].copy_from_slice(&2u32.to_le_bytes());
+    bytes[188..200].fill(0);
+    assert!(spt::tree::spt_file::reseal(&mut bytes));
+    let dir = common::temp_dir();
+    let path = dir.path().join("v2.spt");
+    std::fs::write(&path, &bytes).unwrap();
+    let file = SptFile::open(&path).unwrap();
+    assert_eq!(file.version, 2);
+    assert_eq!(file.to_list(), list);
+}
+
+#[test]
+fn lidar_attributes_survive_the_file() {
+    let dir = common::temp_dir();
+    let las = dir.path().join("tile.laz");
+    std::fs::write(&las, common::las_files::sample(2000, true)).unwrap();
+    let model = spt::io::las::read_las(&las).unwrap();
+    let list = spt::tree::build_sequential_list(spt::surfel::leaf_surfels(&model.geometry));
+    assert!(list.meta.has_attributes);
+    assert_eq!(list.attributes.len(), list.nodes.len());
+    // Leaves keep their own class (ground or building); inner nodes take one of those.
+    assert!(list.attributes.iter().all(|a| a.class == 2 || a.class == 6));
+    let path = dir.path().join("tile.spt");
+    write_spt(&path, &list).unwrap();
+    let file = SptFile::open(&path).unwrap();
+    assert_eq!(file.attributes(), &list.attributes[..]);
+    assert_eq!(file.to_list(), list);
 }

@@ -37,6 +37,39 @@ pub struct Geometry {
     /// The file row of each kept vertex, when some rows were dropped (`None`: vertex i
     /// is row i). Organised clouds (an RGB-D frame's pixels) keep their grid through it.
     pub rows: Option<Vec<u32>>,
+    /// LiDAR attributes of each kept vertex (LAS and LAZ files).
+    pub attributes: Option<Vec<PointAttributes>>,
+}
+
+/// What LiDAR users read a point by (LAS): its intensity, ASPRS class, return number
+/// and number of returns. 4 bytes, the layout of the `.spt` attribute section and of
+/// the GPU's (`shaders/splat.wgsl`, `attributes`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PointAttributes {
+    pub intensity: u16,
+    /// ASPRS class (LAS 1.4 table 17: 2 ground, 6 building, 9 water…).
+    pub class: u8,
+    /// Return number (low 4 bits) and number of returns (high 4 bits), each 0–15.
+    pub returns: u8,
+}
+
+impl PointAttributes {
+    pub fn new(intensity: u16, class: u8, return_number: u8, returns: u8) -> Self {
+        PointAttributes {
+            intensity,
+            class,
+            returns: (return_number.min(15)) | (returns.min(15) << 4),
+        }
+    }
+
+    pub fn return_number(self) -> u8 {
+        self.returns & 15
+    }
+
+    pub fn number_of_returns(self) -> u8 {
+        self.returns >> 4
+    }
 }
 
 impl Geometry {
@@ -97,6 +130,9 @@ impl Geometry {
             .find(|t| t.iter().any(|&v| v as usize >= n))
         {
             return Err(format!("triangle {t:?} beyond the {n} vertices"));
+        }
+        if self.attributes.as_ref().is_some_and(|a| a.len() != n) {
+            return Err("attributes not one per vertex".to_owned());
         }
         Ok(())
     }
@@ -247,6 +283,7 @@ pub(crate) fn assemble<R: VertexRows>(
             colors,
             triangles,
             rows: kept,
+            attributes: None,
         },
         stats,
     ))

@@ -1,6 +1,7 @@
 //! LAS 1.0–1.4 and LAZ files in, with the `las` crate (LAZ decoded in parallel across
 //! cores by `laz`): positions (scaled integers, to f64, then rebased as PLY vertices are,
-//! [`super::geometry`]), RGB, and what LiDAR users read a tile by: counts by ASPRS class
+//! [`super::geometry`]), RGB, each point's intensity, class and returns
+//! ([`PointAttributes`]), and what LiDAR users read a tile by: counts by ASPRS class
 //! and by return number, intensity range, scale, offset and CRS ([`LasSummary`]).
 //!
 //! Bad files get an error that names the file and what is wrong, and nothing is
@@ -20,7 +21,7 @@ use std::time::{Duration, Instant};
 use las::{PointData, PointDataBuilder, Reader};
 use serde::Serialize;
 
-use super::geometry::{Geometry, GeometryStats, assemble};
+use super::geometry::{Geometry, GeometryStats, PointAttributes, assemble};
 use super::ply::fields::{Field, VertexFields, VertexRows};
 use super::ply::scalar::Scalar;
 
@@ -103,7 +104,8 @@ pub fn read_las(path: &Path) -> Result<LasModel, LasError> {
     let mut reader = Reader::new(BufReader::new(file)).map_err(|e| fail(format!("{e}")))?;
     let points = decode(&mut reader, file_bytes).map_err(fail)?;
     let summary = summarize(reader.header(), &points);
-    let (geometry, stats) = assemble(&points, &points.fields(), None).map_err(fail)?;
+    let (mut geometry, stats) = assemble(&points, &points.fields(), None).map_err(fail)?;
+    geometry.attributes = Some(points.attributes(geometry.rows.as_deref()));
     Ok(LasModel {
         summary,
         geometry,
@@ -276,9 +278,26 @@ struct LasPoints {
     intensity: Vec<u16>,
     classification: Vec<u8>,
     return_number: Vec<u8>,
+    number_of_returns: Vec<u8>,
 }
 
 impl LasPoints {
+    /// The attributes of the points kept (file rows `kept`; all when `None`).
+    fn attributes(&self, kept: Option<&[u32]>) -> Vec<PointAttributes> {
+        let of = |i: usize| {
+            PointAttributes::new(
+                self.intensity[i],
+                self.classification[i],
+                self.return_number[i],
+                self.number_of_returns[i],
+            )
+        };
+        match kept {
+            Some(rows) => rows.iter().map(|&r| of(r as usize)).collect(),
+            None => (0..self.xyz.len()).map(of).collect(),
+        }
+    }
+
     /// The fields for [`assemble`]: x y z, then red green blue, 8- or 16-bit.
     fn fields(&self) -> VertexFields {
         let field = |property, scalar| Field { property, scalar };
@@ -333,6 +352,7 @@ fn decode(reader: &mut Reader, file_bytes: u64) -> Result<LasPoints, String> {
         intensity: Vec::with_capacity(n),
         classification: Vec::with_capacity(n),
         return_number: Vec::with_capacity(n),
+        number_of_returns: Vec::with_capacity(n),
     };
     while (points.xyz.len() as u64) < expected {
         let n = reader.fill_points(batch_points, &mut batch).map_err(|e| {
@@ -358,6 +378,7 @@ fn decode(reader: &mut Reader, file_bytes: u64) -> Result<LasPoints, String> {
         points.intensity.extend(batch.intensity());
         points.classification.extend(batch.classification());
         points.return_number.extend(batch.return_number());
+        points.number_of_returns.extend(batch.number_of_returns());
     }
     if points.xyz.is_empty() {
         return Err("the file holds no points".to_owned());

@@ -13,4 +13,4 @@ pub mod rebase;
 pub mod triangulate;
 
 pub use bounds::Bounds;
-pub use geometry::{Geometry, GeometryStats};
+pub use geometry::{Geometry, GeometryStats, PointAttributes};

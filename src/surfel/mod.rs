@@ -20,11 +20,11 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::io::Geometry;
+use crate::io::{Geometry, PointAttributes};
 use shape::SplatShape;
 
-/// A splat: centre, unit normal, radius (the major semi-axis), colour, and its ellipse
-/// and normal field ([`shape`]). 48 bytes.
+/// A splat: centre, unit normal, radius (the major semi-axis), colour, its ellipse and
+/// normal field ([`shape`]), and its LiDAR attributes (zero for other models). 52 bytes.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Surfel {
@@ -35,6 +35,7 @@ pub struct Surfel {
     /// RGBA8; mid grey when the model has no colours.
     pub color: [u8; 4],
     pub shape: SplatShape,
+    pub attributes: PointAttributes,
 }
 
 /// Colour of surfels of a model without colours.
@@ -67,6 +68,8 @@ pub struct LeafSurfels {
     /// Model origin in the file's coordinates: surfel positions are relative to it.
     pub origin: DVec3,
     pub has_colors: bool,
+    /// Whether the surfels' LiDAR attributes came from the file.
+    pub has_attributes: bool,
     /// False for normals estimated from neighbours, whose sign is arbitrary: such
     /// surfels must be drawn two-sided.
     pub oriented_normals: bool,
@@ -150,6 +153,10 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
             normal: Vec3::ZERO,
             color: g.colors.as_ref().map_or(DEFAULT_COLOR, |c| c[i]),
             shape: SplatShape::zeroed(),
+            attributes: g
+                .attributes
+                .as_ref()
+                .map_or_else(PointAttributes::default, |a| a[i]),
         })
         .collect();
     let oriented = if g.triangles.is_empty() {
@@ -185,6 +192,7 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
         surfels,
         origin: g.origin,
         has_colors: g.colors.is_some(),
+        has_attributes: g.attributes.is_some(),
         oriented_normals: oriented,
         stats,
     }

@@ -9,6 +9,7 @@
 //! [`scene`] opens a model from a file (a PLY built through these stages, or an `.spt`
 //! file), telling a [`report::Report`] each step.
 
+pub mod attributes;
 pub mod errors;
 pub mod hierarchy;
 pub mod parent_shape;
@@ -24,7 +25,7 @@ use half::f16;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::io::Bounds;
+use crate::io::{Bounds, PointAttributes};
 use crate::surfel::LeafSurfels;
 use crate::surfel::Surfel;
 use crate::surfel::shape::{Shape, SplatShape};
@@ -53,6 +54,8 @@ pub struct TreeMeta {
     pub depth: u32,
     pub has_colors: bool,
     pub oriented_normals: bool,
+    /// Whether the nodes carry LiDAR attributes ([`SequentialList::attributes`]).
+    pub has_attributes: bool,
 }
 
 /// A tree as built in memory: the nodes in list order (sorted by parent error,
@@ -64,6 +67,9 @@ pub struct SequentialList {
     /// Each node's ellipse and normal field, in list order: read by the splat passes
     /// only (the culling pass reads `nodes`).
     pub shapes: Vec<SplatShape>,
+    /// Each node's LiDAR attributes, in list order; empty when the model has none
+    /// ([`attributes`]): read by the splat passes of the attribute display modes.
+    pub attributes: Vec<PointAttributes>,
     pub parents: Vec<u32>,
 }
 
@@ -73,6 +79,8 @@ pub struct NodeSet {
     pub records: Vec<NodeRecord>,
     /// Each node's ellipse and normal field, in the same order.
     pub shapes: Vec<SplatShape>,
+    /// Each node's LiDAR attributes, in the same order (empty when the model has none).
+    pub attributes: Vec<PointAttributes>,
     /// Parent id of every node (u32::MAX for the root).
     pub parent_ids: Vec<u32>,
     pub meta: TreeMeta,
@@ -148,6 +156,23 @@ fn internal_record(
     (rec, shape.pack())
 }
 
+/// The attributes of an internal node from its children's, each weighed by its splat's
+/// area r² · ratio ([`attributes::parent_attributes`]).
+fn internal_attributes(
+    node: &hierarchy::Internal,
+    records: &[NodeRecord],
+    shapes: &[SplatShape],
+    attributes: &[PointAttributes],
+) -> PointAttributes {
+    let mut children = [(PointAttributes::default(), 0.0); 4];
+    for (slot, &c) in children.iter_mut().zip(node.children()) {
+        let r = records[c as usize].radius() as f64;
+        let ratio = f16::from_bits(shapes[c as usize].ratio).to_f64();
+        *slot = (attributes[c as usize], r * r * ratio);
+    }
+    attributes::parent_attributes(&children[..node.child_count as usize])
+}
+
 /// Top-down: each node's parent error (a bit copy), δ rounded up and level; parents
 /// read from a snapshot of the internal nodes (ids `n..`) so that every node is
 /// written in parallel.
@@ -197,8 +222,15 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Rep
             (rec, s.shape)
         })
         .unzip();
-    drop(leaves.surfels);
     let total = hierarchy.node_count();
+    let mut attributes: Vec<PointAttributes> = if leaves.has_attributes {
+        let mut a: Vec<PointAttributes> = leaves.surfels.par_iter().map(|s| s.attributes).collect();
+        a.resize(total, PointAttributes::default());
+        a
+    } else {
+        Vec::new()
+    };
+    drop(leaves.surfels);
     records.resize(total, NodeRecord::new(Vec3::ZERO, 0.0, Vec3::Z, [0; 4]));
     shapes.resize(total, SplatShape::circle(Vec3::Z));
 
@@ -226,6 +258,12 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Rep
             records[id as usize] = rec;
             shapes[id as usize] = shape;
         }
+        if !attributes.is_empty() {
+            for &id in ids {
+                let node = &hierarchy.internal[id as usize - n];
+                attributes[id as usize] = internal_attributes(node, &records, &shapes, &attributes);
+            }
+        }
         report.advance(ids.len() as u64);
     }
     let parent_ids = hierarchy.parents();
@@ -248,11 +286,13 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Rep
         depth: depth as u32,
         has_colors: bounds.2,
         oriented_normals: oriented,
+        has_attributes: !attributes.is_empty(),
     };
     NodeSet {
         hierarchy,
         records,
         shapes,
+        attributes,
         parent_ids,
         meta,
     }
@@ -283,6 +323,7 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
         hierarchy,
         records,
         shapes,
+        attributes,
         parent_ids,
         meta,
     } = set;
@@ -302,6 +343,14 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
     let nodes: Vec<NodeRecord> = order.par_iter().map(|&id| records[id as usize]).collect();
     drop(records);
     let shapes: Vec<SplatShape> = order.par_iter().map(|&id| shapes[id as usize]).collect();
+    let attributes: Vec<PointAttributes> = if attributes.is_empty() {
+        Vec::new()
+    } else {
+        order
+            .par_iter()
+            .map(|&id| attributes[id as usize])
+            .collect()
+    };
     let parents = order
         .par_iter()
         .map(|&id| match parent_ids[id as usize] {
@@ -313,6 +362,7 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
         meta,
         nodes,
         shapes,
+        attributes,
         parents,
     }
 }

@@ -15,8 +15,8 @@ use super::report::{Finished, Report, Silent, Step};
 use super::select::PrefixIndex;
 use super::spt_file::{SptFile, is_spt};
 use super::{NodeRecord, SequentialList, TreeMeta, build_list};
-use crate::io::Geometry;
 use crate::io::model::read_model;
+use crate::io::{Geometry, PointAttributes};
 use crate::surfel::leaf_surfels;
 use crate::surfel::shape::SplatShape;
 
@@ -100,6 +100,13 @@ impl Scene {
         match &self.tree {
             TreeSource::Memory(l) => &l.shapes,
             TreeSource::File(f) => f.shapes(),
+        }
+    }
+    /// Each node's LiDAR attributes, in list order (empty when the model has none).
+    pub fn attributes(&self) -> &[PointAttributes] {
+        match &self.tree {
+            TreeSource::Memory(l) => &l.attributes,
+            TreeSource::File(f) => f.attributes(),
         }
     }
 }

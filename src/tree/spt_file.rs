@@ -3,9 +3,10 @@
 //! ```text
 //! offset  size  field (little-endian)
 //!      0     8  magic "spt-tree"
-//!      8     4  format version (2; version 1 had no shapes section)
+//!      8     4  format version (3; version 2, read as well, had no attributes
+//!                 section; version 1 no shapes section)
 //!     12     4  header size (256)
-//!     16     4  flags: 1 = has colours, 2 = oriented normals
+//!     16     4  flags: 1 = has colours, 2 = oriented normals, 4 = LiDAR attributes
 //!     20     4  depth (largest level)
 //!     24     8  leaf count
 //!     32     8  node count
@@ -19,12 +20,16 @@
 //!    160     8  file size
 //!    168     8  checksum: XXH3-64 of the header (this field zeroed) and all sections
 //!    176     8  offset of the splat shapes (16 bytes per node, after the parents)
-//!    184     4  splat shape size (12)
-//!    188    68  zero
+//!    184     4  splat shape size (16)
+//!    188     8  offset of the LiDAR attributes (4 bytes per node, after the shapes;
+//!                 an empty section when flag 4 is clear)
+//!    196     4  attribute size (4)
+//!    200    56  zero
 //! ```
 //!
 //! Sections follow the header in this order: node records (what the culling pass
-//! reads), parents (the CPU's), splat shapes (what only the splat passes read).
+//! reads), parents (the CPU's), splat shapes (what only the splat passes read), LiDAR
+//! attributes (what the attribute display modes read; a model without pays nothing).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -36,15 +41,18 @@ use xxhash_rust::xxh3::Xxh3;
 use super::select::TreeView;
 use super::validate;
 use super::{NodeRecord, SequentialList, TreeMeta};
-use crate::io::Bounds;
 use crate::io::atomic::write_atomically;
+use crate::io::{Bounds, PointAttributes};
 use crate::surfel::shape::SplatShape;
 
 pub const MAGIC: &[u8; 8] = b"spt-tree";
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
+/// The oldest version read: version 2 files are version 3 files without attributes.
+pub const OLDEST_READ: u32 = 2;
 pub const HEADER_BYTES: usize = 256;
 const RECORD_BYTES: usize = std::mem::size_of::<NodeRecord>();
 const SHAPE_BYTES: usize = std::mem::size_of::<SplatShape>();
+const ATTRIBUTE_BYTES: usize = std::mem::size_of::<PointAttributes>();
 const CHECKSUM_AT: usize = 168;
 
 #[derive(Debug, Error)]
@@ -96,7 +104,8 @@ fn header_bytes(list: &SequentialList, checksum: u64) -> Vec<u8> {
     h.extend_from_slice(MAGIC);
     h.extend_from_slice(&VERSION.to_le_bytes());
     h.extend_from_slice(&(HEADER_BYTES as u32).to_le_bytes());
-    let flags = m.has_colors as u32 | (m.oriented_normals as u32) << 1;
+    let flags =
+        m.has_colors as u32 | (m.oriented_normals as u32) << 1 | (m.has_attributes as u32) << 2;
     h.extend_from_slice(&flags.to_le_bytes());
     h.extend_from_slice(&m.depth.to_le_bytes());
     h.extend_from_slice(&m.leaf_count.to_le_bytes());
@@ -112,11 +121,14 @@ fn header_bytes(list: &SequentialList, checksum: u64) -> Vec<u8> {
     let nodes_at = HEADER_BYTES as u64;
     let parents_at = nodes_at + (list.nodes.len() * RECORD_BYTES) as u64;
     let shapes_at = parents_at + 4 * list.parents.len() as u64;
-    let size = shapes_at + (list.shapes.len() * SHAPE_BYTES) as u64;
+    let attributes_at = shapes_at + (list.shapes.len() * SHAPE_BYTES) as u64;
+    let size = attributes_at + (list.attributes.len() * ATTRIBUTE_BYTES) as u64;
     for v in [nodes_at, parents_at, size, checksum, shapes_at] {
         h.extend_from_slice(&v.to_le_bytes());
     }
     h.extend_from_slice(&(SHAPE_BYTES as u32).to_le_bytes());
+    h.extend_from_slice(&attributes_at.to_le_bytes());
+    h.extend_from_slice(&(ATTRIBUTE_BYTES as u32).to_le_bytes());
     h.resize(HEADER_BYTES, 0);
     h
 }
@@ -148,10 +160,11 @@ pub fn reseal(bytes: &mut [u8]) -> bool {
 
 /// Writes the list in `.spt` form to `w` (little-endian hosts write their memory as is).
 pub fn write_to(w: &mut dyn Write, list: &SequentialList) -> std::io::Result<()> {
-    let sections: [&[u8]; 3] = [
+    let sections: [&[u8]; 4] = [
         bytemuck::cast_slice(&list.nodes),
         bytemuck::cast_slice(&list.parents),
         bytemuck::cast_slice(&list.shapes),
+        bytemuck::cast_slice(&list.attributes),
     ];
     let checksum = payload_checksum(&header_bytes(list, 0), &sections);
     w.write_all(&header_bytes(list, checksum))?;
@@ -177,6 +190,7 @@ pub struct SptFile {
     nodes_at: usize,
     parents_at: usize,
     shapes_at: usize,
+    attributes_at: usize,
 }
 
 fn u32_at(b: &[u8], at: usize) -> u32 {
@@ -229,7 +243,7 @@ impl SptFile {
         if version > VERSION {
             return Err(SptError::NewerVersion { path: p(), version });
         }
-        if version < VERSION && version > 0 {
+        if version < OLDEST_READ && version > 0 {
             return Err(SptError::OlderVersion { path: p(), version });
         }
         if b.len() < HEADER_BYTES {
@@ -255,6 +269,14 @@ impl SptFile {
         let (leaf_count, node_count) = (u64_at(b, 24), u64_at(b, 32));
         let (nodes_at, parents_at, size) = (u64_at(b, 144), u64_at(b, 152), u64_at(b, 160));
         let shapes_at = u64_at(b, 176);
+        let flags = u32_at(b, 16);
+        let has_attributes = flags & 4 != 0;
+        // Version 2: no attributes section (it ends the file, empty).
+        let (attributes_at, attribute_bytes) = match version {
+            2 => (size, ATTRIBUTE_BYTES as u32),
+            _ => (u64_at(b, 188), u32_at(b, 196)),
+        };
+        let attribute_nodes = if has_attributes { node_count } else { 0 };
         let after = |at: u64, bytes: usize| {
             node_count
                 .checked_mul(bytes as u64)
@@ -263,7 +285,13 @@ impl SptFile {
         if nodes_at != HEADER_BYTES as u64
             || Some(parents_at) != after(nodes_at, RECORD_BYTES)
             || Some(shapes_at) != after(parents_at, 4)
-            || Some(size) != after(shapes_at, SHAPE_BYTES)
+            || Some(attributes_at) != after(shapes_at, SHAPE_BYTES)
+            || attribute_bytes as usize != ATTRIBUTE_BYTES
+            || (version == 2 && has_attributes)
+            || Some(size)
+                != attribute_nodes
+                    .checked_mul(ATTRIBUTE_BYTES as u64)
+                    .and_then(|n| n.checked_add(attributes_at))
             || leaf_count > node_count
             || node_count == 0
         {
@@ -284,7 +312,6 @@ impl SptFile {
                 b.len() as u64 - size
             )));
         }
-        let flags = u32_at(b, 16);
         let v3 = |at: usize| [f64_at(b, at), f64_at(b, at + 8), f64_at(b, at + 16)];
         let f3 = |at: usize| [f32_at(b, at), f32_at(b, at + 4), f32_at(b, at + 8)];
         let meta = TreeMeta {
@@ -301,6 +328,7 @@ impl SptFile {
             depth: u32_at(b, 20),
             has_colors: flags & 1 != 0,
             oriented_normals: flags & 2 != 0,
+            has_attributes,
         };
         let checksum = u64_at(b, CHECKSUM_AT);
         Ok(SptFile {
@@ -311,6 +339,7 @@ impl SptFile {
             nodes_at: nodes_at as usize,
             parents_at: parents_at as usize,
             shapes_at: shapes_at as usize,
+            attributes_at: attributes_at as usize,
             map,
         })
     }
@@ -341,7 +370,12 @@ impl SptFile {
 
     /// Each node's ellipse and normal field, in list order.
     pub fn shapes(&self) -> &[SplatShape] {
-        bytemuck::cast_slice(&self.map[self.shapes_at..])
+        bytemuck::cast_slice(&self.map[self.shapes_at..self.attributes_at])
+    }
+
+    /// Each node's LiDAR attributes, in list order (empty when the model has none).
+    pub fn attributes(&self) -> &[PointAttributes] {
+        bytemuck::cast_slice(&self.map[self.attributes_at..])
     }
 
     pub fn file_bytes(&self) -> u64 {
@@ -358,6 +392,7 @@ impl SptFile {
             meta: self.meta.clone(),
             nodes: self.nodes().to_vec(),
             shapes: self.shapes().to_vec(),
+            attributes: self.attributes().to_vec(),
             parents: self.parents().to_vec(),
         }
     }

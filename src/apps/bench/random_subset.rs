@@ -74,12 +74,15 @@ pub fn random_subset(
     meta.node_count = nodes.len() as u64;
     meta.leaf_count = nodes.len() as u64;
     meta.depth = 0;
+    // Compared in shaded mode only: the subset leaves the LiDAR attributes behind.
+    meta.has_attributes = false;
     let parents = vec![u32::MAX; nodes.len()];
     Scene::from_list(
         SequentialList {
             meta,
             nodes,
             shapes,
+            attributes: Vec::new(),
             parents,
         },
         None,

@@ -1,0 +1,65 @@
+//! LiDAR attributes of internal nodes (DESIGN.md §3's aggregation, for what a LAS point
+//! carries): each child weighs by the area of its splat, π r² · ratio (r the major
+//! semi-axis), so that a node shows what covers most of the surface it stands for.
+//!
+//! * class: the class whose children cover the largest area (ties: the lower code);
+//! * intensity: the area-weighted mean, rounded;
+//! * returns: those of the child of largest area.
+
+use crate::io::PointAttributes;
+
+/// The attributes of a node whose children have `children` (attributes, splat area).
+pub fn parent_attributes(children: &[(PointAttributes, f64)]) -> PointAttributes {
+    let total: f64 = children.iter().map(|(_, a)| a).sum();
+    let mut by_class: [(u8, f64); 4] = [(0, 0.0); 4];
+    let mut classes = 0;
+    for (attr, area) in children {
+        match by_class[..classes]
+            .iter_mut()
+            .find(|(c, _)| *c == attr.class)
+        {
+            Some(slot) => slot.1 += area,
+            None => {
+                by_class[classes] = (attr.class, *area);
+                classes += 1;
+            }
+        }
+    }
+    let class = by_class[..classes]
+        .iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
+        .map_or(0, |(c, _)| *c);
+    let intensity = if total > 0.0 {
+        let sum: f64 = children.iter().map(|(a, w)| a.intensity as f64 * w).sum();
+        (sum / total).round().clamp(0.0, u16::MAX as f64) as u16
+    } else {
+        children.first().map_or(0, |(a, _)| a.intensity)
+    };
+    let largest = children
+        .iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or(0, |(a, _)| a.returns);
+    PointAttributes {
+        intensity,
+        class,
+        returns: largest,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_class_of_most_area_wins_and_intensity_is_the_area_mean() {
+        let ground = PointAttributes::new(100, 2, 1, 1);
+        let tree = PointAttributes::new(300, 5, 2, 3);
+        // Two small ground splats against one large vegetation splat.
+        let p = parent_attributes(&[(ground, 1.0), (ground, 1.0), (tree, 3.0)]);
+        assert_eq!(p.class, 5);
+        assert_eq!(p.intensity, 220);
+        assert_eq!((p.return_number(), p.number_of_returns()), (2, 3));
+        let p = parent_attributes(&[(ground, 2.0), (ground, 2.0), (tree, 3.0)]);
+        assert_eq!(p.class, 2);
+    }
+}
