@@ -46,6 +46,12 @@ struct Frame {
     lod_eye: vec3<f32>,
     // Eye-dome lighting's neighbour distance, pixels (MODE_EDL).
     edl_radius_px: f32,
+    // The intensities drawn black and white (MODE_INTENSITY): the model's 1st and 99th
+    // percentiles.
+    intensity_range: vec2<f32>,
+    // 1 when the nodes carry LiDAR attributes (the attribute modes read them).
+    has_attributes: u32,
+    pad: u32,
 }
 
 const MODE_SHADED: u32 = 0u;
@@ -56,6 +62,55 @@ const MODE_POINTS: u32 = 4u;
 const MODE_MESH: u32 = 5u;
 const MODE_EDL: u32 = 6u;
 const MODE_ELEVATION: u32 = 7u;
+const MODE_CLASSIFICATION: u32 = 8u;
+const MODE_INTENSITY: u32 = 9u;
+const MODE_RETURNS: u32 = 10u;
+
+// The colour of ASPRS class `c` (LAS 1.4, table 17), linear RGB. Kept in step with the
+// viewer's legend (src/apps/view/legend.rs, CLASS_COLORS).
+fn class_color(c: u32) -> vec3<f32> {
+    switch c {
+        case 2u: { return vec3<f32>(0.35, 0.17, 0.04); }   // ground: brown
+        case 3u: { return vec3<f32>(0.35, 0.75, 0.15); }   // low vegetation: light green
+        case 4u: { return vec3<f32>(0.1, 0.45, 0.03); }    // medium vegetation: green
+        case 5u: { return vec3<f32>(0.01, 0.2, 0.01); }    // high vegetation: dark green
+        case 6u: { return vec3<f32>(0.8, 0.12, 0.03); }    // building: red
+        case 7u, 18u: { return vec3<f32>(0.9, 0.0, 0.9); } // noise: magenta
+        case 9u: { return vec3<f32>(0.02, 0.15, 0.85); }   // water: blue
+        case 10u: { return vec3<f32>(0.3, 0.2, 0.12); }    // rail: dark brown
+        case 11u: { return vec3<f32>(0.12, 0.12, 0.12); }  // road surface: dark grey
+        case 17u: { return vec3<f32>(0.9, 0.7, 0.02); }    // bridge deck: yellow
+        case 13u, 14u, 15u, 16u: { return vec3<f32>(0.02, 0.7, 0.8); } // wires, towers: cyan
+        default: { return vec3<f32>(0.45, 0.45, 0.45); }   // unclassified and others: grey
+    }
+}
+
+// Intensity as grey, linear, from black at intensity_range.x to white at .y.
+fn intensity_grey(i: f32) -> vec3<f32> {
+    let span = max(frame.intensity_range.y - frame.intensity_range.x, 1.0);
+    let t = clamp((i - frame.intensity_range.x) / span, 0.0, 1.0);
+    return vec3<f32>(t * t);
+}
+
+// Returns (return number n of m): single (1 of 1) yellow, first of several green,
+// last of several red, intermediate blue. Linear RGB.
+fn returns_color(n: u32, m: u32) -> vec3<f32> {
+    if m <= 1u { return vec3<f32>(0.9, 0.7, 0.02); }
+    if n <= 1u { return vec3<f32>(0.05, 0.6, 0.05); }
+    if n >= m { return vec3<f32>(0.75, 0.03, 0.02); }
+    return vec3<f32>(0.03, 0.15, 0.8);
+}
+
+// The colour of a node with attributes `a` (intensity, class, returns packed as
+// src/io/geometry.rs's PointAttributes) in attribute mode `mode`.
+fn attribute_color(mode: u32, a: u32) -> vec3<f32> {
+    if frame.has_attributes == 0u { return vec3<f32>(0.45, 0.45, 0.45); }
+    switch mode {
+        case MODE_CLASSIFICATION: { return class_color((a >> 16u) & 0xffu); }
+        case MODE_INTENSITY: { return intensity_grey(f32(a & 0xffffu)); }
+        default: { return returns_color((a >> 24u) & 15u, a >> 28u); }
+    }
+}
 
 // The elevation ramp: blue (lowest) through cyan, green and yellow to red (highest),
 // linear RGB; `z` relative to the model origin. Kept in step with the viewer's legend

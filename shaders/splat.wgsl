@@ -8,6 +8,8 @@
 @group(1) @binding(0) var<storage, read> nodes: array<vec4<u32>>;
 @group(1) @binding(1) var<storage, read> survivors: array<u32>;
 @group(1) @binding(2) var<storage, read> shapes: array<SplatShape>;
+// Each node's LiDAR attributes (one u32 of zero for a model without them).
+@group(1) @binding(3) var<storage, read> attributes: array<u32>;
 
 // A splat's ellipse, normal field and clip line, as src/surfel/shape.rs packs it.
 struct SplatShape {
@@ -148,6 +150,10 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
         case MODE_LEVELS: { color = vec4<f32>(level_color(node.level), 1.0); }
         case MODE_RADIUS: { color = vec4<f32>(radius_color(node.radius), 1.0); }
         case MODE_ELEVATION: { color = vec4<f32>(elevation_color(node.position.z), 1.0); }
+        case MODE_CLASSIFICATION, MODE_INTENSITY, MODE_RETURNS: {
+            let a = attributes[min(index, arrayLength(&attributes) - 1u)];
+            color = vec4<f32>(attribute_color(frame.mode, a), 1.0);
+        }
         default: {}
     }
     out.color = color;

@@ -31,7 +31,7 @@ fn a_written_file_reads_back_with_its_points_colours_and_counts() {
             "{name}"
         );
         assert_eq!(s.compressed, compressed);
-        assert_eq!(s.by_class, vec![(2, 1000), (6, 2000)], "{name}");
+        assert_eq!(s.by_class, vec![(2, 1024), (9, 1976)], "{name}");
         assert_eq!(s.by_return, vec![(1, 1500), (2, 1500)], "{name}");
         assert_eq!(s.intensity, Some((0, 999)), "{name}");
         assert_eq!(

@@ -229,8 +229,8 @@ fn lidar_attributes_survive_the_file() {
     let list = spt::tree::build_sequential_list(spt::surfel::leaf_surfels(&model.geometry));
     assert!(list.meta.has_attributes);
     assert_eq!(list.attributes.len(), list.nodes.len());
-    // Leaves keep their own class (ground or building); inner nodes take one of those.
-    assert!(list.attributes.iter().all(|a| a.class == 2 || a.class == 6));
+    // Leaves keep their own class (ground or water); inner nodes take one of those.
+    assert!(list.attributes.iter().all(|a| a.class == 2 || a.class == 9));
     let path = dir.path().join("tile.spt");
     write_spt(&path, &list).unwrap();
     let file = SptFile::open(&path).unwrap();

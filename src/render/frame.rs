@@ -9,7 +9,7 @@ use super::settings::{DEPTH_PUSH, Mode, PREFILTER_PX, Settings};
 use crate::tree::TreeMeta;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl`, field for field (the WGSL file
-/// documents each); 272 bytes, with the padding WGSL's vec3 alignment asks for.
+/// documents each); 288 bytes, with the padding WGSL's vec3 alignment asks for.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub(super) struct FrameUniform {
@@ -38,9 +38,12 @@ pub(super) struct FrameUniform {
     pub elevation_range: [f32; 2],
     pub lod_eye: [f32; 3],
     pub edl_radius_px: f32,
+    pub intensity_range: [f32; 2],
+    pub has_attributes: u32,
+    pub pad: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<FrameUniform>() == 272);
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 288);
 
 /// The layout of bind group 0 of every pass: the frame uniform.
 pub(super) fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
@@ -105,6 +108,9 @@ impl FrameUniform {
             Mode::Mesh => 5,
             Mode::Edl => 6,
             Mode::Elevation => 7,
+            Mode::Classification => 8,
+            Mode::Intensity => 9,
+            Mode::Returns => 10,
         };
         let light = settings.light.normalize_or(Vec3::Z);
         let [r, g, b] = settings.background.map(srgb_to_linear);
@@ -142,6 +148,9 @@ impl FrameUniform {
                 .as_vec3()
                 .to_array(),
             edl_radius_px: settings.edl_radius_px,
+            intensity_range: meta.intensity_range.map(f32::from),
+            has_attributes: meta.has_attributes as u32,
+            pad: 0,
         }
     }
 }

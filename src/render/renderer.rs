@@ -200,7 +200,12 @@ impl Renderer {
     /// Uploads one slice of a scene's list (a range given by [`Renderer::slice_plan`]),
     /// to be pushed in order.
     pub fn upload_slice(&self, scene: &Scene, range: std::ops::Range<usize>) -> SliceUpload {
-        let chunk = (&scene.nodes()[range.clone()], &scene.shapes()[range]);
+        let attributes = scene.attributes().get(range.clone()).unwrap_or(&[]);
+        let chunk = (
+            &scene.nodes()[range.clone()],
+            &scene.shapes()[range],
+            attributes,
+        );
         upload::upload_slice(&self.gpu.device, (&self.splats, &self.cull), chunk)
     }
 

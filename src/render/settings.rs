@@ -22,6 +22,14 @@ pub enum Mode {
     Edl,
     /// Colour by height over the model's range (a ramp from low blue to high red), lit.
     Elevation,
+    /// LiDAR: colour by ASPRS class (ground brown, vegetation greens, buildings red,
+    /// water blue…), lit.
+    Classification,
+    /// LiDAR: intensity as grey between the model's 1st and 99th percentiles, lit.
+    Intensity,
+    /// LiDAR: colour by return (single yellow, first green, intermediate blue, last
+    /// red), lit.
+    Returns,
 }
 
 /// How the splats of the prefix are culled (DESIGN.md §6).

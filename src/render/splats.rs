@@ -10,7 +10,7 @@ use super::gbuffer::{ADD, color_targets, depth_state};
 use super::gpu_scene::Slice;
 use super::shaders::module;
 use crate::tree::NodeRecord;
-use crate::tree::record::SplatShape;
+use crate::tree::record::{PointAttributes, SplatShape};
 
 /// The three splat pipelines of one culling strategy.
 pub(super) struct SplatPipelines {
@@ -96,6 +96,7 @@ impl SplatPasses {
     pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> SplatPasses {
         let node = std::mem::size_of::<NodeRecord>() as u64;
         let shape = std::mem::size_of::<SplatShape>() as u64;
+        let attribute = std::mem::size_of::<PointAttributes>() as u64;
         let bind_layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(label),
@@ -104,7 +105,11 @@ impl SplatPasses {
         };
         let nodes_layout = bind_layout(
             "nodes",
-            &[vertex_storage(0, node), vertex_storage(2, shape)],
+            &[
+                vertex_storage(0, node),
+                vertex_storage(2, shape),
+                vertex_storage(3, attribute),
+            ],
         );
         let compacted_layout = bind_layout(
             "compacted nodes",
@@ -112,6 +117,7 @@ impl SplatPasses {
                 vertex_storage(0, node),
                 vertex_storage(1, 4),
                 vertex_storage(2, shape),
+                vertex_storage(3, attribute),
             ],
         );
         let pipeline_layout = |second: &wgpu::BindGroupLayout| {

@@ -11,7 +11,7 @@ use super::gpu_scene::{GpuScene, Slice, SliceUpload};
 use super::shaders::WORKGROUP_SIZE;
 use super::splats::SplatPasses;
 use crate::tree::NodeRecord;
-use crate::tree::record::SplatShape;
+use crate::tree::record::{PointAttributes, SplatShape};
 
 /// Nodes per slice at most: one dispatch of 65,535 workgroups covers a slice.
 const MAX_SLICE_NODES: u64 = 65_535 * WORKGROUP_SIZE as u64;
@@ -59,14 +59,16 @@ fn bind(
     })
 }
 
-/// Uploads one slice of the list (a range of [`slice_plan`]): its node records and
-/// their shapes, bound for both culling strategies, to be pushed in order.
+/// Uploads one slice of the list (a range of [`slice_plan`]): its node records, their
+/// shapes and LiDAR attributes (empty for a model without: one zero is bound in their
+/// place), bound for both culling strategies, to be pushed in order.
 pub(super) fn upload_slice(
     device: &wgpu::Device,
     (splats, cull): (&SplatPasses, &CullPass),
-    (chunk, chunk_shapes): (&[NodeRecord], &[SplatShape]),
+    (chunk, chunk_shapes, chunk_attributes): (&[NodeRecord], &[SplatShape], &[PointAttributes]),
 ) -> SliceUpload {
     assert_eq!(chunk.len(), chunk_shapes.len());
+    assert!(chunk_attributes.is_empty() || chunk_attributes.len() == chunk.len());
     let storage = |label, contents| {
         device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
@@ -76,6 +78,15 @@ pub(super) fn upload_slice(
     };
     let nodes = storage("nodes", bytemuck::cast_slice(chunk));
     let shapes = storage("shapes", bytemuck::cast_slice(chunk_shapes));
+    let none = [PointAttributes::default()];
+    let attributes = storage(
+        "attributes",
+        bytemuck::cast_slice(if chunk_attributes.is_empty() {
+            &none
+        } else {
+            chunk_attributes
+        }),
+    );
     let survivors = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("survivors"),
         size: (std::mem::size_of::<u32>() * chunk.len()) as u64,
@@ -93,7 +104,11 @@ pub(super) fn upload_slice(
     });
     SliceUpload(Slice {
         count: chunk.len() as u32,
-        direct: bind(device, &splats.nodes_layout, &[(0, &nodes), (2, &shapes)]),
+        direct: bind(
+            device,
+            &splats.nodes_layout,
+            &[(0, &nodes), (2, &shapes), (3, &attributes)],
+        ),
         cull: bind(
             device,
             &cull.layout,
@@ -102,7 +117,7 @@ pub(super) fn upload_slice(
         compacted: bind(
             device,
             &splats.compacted_layout,
-            &[(0, &nodes), (1, &survivors), (2, &shapes)],
+            &[(0, &nodes), (1, &survivors), (2, &shapes), (3, &attributes)],
         ),
         compaction,
     })

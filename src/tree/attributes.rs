@@ -46,9 +46,47 @@ pub fn parent_attributes(children: &[(PointAttributes, f64)]) -> PointAttributes
     }
 }
 
+/// The 1st and 99th percentiles of the intensities of `leaves` (what the intensity mode
+/// draws black and white, robust to a few stray returns); [0, 0] for none.
+pub fn intensity_range(leaves: &[PointAttributes]) -> [u16; 2] {
+    let mut histogram = vec![0u64; 1 << 16];
+    for a in leaves {
+        histogram[a.intensity as usize] += 1;
+    }
+    let n = leaves.len() as u64;
+    let at = |rank: u64| {
+        let mut seen = 0;
+        for (value, count) in histogram.iter().enumerate() {
+            seen += count;
+            if seen > rank {
+                return value as u16;
+            }
+        }
+        0
+    };
+    if n == 0 {
+        [0, 0]
+    } else {
+        [at(n / 100), at(n - 1 - n / 100)]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_intensity_range_leaves_out_a_few_strays() {
+        let mut leaves: Vec<PointAttributes> = (0..1000)
+            .map(|i| PointAttributes::new(100 + (i % 200) as u16, 1, 1, 1))
+            .collect();
+        leaves.extend((0..5).map(|_| PointAttributes::new(65535, 1, 1, 1)));
+        let [lo, hi] = intensity_range(&leaves);
+        assert!(
+            (100..110).contains(&lo) && (290..300).contains(&hi),
+            "{lo} {hi}"
+        );
+    }
 
     #[test]
     fn the_class_of_most_area_wins_and_intensity_is_the_area_mean() {

@@ -56,6 +56,8 @@ pub struct TreeMeta {
     pub oriented_normals: bool,
     /// Whether the nodes carry LiDAR attributes ([`SequentialList::attributes`]).
     pub has_attributes: bool,
+    /// The leaves' 1st and 99th intensity percentiles ([`attributes::intensity_range`]).
+    pub intensity_range: [u16; 2],
 }
 
 /// A tree as built in memory: the nodes in list order (sorted by parent error,
@@ -287,6 +289,7 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Rep
         has_colors: bounds.2,
         oriented_normals: oriented,
         has_attributes: !attributes.is_empty(),
+        intensity_range: attributes::intensity_range(attributes.get(..n).unwrap_or(&[])),
     };
     NodeSet {
         hierarchy,

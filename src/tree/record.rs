@@ -8,8 +8,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-pub use crate::surfel::octahedral::{oct_decode, oct_encode};
 /// The second stream of a node: its ellipse and normal field (read by the splat passes).
+pub use crate::io::PointAttributes;
+pub use crate::surfel::octahedral::{oct_decode, oct_encode};
 pub use crate::surfel::shape::SplatShape;
 use half::f16;
 

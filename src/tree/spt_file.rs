@@ -24,7 +24,8 @@
 //!    188     8  offset of the LiDAR attributes (4 bytes per node, after the shapes;
 //!                 an empty section when flag 4 is clear)
 //!    196     4  attribute size (4)
-//!    200    56  zero
+//!    200     4  intensity range: 1st and 99th percentile of the leaves, 2 × u16
+//!    204    52  zero
 //! ```
 //!
 //! Sections follow the header in this order: node records (what the culling pass
@@ -129,6 +130,9 @@ fn header_bytes(list: &SequentialList, checksum: u64) -> Vec<u8> {
     h.extend_from_slice(&(SHAPE_BYTES as u32).to_le_bytes());
     h.extend_from_slice(&attributes_at.to_le_bytes());
     h.extend_from_slice(&(ATTRIBUTE_BYTES as u32).to_le_bytes());
+    for v in m.intensity_range {
+        h.extend_from_slice(&v.to_le_bytes());
+    }
     h.resize(HEADER_BYTES, 0);
     h
 }
@@ -329,6 +333,7 @@ impl SptFile {
             has_colors: flags & 1 != 0,
             oriented_normals: flags & 2 != 0,
             has_attributes,
+            intensity_range: [0, 2].map(|k| u16::from_le_bytes([b[200 + k], b[201 + k]])),
         };
         let checksum = u64_at(b, CHECKSUM_AT);
         Ok(SptFile {

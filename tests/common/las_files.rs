@@ -3,7 +3,8 @@
 use las::{Builder, Color, Point, Writer, point::Classification, point::Format};
 
 /// A LAS 1.2 file of point format 3 (RGB, intensity, classes, returns, GPS time):
-/// `n` points on a 1 m grid at UTM-sized coordinates, scale 0.01; LAZ when `compressed`.
+/// `n` points on a 1 m grid of rows of 64 at UTM-sized coordinates, scale 0.01; the
+/// first 16 rows ground (class 2), the others water (class 9); LAZ when `compressed`.
 pub fn sample(n: usize, compressed: bool) -> Vec<u8> {
     let mut builder = Builder::from((1, 2));
     builder.point_format = Format::new(3).unwrap();
@@ -23,10 +24,10 @@ pub fn sample(n: usize, compressed: bool) -> Vec<u8> {
                 y: 5_000_000.0 + row,
                 z: 100.0 + (col * 0.3).sin(),
                 intensity: (i % 1000) as u16,
-                classification: if i % 3 == 0 {
+                classification: if row < 16.0 {
                     Classification::Ground
                 } else {
-                    Classification::Building
+                    Classification::Water
                 },
                 return_number: 1 + (i % 2) as u8,
                 number_of_returns: 2,

@@ -12,6 +12,7 @@
 mod app;
 pub mod controls;
 pub mod input;
+mod legend;
 pub mod loader;
 mod panel;
 mod present;

@@ -19,13 +19,16 @@ pub struct PanelStatus<'a> {
     pub message: Option<(&'a str, bool)>,
 }
 
-const MODES: [(Mode, &str); 8] = [
+const MODES: [(Mode, &str); 11] = [
     (Mode::Shaded, "shaded"),
     (Mode::Levels, "tree levels"),
     (Mode::Normals, "normals"),
     (Mode::Radius, "splat radius"),
     (Mode::Edl, "eye-dome lighting"),
     (Mode::Elevation, "elevation"),
+    (Mode::Classification, "classification (LiDAR)"),
+    (Mode::Intensity, "intensity (LiDAR)"),
+    (Mode::Returns, "returns (LiDAR)"),
     (Mode::Points, "points (no blending)"),
     (Mode::Mesh, "mesh (reference)"),
 ];
@@ -136,20 +139,21 @@ fn lod_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
 }
 
 fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
-    let has_mesh = viewer
-        .model
-        .as_ref()
-        .is_some_and(|m| m.gpu_scene.mesh_triangles() > 0);
+    let m = viewer.model.as_ref();
+    let has_mesh = m.is_some_and(|m| m.gpu_scene.mesh_triangles() > 0);
+    let has_attributes = m.is_some_and(|m| m.scene.meta().has_attributes);
     let s = &mut viewer.settings;
+    let lidar = |mode| matches!(mode, Mode::Classification | Mode::Intensity | Mode::Returns);
     egui::ComboBox::from_label("Display (M)")
         .selected_text(MODES.iter().find(|m| m.0 == s.mode).map_or("", |m| m.1))
         .show_ui(ui, |ui| {
             for (mode, name) in MODES {
-                if mode != Mode::Mesh || has_mesh {
+                if (mode != Mode::Mesh || has_mesh) && (!lidar(mode) || has_attributes) {
                     ui.selectable_value(&mut s.mode, mode, name);
                 }
             }
         });
+    super::legend::show(ui, s.mode);
     ui.checkbox(&mut s.ewa, "EWA prefilter (X)");
     ui.checkbox(&mut s.cull_back_faces, "Back-face culling");
     ui.horizontal(|ui| {

@@ -192,11 +192,10 @@ impl Viewer {
             Command::ToggleEwa => s.ewa = !s.ewa,
             Command::TogglePanel => self.show_panel = !self.show_panel,
             Command::NextMode => {
-                let has_mesh = self
-                    .model
-                    .as_ref()
-                    .is_some_and(|m| m.gpu_scene.mesh_triangles() > 0);
-                s.mode = next_mode(s.mode, has_mesh);
+                let m = self.model.as_ref();
+                let has_mesh = m.is_some_and(|m| m.gpu_scene.mesh_triangles() > 0);
+                let has_attributes = m.is_some_and(|m| m.scene.meta().has_attributes);
+                s.mode = next_mode(s.mode, has_mesh, has_attributes);
             }
             Command::ToggleFreeze => self.set_frozen(self.settings.lod_eye.is_none()),
             Command::Frame => {
@@ -358,16 +357,43 @@ impl Viewer {
     }
 }
 
-/// The display mode after `mode`; mesh only for models that have one.
-pub fn next_mode(mode: Mode, has_mesh: bool) -> Mode {
+/// The display mode after `mode`; mesh only for models that have one, the LiDAR modes
+/// only for models with attributes.
+pub fn next_mode(mode: Mode, has_mesh: bool, has_attributes: bool) -> Mode {
     match mode {
         Mode::Shaded => Mode::Levels,
         Mode::Levels => Mode::Normals,
         Mode::Normals => Mode::Radius,
         Mode::Radius => Mode::Edl,
         Mode::Edl => Mode::Elevation,
-        Mode::Elevation => Mode::Points,
+        Mode::Elevation if has_attributes => Mode::Classification,
+        Mode::Classification => Mode::Intensity,
+        Mode::Intensity => Mode::Returns,
+        Mode::Elevation | Mode::Returns => Mode::Points,
         Mode::Points if has_mesh => Mode::Mesh,
         Mode::Points | Mode::Mesh => Mode::Shaded,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_lidar_modes_come_after_elevation_for_models_with_attributes() {
+        let cycle = |has_attributes| {
+            let mut mode = Mode::Elevation;
+            let mut seen = Vec::new();
+            while mode != Mode::Points {
+                mode = next_mode(mode, false, has_attributes);
+                seen.push(mode);
+            }
+            seen
+        };
+        assert_eq!(
+            cycle(true),
+            [Mode::Classification, Mode::Intensity, Mode::Returns, Mode::Points]
+        );
+        assert_eq!(cycle(false), [Mode::Points]);
     }
 }

@@ -1,0 +1,84 @@
+//! The panel's legend for the LiDAR display modes: which colour is which ASPRS class, or
+//! which return. The colours are those of `shaders/common.wgsl` (`class_color`,
+//! `returns_color`), linear RGB; a test keeps the two in step.
+
+use crate::render::Mode;
+
+/// (classes, name, linear RGB) as `class_color` draws them.
+pub const CLASS_COLORS: [(&str, &str, [f32; 3]); 12] = [
+    ("2", "ground", [0.35, 0.17, 0.04]),
+    ("3", "low vegetation", [0.35, 0.75, 0.15]),
+    ("4", "medium vegetation", [0.1, 0.45, 0.03]),
+    ("5", "high vegetation", [0.01, 0.2, 0.01]),
+    ("6", "building", [0.8, 0.12, 0.03]),
+    ("7, 18", "noise", [0.9, 0.0, 0.9]),
+    ("9", "water", [0.02, 0.15, 0.85]),
+    ("10", "rail", [0.3, 0.2, 0.12]),
+    ("11", "road surface", [0.12, 0.12, 0.12]),
+    ("13–16", "wires, towers", [0.02, 0.7, 0.8]),
+    ("17", "bridge deck", [0.9, 0.7, 0.02]),
+    ("other", "unclassified", [0.45, 0.45, 0.45]),
+];
+
+/// (name, linear RGB) as `returns_color` draws them.
+pub const RETURN_COLORS: [(&str, [f32; 3]); 4] = [
+    ("single (1 of 1)", [0.9, 0.7, 0.02]),
+    ("first of several", [0.05, 0.6, 0.05]),
+    ("intermediate", [0.03, 0.15, 0.8]),
+    ("last of several", [0.75, 0.03, 0.02]),
+];
+
+fn swatch(ui: &mut egui::Ui, [r, g, b]: [f32; 3], label: String) {
+    ui.horizontal(|ui| {
+        let (rect, _) = ui.allocate_exact_size(egui::vec2(14.0, 14.0), egui::Sense::hover());
+        ui.painter().rect_filled(
+            rect,
+            2.0,
+            egui::Color32::from(egui::Rgba::from_rgb(r, g, b)),
+        );
+        ui.label(label);
+    });
+}
+
+/// The legend of `mode`, if it has one.
+pub fn show(ui: &mut egui::Ui, mode: Mode) {
+    match mode {
+        Mode::Classification => {
+            ui.collapsing("ASPRS classes", |ui| {
+                for (codes, name, color) in CLASS_COLORS {
+                    swatch(ui, color, format!("{codes}: {name}"));
+                }
+            });
+        }
+        Mode::Returns => {
+            ui.collapsing("Returns", |ui| {
+                for (name, color) in RETURN_COLORS {
+                    swatch(ui, color, name.to_owned());
+                }
+            });
+        }
+        Mode::Intensity => {
+            ui.label("black to white: the 1st to the 99th percentile of the intensities");
+        }
+        _ => {}
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every legend colour is written, as WGSL, in the shader that draws it.
+    #[test]
+    fn the_legend_colours_are_the_shaders() {
+        let wgsl = include_str!("../../../shaders/common.wgsl");
+        let colors = CLASS_COLORS
+            .iter()
+            .map(|c| c.2)
+            .chain(RETURN_COLORS.iter().map(|c| c.1));
+        for [r, g, b] in colors {
+            let text = format!("vec3<f32>({r:?}, {g:?}, {b:?})");
+            assert!(wgsl.contains(&text), "{text} is not in common.wgsl");
+        }
+    }
+}
