@@ -59,17 +59,8 @@ fn strips_become_triangles_wound_alike() {
             let n: Vec3 = (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]));
             assert!(n.dot(first) > 0.0, "{name}: {t:?} wound the other way");
         }
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_spt"))
-            .arg("info")
-            .arg(&path)
-            .output()
-            .unwrap();
-        let text = String::from_utf8_lossy(&out.stdout);
-        assert!(
-            out.status.success(),
-            "{name}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let (code, text, stderr) = common::run_spt(&["info".as_ref(), path.as_os_str()]);
+        assert_eq!(code, Some(0), "{name}: {stderr}");
         assert!(
             text.contains("1 rows of triangle strips (tristrips) read → 6 triangles"),
             "{text}"

@@ -184,6 +184,80 @@ pub fn write_spt(path: &Path, list: &SequentialList) -> std::io::Result<()> {
     write_atomically(path, |w| write_to(w, list))
 }
 
+/// Where the sections of an `.spt` image lie, from its header.
+struct Sections {
+    nodes_at: u64,
+    parents_at: u64,
+    shapes_at: u64,
+    attributes_at: u64,
+    size: u64,
+}
+
+/// The sections of the `.spt` image `b` (a whole header, format `version`), checked
+/// to follow each other as the module doc lays them out.
+fn sections(b: &[u8], version: u32) -> Result<Sections, String> {
+    let (leaf_count, node_count) = (u64_at(b, 24), u64_at(b, 32));
+    let (nodes_at, parents_at, size) = (u64_at(b, 144), u64_at(b, 152), u64_at(b, 160));
+    let shapes_at = u64_at(b, 176);
+    let has_attributes = u32_at(b, 16) & 4 != 0;
+    // Version 2: no attributes section (it ends the file, empty).
+    let (attributes_at, attribute_bytes) = match version {
+        2 => (size, ATTRIBUTE_BYTES as u32),
+        _ => (u64_at(b, 188), u32_at(b, 196)),
+    };
+    let attribute_nodes = if has_attributes { node_count } else { 0 };
+    let after = |at: u64, count: u64, bytes: usize| {
+        count
+            .checked_mul(bytes as u64)
+            .and_then(|n| n.checked_add(at))
+    };
+    if nodes_at != HEADER_BYTES as u64
+        || Some(parents_at) != after(nodes_at, node_count, RECORD_BYTES)
+        || Some(shapes_at) != after(parents_at, node_count, 4)
+        || Some(attributes_at) != after(shapes_at, node_count, SHAPE_BYTES)
+        || attribute_bytes as usize != ATTRIBUTE_BYTES
+        || (version == 2 && has_attributes)
+        || Some(size) != after(attributes_at, attribute_nodes, ATTRIBUTE_BYTES)
+        || leaf_count > node_count
+        || node_count == 0
+    {
+        return Err(format!(
+            "{node_count} nodes, {leaf_count} leaves, sections at {nodes_at} and {parents_at}, size {size}"
+        ));
+    }
+    Ok(Sections {
+        nodes_at,
+        parents_at,
+        shapes_at,
+        attributes_at,
+        size,
+    })
+}
+
+/// The tree's description in the header of the `.spt` image `b`.
+fn meta_of(b: &[u8]) -> TreeMeta {
+    let flags = u32_at(b, 16);
+    let v3 = |at: usize| [f64_at(b, at), f64_at(b, at + 8), f64_at(b, at + 16)];
+    let f3 = |at: usize| [f32_at(b, at), f32_at(b, at + 4), f32_at(b, at + 8)];
+    TreeMeta {
+        origin: v3(40),
+        bounds: Bounds {
+            min: v3(64),
+            max: v3(88),
+        },
+        centre_min: f3(112),
+        centre_max: f3(124),
+        error_scale: f32_at(b, 136),
+        leaf_count: u64_at(b, 24),
+        node_count: u64_at(b, 32),
+        depth: u32_at(b, 20),
+        has_colors: flags & 1 != 0,
+        oriented_normals: flags & 2 != 0,
+        has_attributes: flags & 4 != 0,
+        intensity_range: [0, 2].map(|k| u16::from_le_bytes([b[200 + k], b[201 + k]])),
+    }
+}
+
 /// An `.spt` file, memory-mapped: the node records are read in place.
 pub struct SptFile {
     pub path: PathBuf,
@@ -270,39 +344,13 @@ impl SptFile {
                 u32_at(b, 184)
             )));
         }
-        let (leaf_count, node_count) = (u64_at(b, 24), u64_at(b, 32));
-        let (nodes_at, parents_at, size) = (u64_at(b, 144), u64_at(b, 152), u64_at(b, 160));
-        let shapes_at = u64_at(b, 176);
-        let flags = u32_at(b, 16);
-        let has_attributes = flags & 4 != 0;
-        // Version 2: no attributes section (it ends the file, empty).
-        let (attributes_at, attribute_bytes) = match version {
-            2 => (size, ATTRIBUTE_BYTES as u32),
-            _ => (u64_at(b, 188), u32_at(b, 196)),
-        };
-        let attribute_nodes = if has_attributes { node_count } else { 0 };
-        let after = |at: u64, bytes: usize| {
-            node_count
-                .checked_mul(bytes as u64)
-                .and_then(|n| n.checked_add(at))
-        };
-        if nodes_at != HEADER_BYTES as u64
-            || Some(parents_at) != after(nodes_at, RECORD_BYTES)
-            || Some(shapes_at) != after(parents_at, 4)
-            || Some(attributes_at) != after(shapes_at, SHAPE_BYTES)
-            || attribute_bytes as usize != ATTRIBUTE_BYTES
-            || (version == 2 && has_attributes)
-            || Some(size)
-                != attribute_nodes
-                    .checked_mul(ATTRIBUTE_BYTES as u64)
-                    .and_then(|n| n.checked_add(attributes_at))
-            || leaf_count > node_count
-            || node_count == 0
-        {
-            return Err(bad(format!(
-                "{node_count} nodes, {leaf_count} leaves, sections at {nodes_at} and {parents_at}, size {size}"
-            )));
-        }
+        let Sections {
+            nodes_at,
+            parents_at,
+            shapes_at,
+            attributes_at,
+            size,
+        } = sections(b, version).map_err(bad)?;
         if (b.len() as u64) < size {
             return Err(SptError::Truncated {
                 path: p(),
@@ -316,25 +364,7 @@ impl SptFile {
                 b.len() as u64 - size
             )));
         }
-        let v3 = |at: usize| [f64_at(b, at), f64_at(b, at + 8), f64_at(b, at + 16)];
-        let f3 = |at: usize| [f32_at(b, at), f32_at(b, at + 4), f32_at(b, at + 8)];
-        let meta = TreeMeta {
-            origin: v3(40),
-            bounds: Bounds {
-                min: v3(64),
-                max: v3(88),
-            },
-            centre_min: f3(112),
-            centre_max: f3(124),
-            error_scale: f32_at(b, 136),
-            leaf_count,
-            node_count,
-            depth: u32_at(b, 20),
-            has_colors: flags & 1 != 0,
-            oriented_normals: flags & 2 != 0,
-            has_attributes,
-            intensity_range: [0, 2].map(|k| u16::from_le_bytes([b[200 + k], b[201 + k]])),
-        };
+        let meta = meta_of(b);
         let checksum = u64_at(b, CHECKSUM_AT);
         Ok(SptFile {
             path: p(),

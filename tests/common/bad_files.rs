@@ -72,3 +72,16 @@ pub fn fixtures(dir: &Path) -> Vec<Fixture> {
         Fixture { name: "all_nan.ply", bytes: b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\nnan 0 0\n0 inf 0\n".to_vec(), expect: &["none of the 2 vertices has finite coordinates"] },
     ]
 }
+
+/// Asserts that the error `err` of the bad file `name` names it and holds every word of
+/// `expect`, and that no allocation (`largest`, bytes) reached `limit`.
+pub fn check_refusal(name: &str, err: &str, expect: &[&str], largest: usize, limit: usize) {
+    assert!(
+        err.contains(name),
+        "{name}: error does not name the file: {err}"
+    );
+    for word in expect {
+        assert!(err.contains(word), "{name}: expected '{word}' in: {err}");
+    }
+    assert!(largest < limit, "{name}: an allocation of {largest} bytes");
+}

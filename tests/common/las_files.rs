@@ -6,8 +6,20 @@ use las::{Builder, Color, Point, Writer, point::Classification, point::Format};
 /// `n` points on a 1 m grid of rows of 64 at UTM-sized coordinates, scale 0.01; the
 /// first 16 rows ground (class 2), the others water (class 9); LAZ when `compressed`.
 pub fn sample(n: usize, compressed: bool) -> Vec<u8> {
-    let mut builder = Builder::from((1, 2));
-    builder.point_format = Format::new(3).unwrap();
+    sample_of_format(n, 3, compressed)
+}
+
+/// [`sample`] in point `format` (0–10; LAS 1.3 for 4 and 5, 1.4 for 6–10), with the
+/// fields it holds.
+pub fn sample_of_format(n: usize, format: u8, compressed: bool) -> Vec<u8> {
+    let minor = match format {
+        0..=3 => 2,
+        4 | 5 => 3,
+        _ => 4,
+    };
+    let mut builder = Builder::from((1, minor));
+    builder.point_format = Format::new(format).unwrap();
+    let format = builder.point_format;
     builder.point_format.is_compressed = compressed;
     builder.transforms.x.scale = 0.01;
     builder.transforms.y.scale = 0.01;
@@ -31,8 +43,12 @@ pub fn sample(n: usize, compressed: bool) -> Vec<u8> {
                 },
                 return_number: 1 + (i % 2) as u8,
                 number_of_returns: 2,
-                color: Some(Color::new(200, (i % 256) as u16, 40)),
-                gps_time: Some(i as f64),
+                color: format
+                    .has_color
+                    .then(|| Color::new(200, (i % 256) as u16, 40)),
+                gps_time: format.has_gps_time.then_some(i as f64),
+                nir: format.has_nir.then_some(7),
+                waveform: format.has_waveform.then(Default::default),
                 ..Default::default()
             })
             .unwrap();

@@ -392,7 +392,12 @@ mod tests {
         };
         assert_eq!(
             cycle(true),
-            [Mode::Classification, Mode::Intensity, Mode::Returns, Mode::Points]
+            [
+                Mode::Classification,
+                Mode::Intensity,
+                Mode::Returns,
+                Mode::Points
+            ]
         );
         assert_eq!(cycle(false), [Mode::Points]);
     }
