@@ -144,11 +144,11 @@ fn check_layout(file: &mut File, len: u64) -> Result<(), String> {
             "the point data would start at byte {data}, past the end ({len} bytes)"
         ));
     }
+    // LAS 1.4 keeps a legacy 32-bit count beside its 64-bit one: both must fit.
     let count = raw
         .large_file
-        .map_or(u64::from(raw.number_of_point_records), |l| {
-            l.number_of_point_records
-        });
+        .map_or(0, |l| l.number_of_point_records)
+        .max(u64::from(raw.number_of_point_records));
     let compressed = raw.point_data_record_format & 0x80 != 0;
     if !compressed {
         let record = u64::from(raw.point_data_record_length);
@@ -218,8 +218,9 @@ fn check_evlr(file: &mut File, len: u64, start: u64) -> Result<(), String> {
 pub const MAX_CHUNK_BYTES: u64 = 8 << 20;
 
 /// What the LAZ decoder would trust without checking: its VLR's record size must be the
-/// header's, its chunks no larger than [`MAX_CHUNK_BYTES`], and its chunk table's byte
-/// counts must add up to no more than the compressed data.
+/// header's, its chunks no larger than [`MAX_CHUNK_BYTES`], its chunk table's byte
+/// counts must add up to no more than the compressed data, and its chunks must hold at
+/// least the points the header announces.
 fn check_laz(file: &mut File, header: &las::Header) -> Result<(), String> {
     let vlr = header
         .all_vlrs()
@@ -250,16 +251,82 @@ fn check_laz(file: &mut File, header: &las::Header) -> Result<(), String> {
         .map_err(|e| e.to_string())?
         .len()
         .saturating_sub(data);
-    let (mut bytes, mut largest) = (0u64, 0u64);
+    let (mut bytes, mut largest, mut points) = (0u64, 0u64, 0u64);
     for entry in &table {
         bytes = bytes.saturating_add(entry.byte_count);
         largest = largest.max(entry.point_count);
+        points = points.saturating_add(entry.point_count);
+    }
+    // Fixed-size chunks: every chunk holds chunk_size points but the last, which holds
+    // at most that.
+    if !laz_vlr.uses_variable_size_chunks() {
+        points = (table.as_ref().len() as u64).saturating_mul(chunk);
+    }
+    check_layers(file, data, &laz_vlr, &table, record)?;
+    let announced = header.number_of_points();
+    if announced > points {
+        return Err(format!(
+            "the header says {announced} points, but the LAZ chunks hold at most {points}: \
+             the file is damaged or truncated"
+        ));
     }
     if bytes > room || largest.saturating_mul(record) > MAX_CHUNK_BYTES {
         return Err(format!(
             "the LAZ chunk table lists {bytes} compressed bytes (the file has {room} after the \
              header) or a chunk of {largest} points: it is damaged"
         ));
+    }
+    Ok(())
+}
+
+/// The layer sizes (u32 each) that a layered (LAS 1.4, point formats 6–10) LAZ chunk
+/// lists after its first point and its point count, by item: 9 for the point, one for
+/// RGB, two for RGB and NIR, one for the wave packet, one per extra byte.
+fn layer_count(vlr: &laz::LazVlr) -> Option<u64> {
+    use laz::LazItemType::*;
+    let mut layers = 0u64;
+    for item in vlr.items() {
+        layers += match item.item_type() {
+            Point14 => 9,
+            RGB14 | WavePacket14 => 1,
+            RGBNIR14 => 2,
+            Byte14(n) => u64::from(n),
+            // Pointwise chunks (formats 0–5) have no layers.
+            _ => return None,
+        };
+    }
+    Some(layers)
+}
+
+/// In a layered LAZ, each chunk's layers must fit in the chunk: the decoder allocates
+/// each layer at the size the chunk states (a u32, up to 4 GiB), before reading it.
+fn check_layers(
+    file: &mut File,
+    data: u64,
+    vlr: &laz::LazVlr,
+    table: &laz::laszip::ChunkTable,
+    record: u64,
+) -> Result<(), String> {
+    let Some(layers) = layer_count(vlr) else {
+        return Ok(());
+    };
+    // The chunks follow the 8-byte chunk table offset, one after the other.
+    let mut at = data + 8;
+    for (k, entry) in table.as_ref().iter().enumerate() {
+        let sizes_at = at + record + 4;
+        let sizes = bytes_at(file, sizes_at, 4 * layers as usize);
+        let stated: u64 = sizes.map_or(u64::MAX, |b| {
+            b.chunks_exact(4)
+                .map(|w| u64::from(u32::from_le_bytes(w.try_into().unwrap_or_default())))
+                .sum()
+        });
+        let room = entry.byte_count.saturating_sub(record + 4 + 4 * layers);
+        if stated > room {
+            return Err(format!(
+                "LAZ chunk {k} says its layers hold {stated} bytes; it has {room}: it is damaged"
+            ));
+        }
+        at = at.saturating_add(entry.byte_count);
     }
     Ok(())
 }
@@ -344,7 +411,7 @@ fn decode(reader: &mut Reader, file_bytes: u64) -> Result<LasPoints, String> {
     let batch_points = if header.point_format().is_compressed {
         LAZ_BATCH.min(n as u64).max(BATCH)
     } else {
-        BATCH
+        BATCH.min(n as u64).max(1)
     };
     let mut points = LasPoints {
         xyz: Vec::with_capacity(n),

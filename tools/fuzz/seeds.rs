@@ -141,19 +141,43 @@ fn ascii_points(header_extra: &str, rows: &[&str]) -> Vec<u8> {
 #[allow(dead_code)]
 mod las_files;
 
-/// LAS and LAZ tiles of 1, 70 and 500 points (a grid of rows of 64).
+/// LAS and LAZ tiles of 1, 70 and 500 points (a grid of rows of 64) in point format 3,
+/// and of 70 points in formats 1, 6 and 8 (LAS 1.4's extended records).
 fn las_seeds() -> Vec<Seed> {
     let mut seeds = Vec::new();
-    for n in [1, 70, 500] {
+    let tiles = [(1, 3), (70, 3), (500, 3), (70, 1), (70, 6), (70, 8)];
+    for (n, format) in tiles {
         for (kind, compressed) in [(Kind::Las, false), (Kind::Laz, true)] {
             seeds.push(Seed {
-                name: format!("tile{n}_{}", kind.extension()),
+                name: format!("tile{n}_format{format}_{}", kind.extension()),
                 kind,
-                bytes: las_files::sample(n, compressed),
+                bytes: las_files::sample_of_format(n, format, compressed),
             });
         }
     }
     seeds
+}
+
+/// A PLY of triangle strips (a `tristrips` element, −1 restarts) over a 4 × 2 grid.
+fn strips_seed() -> Vec<u8> {
+    let mut s = ascii_points(
+        "",
+        &[
+            "0 0 0", "1 0 0", "2 0 0", "3 0 0", "0 1 0", "1 1 0", "2 1 0", "3 1 0",
+        ],
+    );
+    let at = s
+        .windows(10)
+        .position(|w| w == b"end_header")
+        .expect("a header");
+    s.splice(
+        at..at,
+        b"element tristrips 1\nproperty list int int vertex_indices\n"
+            .iter()
+            .copied(),
+    );
+    s.extend(b"11 0 4 1 5 -1 1 5 2 6 3 7\n");
+    s
 }
 
 /// Every seed, PLY first, then `.spt` files built from some of them, then LAS and LAZ.
@@ -219,6 +243,7 @@ pub fn all(dir: &Path) -> Vec<Seed> {
             ascii_points("", &["0 0 0", "1 0 0", "0 1 0", "1e300 0 0"]),
         ),
         ("single_-1e308", ascii_points("", &["-1e308 -1e308 -1e308"])),
+        ("tristrips", strips_seed()),
         (
             "obj_info",
             ascii_points("obj_info scanner 1\n", &["0 0 0", "0 0 1", "0 1 0"]),
