@@ -114,7 +114,7 @@ fn attribute_color(mode: u32, a: u32) -> vec3<f32> {
 
 // The elevation ramp: blue (lowest) through cyan, green and yellow to red (highest),
 // linear RGB; `z` relative to the model origin. Kept in step with the viewer's legend
-// (src/apps/view/panel.rs, ELEVATION_RAMP).
+// (src/apps/view/legend.rs, ELEVATION_RAMP).
 fn elevation_color(z: f32) -> vec3<f32> {
     let span = max(frame.elevation_range.y - frame.elevation_range.x, 1e-30);
     let t = clamp((z - frame.elevation_range.x) / span, 0.0, 1.0) * 4.0;

@@ -82,6 +82,17 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // The LAZ decoder's panics on damaged files become errors that name the file
+    // (spt::io::las); only other panics are reported as panics.
+    let report = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if !info
+            .location()
+            .is_some_and(|l| spt::io::las::is_decoder_panic(l.file()))
+        {
+            report(info);
+        }
+    }));
     let cli = Cli::parse();
     let command = cli
         .command

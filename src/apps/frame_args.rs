@@ -28,8 +28,9 @@ pub struct RenderArgs {
     /// Largest screen-space error in pixels (0: leaves only).
     #[arg(long, default_value_t = 1.0)]
     pub error_px: f64,
-    #[arg(long, value_enum, default_value = "shaded")]
-    pub mode: Mode,
+    /// Display mode (default: shaded; in the viewer, edl for a cloud without colours).
+    #[arg(long, value_enum)]
+    pub mode: Option<Mode>,
     /// Eye-dome lighting (--mode edl): darkening per log2 depth step.
     #[arg(long, default_value_t = 1.0, value_parser = parse_finite)]
     pub edl_strength: f32,
@@ -107,7 +108,7 @@ impl RenderArgs {
     pub fn settings(&self) -> Settings {
         Settings {
             error_px: self.error_px.max(0.0),
-            mode: self.mode,
+            mode: self.mode.unwrap_or(Mode::Shaded),
             ewa: !self.no_ewa,
             lod: !self.no_lod,
             cull_back_faces: self.cull_back_faces,

@@ -54,12 +54,16 @@ impl Camera {
         1.0 / half.sin()
     }
 
-    /// The whole model framed, seen from a three-quarter view: the least distance at
-    /// which all eight corners of the model's box fall inside both fields of view (a
-    /// corner c, in view axes relative to the centre, needs d ≥ c_z + |c_x| / tan(fov_x/2)
-    /// and d ≥ c_z + |c_y| / tan(fov_y/2)), with a 5 % margin.
+    /// The whole model framed, seen from a three-quarter view (from 45° above for a
+    /// terrain, a box less than a quarter as high as it is wide, which a low view would
+    /// see edge-on): the least distance at which all eight corners of the model's box
+    /// fall inside both fields of view (a corner c, in view axes relative to the centre,
+    /// needs d ≥ c_z + |c_x| / tan(fov_x/2) and d ≥ c_z + |c_y| / tan(fov_y/2)), with a
+    /// 5 % margin.
     pub fn framed(meta: &TreeMeta, fov_y: f64, aspect: f64) -> Camera {
-        Camera::framed_from(meta, 30.0, 20.0, fov_y, aspect)
+        let e = DVec3::from(meta.bounds.max) - DVec3::from(meta.bounds.min);
+        let flat = e.z < 0.25 * e.x.max(e.y);
+        Camera::framed_from(meta, 30.0, if flat { 45.0 } else { 20.0 }, fov_y, aspect)
     }
 
     /// [`Camera::framed`] seen from a given azimuth and elevation (degrees).

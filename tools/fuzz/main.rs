@@ -91,6 +91,10 @@ impl Tally {
     }
 }
 
+/// Panics of the LAZ decoder that `spt::io::las` turned into errors (the input counts as
+/// refused): reported, as a property of the `laz` crate, not as failures of spt.
+static CONTAINED: AtomicU64 = AtomicU64::new(0);
+
 /// Whether an input is running (its panics are caught and need no message).
 static IN_INPUT: AtomicBool = AtomicBool::new(false);
 
@@ -161,6 +165,12 @@ fn main() {
     // Panics of the inputs are expected and reported; any other is printed as usual.
     let default_hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
+        if info
+            .location()
+            .is_some_and(|l| spt::io::las::is_decoder_panic(l.file()))
+        {
+            CONTAINED.fetch_add(1, Ordering::Relaxed);
+        }
         if !IN_INPUT.load(Ordering::Relaxed) {
             default_hook(info)
         }
@@ -256,7 +266,8 @@ fn report(t: &Tally, elapsed: Duration, last: bool) {
     println!(
         "{}executions {} in {s:.0} s ({:.0}/s): {}; panics {}, invariant violations {}, slower \
          than the limit {}, oversized allocations {}; slowest input {:.1} ms; largest \
-         allocation {:.0} % of what its input justified ({} bytes for {} input bytes)",
+         allocation {:.0} % of what its input justified ({} bytes for {} input bytes); LAZ \
+         decoder panics contained as errors {}",
         if last { "fuzz: " } else { "      " },
         t.executions,
         t.executions as f64 / s.max(1e-9),
@@ -269,5 +280,6 @@ fn report(t: &Tally, elapsed: Duration, last: bool) {
         t.worst.0 * 100.0,
         t.worst.1,
         t.worst.2,
+        CONTAINED.load(Ordering::Relaxed),
     );
 }

@@ -125,6 +125,7 @@ impl App {
             egui_wgpu::RendererOptions::default(),
         );
         let mut viewer = Viewer::new(renderer, self.args.render.settings());
+        viewer.auto_mode = self.args.render.mode.is_none();
         viewer.show_panel = !self.args.hide_panel;
         self.windowed = Some(Windowed {
             window,

@@ -1,8 +1,18 @@
-//! The panel's legend for the LiDAR display modes: which colour is which ASPRS class, or
-//! which return. The colours are those of `shaders/common.wgsl` (`class_color`,
-//! `returns_color`), linear RGB; a test keeps the two in step.
+//! The panel's legends: which colour is which ASPRS class, which return, which height.
+//! The colours are those of `shaders/common.wgsl` (`class_color`, `returns_color`,
+//! `elevation_color`), linear RGB; a test keeps the two in step.
 
 use crate::render::Mode;
+use crate::tree::TreeMeta;
+
+/// The stops of `elevation_color`, lowest first, evenly spaced over the height range.
+pub const ELEVATION_RAMP: [[f32; 3]; 5] = [
+    [0.02, 0.08, 0.6],
+    [0.0, 0.55, 0.65],
+    [0.1, 0.55, 0.05],
+    [0.9, 0.75, 0.02],
+    [0.7, 0.02, 0.01],
+];
 
 /// (classes, name, linear RGB) as `class_color` draws them.
 pub const CLASS_COLORS: [(&str, &str, [f32; 3]); 12] = [
@@ -40,9 +50,41 @@ fn swatch(ui: &mut egui::Ui, [r, g, b]: [f32; 3], label: String) {
     });
 }
 
-/// The legend of `mode`, if it has one.
-pub fn show(ui: &mut egui::Ui, mode: Mode) {
+/// The elevation ramp as a bar, with the model's lowest and highest node heights (the
+/// file's z) at its ends.
+fn elevation_bar(ui: &mut egui::Ui, meta: &TreeMeta) {
+    let (lo, hi) = (
+        meta.origin[2] + meta.centre_min[2] as f64,
+        meta.origin[2] + meta.centre_max[2] as f64,
+    );
+    ui.horizontal(|ui| {
+        ui.label(format!("{lo:.2}"));
+        let (rect, _) = ui.allocate_exact_size(egui::vec2(120.0, 12.0), egui::Sense::hover());
+        let steps = 48;
+        for k in 0..steps {
+            let t = (k as f32 + 0.5) / steps as f32 * 4.0;
+            let i = (t as usize).min(3);
+            let f = t - i as f32;
+            let [a, b] = [ELEVATION_RAMP[i], ELEVATION_RAMP[i + 1]];
+            let c: [f32; 3] = std::array::from_fn(|j| a[j] + (b[j] - a[j]) * f);
+            let x0 = rect.left() + rect.width() * k as f32 / steps as f32;
+            let x1 = rect.left() + rect.width() * (k + 1) as f32 / steps as f32;
+            let cell = egui::Rect::from_x_y_ranges(x0..=x1, rect.y_range());
+            let color = egui::Color32::from(egui::Rgba::from_rgb(c[0], c[1], c[2]));
+            ui.painter().rect_filled(cell, 0.0, color);
+        }
+        ui.label(format!("{hi:.2}"));
+    });
+}
+
+/// The legend of `mode` for a model described by `meta`, if it has one.
+pub fn show(ui: &mut egui::Ui, mode: Mode, meta: Option<&TreeMeta>) {
     match mode {
+        Mode::Elevation => {
+            if let Some(meta) = meta {
+                elevation_bar(ui, meta);
+            }
+        }
         Mode::Classification => {
             ui.collapsing("ASPRS classes", |ui| {
                 for (codes, name, color) in CLASS_COLORS {
@@ -75,7 +117,8 @@ mod tests {
         let colors = CLASS_COLORS
             .iter()
             .map(|c| c.2)
-            .chain(RETURN_COLORS.iter().map(|c| c.1));
+            .chain(RETURN_COLORS.iter().map(|c| c.1))
+            .chain(ELEVATION_RAMP);
         for [r, g, b] in colors {
             let text = format!("vec3<f32>({r:?}, {g:?}, {b:?})");
             assert!(wgsl.contains(&text), "{text} is not in common.wgsl");

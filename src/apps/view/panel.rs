@@ -153,7 +153,11 @@ fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
                 }
             }
         });
-    super::legend::show(ui, s.mode);
+    if s.mode == Mode::Edl {
+        ui.add(egui::Slider::new(&mut s.edl_strength, 0.0..=10.0).text("EDL strength"));
+        ui.add(egui::Slider::new(&mut s.edl_radius_px, 0.5..=8.0).text("EDL radius (px)"));
+    }
+    super::legend::show(ui, s.mode, m.map(|m| m.scene.meta()));
     ui.checkbox(&mut s.ewa, "EWA prefilter (X)");
     ui.checkbox(&mut s.cull_back_faces, "Back-face culling");
     ui.horizontal(|ui| {

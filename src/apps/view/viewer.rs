@@ -67,6 +67,9 @@ pub struct Viewer {
     pub renderer: Arc<Renderer>,
     pub model: Option<Model>,
     pub settings: Settings,
+    /// Whether each model opened picks its display mode (no `--mode` was given): eye-dome
+    /// lighting for a cloud without colours, shaded for the others.
+    pub auto_mode: bool,
     pub show_panel: bool,
     pub stats: Stats,
     targets: Option<FrameTargets>,
@@ -82,6 +85,7 @@ impl Viewer {
             renderer,
             model: None,
             settings,
+            auto_mode: false,
             show_panel: true,
             stats: Stats::default(),
             targets: None,
@@ -103,6 +107,9 @@ impl Viewer {
         let counters = CounterReadback::new(&self.renderer.gpu, &gpu_scene);
         if self.settings.mode == Mode::Mesh && gpu_scene.mesh_triangles() == 0 {
             self.settings.mode = Mode::Shaded;
+        }
+        if self.auto_mode {
+            self.settings.mode = default_mode(scene.meta());
         }
         self.settings.lod_eye = None;
         self.stats = Stats::default();
@@ -357,6 +364,17 @@ impl Viewer {
     }
 }
 
+/// The display mode a model opens in when none was asked for: eye-dome lighting for a
+/// cloud without colours (its estimated normals, unoriented, shade it poorly; EDL needs
+/// none), shaded otherwise.
+pub fn default_mode(meta: &crate::tree::TreeMeta) -> Mode {
+    if !meta.has_colors && !meta.oriented_normals {
+        Mode::Edl
+    } else {
+        Mode::Shaded
+    }
+}
+
 /// The display mode after `mode`; mesh only for models that have one, the LiDAR modes
 /// only for models with attributes.
 pub fn next_mode(mode: Mode, has_mesh: bool, has_attributes: bool) -> Mode {
@@ -378,6 +396,19 @@ pub fn next_mode(mode: Mode, has_mesh: bool, has_attributes: bool) -> Mode {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_cloud_without_colours_opens_in_eye_dome_lighting() {
+        let points: Vec<[f64; 3]> = (0..64)
+            .map(|i| [(i % 8) as f64, (i / 8) as f64, 0.1 * (i % 3) as f64])
+            .collect();
+        let (geometry, _) = crate::io::Geometry::from_points(&points).unwrap();
+        let list = crate::tree::build_sequential_list(crate::surfel::leaf_surfels(&geometry));
+        assert_eq!(default_mode(&list.meta), Mode::Edl);
+        let mut coloured = list.meta.clone();
+        coloured.has_colors = true;
+        assert_eq!(default_mode(&coloured), Mode::Shaded);
+    }
 
     #[test]
     fn the_lidar_modes_come_after_elevation_for_models_with_attributes() {
