@@ -15,6 +15,7 @@ use crate::apps::text::count;
 use crate::io::GeometryStats;
 use crate::io::atomic::write_atomically;
 use crate::tree::NodeRecord;
+use crate::tree::record::{PointAttributes, SplatShape};
 use crate::tree::report::{Finished, Report, Step};
 use crate::tree::scene::build_from_file;
 use crate::tree::spt_file::{HEADER_BYTES, write_to};
@@ -156,14 +157,26 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
         .fold(|| (f64::MAX, 0.0f64), |(a, b), e| (a.min(e), b.max(e)))
         .reduce(|| (f64::MAX, 0.0), |x, y| (x.0.min(y.0), x.1.max(y.1)));
     let total = start.elapsed().as_secs_f64();
+    let record = std::mem::size_of::<NodeRecord>();
+    let shape = std::mem::size_of::<SplatShape>();
+    let attributes = if list.meta.has_attributes {
+        std::mem::size_of::<PointAttributes>()
+    } else {
+        0
+    };
     println!(
-        "{} nodes ({} leaves, {} internal), depth {}, {} bytes per node ({} record + 4 parent index)",
+        "{} nodes ({} leaves, {} internal), depth {}, {} bytes per node ({record} record + \
+         4 parent index + {shape} shape{})",
         count(list.meta.node_count),
         count(list.meta.leaf_count),
         count(list.meta.node_count - list.meta.leaf_count),
         list.meta.depth,
-        std::mem::size_of::<NodeRecord>() + 4,
-        std::mem::size_of::<NodeRecord>()
+        record + 4 + shape + attributes,
+        if attributes > 0 {
+            format!(" + {attributes} LiDAR attributes")
+        } else {
+            String::new()
+        }
     );
     if emax == 0.0 {
         println!("errors: all zero (a single leaf)");

@@ -497,12 +497,20 @@ impl SptInfo {
         line(
             "present",
             format!(
-                "colours {}, normals {}",
+                "colours {}, normals {}, LiDAR attributes {}",
                 if m.has_colors { "yes" } else { "no" },
                 if m.oriented_normals {
                     "oriented"
                 } else {
                     "unoriented (two-sided)"
+                },
+                if m.has_attributes {
+                    format!(
+                        "yes (intensity 1st–99th percentile {}–{})",
+                        m.intensity_range[0], m.intensity_range[1]
+                    )
+                } else {
+                    "no".to_owned()
                 }
             ),
         );
