@@ -1,6 +1,7 @@
 //! A face-less cloud's splats against a triangulation of the same points (issue 13):
 //! per view and as medians, FLIP and SSIM of the splats (leaves only), FLIP of the
-//! triangulation at 1×, hole rate (see `spt::apps::cloud_quality`). With `--images DIR`,
+//! triangulation at 1×, hole rate (see `spt::apps::cloud_quality`); for a sensor frame,
+//! FLIP of the same triangulation over the points moved within their depth step. With `--images DIR`,
 //! each view's splats, triangulation and reference as PNG.
 //!
 //! ```text
@@ -79,10 +80,13 @@ fn main() -> anyhow::Result<()> {
     };
     let shape = (args.views, args.distance, args.size);
     let figures = measure(&renderer, &models, shape, &settings, &mut save)?;
-    println!("view  splat FLIP  SSIM   mesh 1x FLIP  holes");
+    println!("view  splat FLIP  SSIM   mesh 1x FLIP  requantized 1x FLIP  holes");
     for (k, f) in figures.iter().enumerate() {
+        let requantized = f
+            .requantized_flip
+            .map_or("–".to_owned(), |v| format!("{v:.4}"));
         println!(
-            "{k:4}  {:10.4}  {:5.3}  {:12.4}  {:.3} %",
+            "{k:4}  {:10.4}  {:5.3}  {:12.4}  {requantized:>19}  {:.3} %",
             f.splat_flip,
             f.splat_ssim,
             f.mesh_flip,
@@ -100,5 +104,11 @@ fn main() -> anyhow::Result<()> {
         100.0 * median(|f| f.hole_rate),
         100.0 * figures.iter().map(|f| f.hole_rate).fold(0.0, f64::max),
     );
+    if figures.iter().all(|f| f.requantized_flip.is_some()) {
+        println!(
+            "median requantized triangulation at 1x (points moved within their depth step) {:.4}",
+            median(|f| f.requantized_flip.unwrap_or(f64::NAN))
+        );
+    }
     Ok(())
 }

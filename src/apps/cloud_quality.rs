@@ -28,10 +28,13 @@ pub enum Triangulation {
 /// The reference's supersampling factor per axis.
 pub const SUPERSAMPLE: u32 = 4;
 
-/// A cloud read from `path` (faces, if any, dropped) and the same points triangulated.
+/// A cloud read from `path` (faces, if any, dropped) and the same points triangulated;
+/// for a sensor frame, also the same triangles over the points moved within their
+/// depth step ([`requantize`]).
 pub struct CloudAndReference {
     pub cloud: Scene,
     pub reference: Scene,
+    pub requantized: Option<Scene>,
 }
 
 impl CloudAndReference {
@@ -46,10 +49,52 @@ impl CloudAndReference {
         };
         let mut meshed = geometry.clone();
         meshed.triangles = triangles;
+        let requantized = matches!(triangulation, Triangulation::Grid { .. }).then(|| {
+            let mut moved = meshed.clone();
+            requantize(&mut moved);
+            Scene::from_geometry(moved)
+        });
         Ok(CloudAndReference {
             cloud: Scene::from_geometry(geometry),
             reference: Scene::from_geometry(meshed),
+            requantized,
         })
+    }
+}
+
+/// Moves each point of a sensor frame along its ray (toward the file's origin, where
+/// the sensor is) to a depth drawn uniformly within ±½ of the depth step there (the gap
+/// between consecutive distinct depths z the file holds; RGB-D sensors quantise depth):
+/// a surface as faithful to the scan as the stored one, within what the sensor
+/// resolves. Deterministic (a fixed xorshift sequence).
+pub fn requantize(g: &mut Geometry) {
+    let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut uniform = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let depth = |p: &glam::Vec3| g.origin.z + p.z as f64;
+    let mut depths: Vec<f64> = g.positions.iter().map(depth).collect();
+    depths.sort_by(f64::total_cmp);
+    depths.dedup();
+    let step = |z: f64| {
+        let i = depths.partition_point(|d| *d < z);
+        match (i.checked_sub(1).map(|k| depths[k]), depths.get(i + 1)) {
+            (_, Some(next)) => next - depths[i.min(depths.len() - 1)],
+            (Some(prev), None) => z - prev,
+            (None, None) => 0.0,
+        }
+    };
+    let origin = g.origin;
+    for p in g.positions.iter_mut() {
+        let z = origin.z + p.z as f64;
+        if z == 0.0 {
+            continue;
+        }
+        let scale = (z + uniform() * step(z)) / z;
+        *p = ((origin + p.as_dvec3()) * scale - origin).as_vec3();
     }
 }
 
@@ -60,6 +105,8 @@ pub struct ViewFigures {
     pub splat_ssim: f64,
     /// The triangulation at 1× against itself supersampled: the aliasing floor.
     pub mesh_flip: f64,
+    /// The requantized triangulation at 1× against the reference (sensor frames).
+    pub requantized_flip: Option<f64>,
     pub hole_rate: f64,
 }
 
@@ -82,6 +129,7 @@ pub fn measure(
 ) -> anyhow::Result<Vec<ViewFigures>> {
     let cloud_gpu = renderer.upload(&models.cloud);
     let mesh_gpu = renderer.upload(&models.reference);
+    let requantized_gpu = models.requantized.as_ref().map(|s| (s, renderer.upload(s)));
     let fov = 45f64.to_radians();
     let mut out = Vec::new();
     for k in 0..views {
@@ -104,10 +152,18 @@ pub fn measure(
             mesh: mesh(size)?.0,
             reference: downsample(&mesh(size * SUPERSAMPLE)?.0, SUPERSAMPLE),
         };
+        let requantized_flip = match &requantized_gpu {
+            Some((scene, gpu)) => {
+                let mesh = renderer.render(scene, gpu, &camera, &Settings::mesh(), size, size)?;
+                Some(flip_mean(&mesh.0, &images.reference))
+            }
+            None => None,
+        };
         out.push(ViewFigures {
             splat_flip: flip_mean(&images.splats, &images.reference),
             splat_ssim: ssim_mean(&images.splats, &images.reference),
             mesh_flip: flip_mean(&images.mesh, &images.reference),
+            requantized_flip,
             hole_rate: compare(&images.splats, &images.mesh).hole_rate,
         });
         keep(k, &images);
