@@ -38,10 +38,11 @@ static ALLOC: largest_allocation::Largest = largest_allocation::Largest;
 /// byte (a vertex of three `char`s becomes a 32-byte surfel and about 1.3 node records;
 /// a face of `char` indices, 12 bytes per triangle; vectors grow by doubling) and 1 MiB
 /// of fixed buffers.
-/// A LAZ input also justifies one decompressed chunk, which the decoder allocates
-/// whole ([`spt::io::las::MAX_CHUNK_BYTES`]).
+/// An input of the LAS reader (which reads LAZ whatever the extension) also justifies
+/// one decompressed chunk, which the decoder allocates whole
+/// ([`spt::io::las::MAX_CHUNK_BYTES`]).
 pub fn justified(kind: Kind, len: usize) -> usize {
-    let chunk = if kind == Kind::Laz {
+    let chunk = if matches!(kind, Kind::Las | Kind::Laz) {
         spt::io::las::MAX_CHUNK_BYTES as usize
     } else {
         0

@@ -122,6 +122,7 @@ pub(super) fn check_laz(file: &mut File, header: &las::Header) -> Result<(), Str
         .ok_or("compressed, but without the LASzip VLR that says how")?;
     let laz_vlr =
         laz::LazVlr::from_buffer(&vlr.data).map_err(|e| format!("the LASzip VLR: {e}"))?;
+    item_sizes(&laz_vlr)?;
     let record = u64::from(header.point_format().len());
     if laz_vlr.items_size() != record || record == 0 {
         return Err(format!(
@@ -169,6 +170,33 @@ pub(super) fn check_laz(file: &mut File, header: &las::Header) -> Result<(), Str
             "the LAZ chunk table lists {bytes} compressed bytes (the file has {room} after the \
              header) or a chunk of {largest} points: it is damaged"
         ));
+    }
+    Ok(())
+}
+
+/// Each item of a LASzip VLR must state its type's own size (LAS 1.4 and LASzip: the
+/// 1.0–1.3 point 20 bytes, GPS time 8, RGB 6, wave packet 29; the 1.4 point 30, RGB 6,
+/// RGB and NIR 8, wave packet 29; extra bytes their count): the decoder reads each
+/// chunk's first point by the type's size, whatever the VLR says, so a wrong size
+/// shifts everything it reads next.
+fn item_sizes(vlr: &laz::LazVlr) -> Result<(), String> {
+    use laz::LazItemType::*;
+    for item in vlr.items() {
+        let own = match item.item_type() {
+            Point10 => 20,
+            GpsTime | RGBNIR14 => 8,
+            RGB12 | RGB14 => 6,
+            WavePacket13 | WavePacket14 => 29,
+            Point14 => 30,
+            Byte(n) | Byte14(n) => n,
+        };
+        if item.size() != own {
+            return Err(format!(
+                "the LASzip VLR says its {:?} item takes {} bytes; it takes {own}",
+                item.item_type(),
+                item.size()
+            ));
+        }
     }
     Ok(())
 }
