@@ -106,8 +106,9 @@ pub fn read_las(path: &Path) -> Result<LasModel, LasError> {
     file.seek(SeekFrom::Start(0)).map_err(io)?;
     let mut reader = Reader::new(BufReader::new(file)).map_err(|e| fail(format!("{e}")))?;
     let points = decode(&mut reader, file_bytes).map_err(fail)?;
-    let summary = summarize(reader.header(), &points);
-    let (mut geometry, stats) = assemble(&points, &points.fields(), None).map_err(fail)?;
+    let eight_bit = points.eight_bit_rgb();
+    let summary = summarize(reader.header(), &points, eight_bit);
+    let (mut geometry, stats) = assemble(&points, &points.fields(eight_bit), None).map_err(fail)?;
     geometry.attributes = Some(points.attributes(geometry.rows.as_deref()));
     Ok(LasModel {
         summary,
@@ -145,14 +146,19 @@ impl LasPoints {
         }
     }
 
-    /// The fields for [`assemble`]: x y z, then red green blue, 8- or 16-bit.
-    fn fields(&self) -> VertexFields {
+    /// Whether the points have RGB whose channels all stay within 0–255 (8-bit values
+    /// stored in LAS's 16-bit fields).
+    fn eight_bit_rgb(&self) -> bool {
+        self.rgb
+            .as_ref()
+            .is_some_and(|c| c.iter().flatten().all(|v| *v <= 255))
+    }
+
+    /// The fields for [`assemble`]: x y z, then red green blue, 8-bit when `eight_bit`
+    /// ([`LasPoints::eight_bit_rgb`]), else 16-bit.
+    fn fields(&self, eight_bit: bool) -> VertexFields {
         let field = |property, scalar| Field { property, scalar };
         let mut fields: Vec<Field> = (0..3).map(|k| field(k, Scalar::F64)).collect();
-        let eight_bit = self
-            .rgb
-            .as_ref()
-            .is_some_and(|c| c.iter().flatten().all(|v| *v <= 255));
         if self.rgb.is_some() {
             let scalar = if eight_bit { Scalar::U8 } else { Scalar::U16 };
             fields.extend((3..6).map(|k| field(k, scalar)));
@@ -267,7 +273,7 @@ fn histogram(values: &[u8]) -> Vec<(u8, u64)> {
     (0..=255u8).zip(counts).filter(|(_, n)| *n > 0).collect()
 }
 
-fn summarize(header: &las::Header, points: &LasPoints) -> LasSummary {
+fn summarize(header: &las::Header, points: &LasPoints, eight_bit: bool) -> LasSummary {
     let t = header.transforms();
     let crs = if header.has_wkt_crs() && header.has_crs_vlrs() {
         Some("WKT".to_owned())
@@ -276,8 +282,8 @@ fn summarize(header: &las::Header, points: &LasPoints) -> LasSummary {
     } else {
         None
     };
-    let colors = points.rgb.as_ref().map(|c| {
-        if c.iter().flatten().all(|v| *v <= 255) {
+    let colors = points.rgb.as_ref().map(|_| {
+        if eight_bit {
             "8-bit (in 16-bit fields)".to_owned()
         } else {
             "16-bit".to_owned()
