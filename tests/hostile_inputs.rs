@@ -26,7 +26,7 @@ fn through_everything(path: &Path) -> LeafSurfels {
     let list = build_sequential_list(leaves.clone());
     check_meta(&list.meta).unwrap();
     check_nodes(&list.meta, &list.nodes, &list.parents).unwrap();
-    check_structure(&list.meta, &list.nodes, &list.parents).unwrap();
+    check_structure(&list.meta, &list.nodes, &list.parents, &list.chunks).unwrap();
     let spt = path.with_extension("spt");
     write_spt(&spt, &list).unwrap();
     let back = SptFile::open(&spt).unwrap_or_else(|e| panic!("{e}"));

@@ -206,18 +206,30 @@ fn version_2_files_read_as_files_without_attributes() {
     let list = default_list();
     let mut bytes = Vec::new();
     write_to(&mut bytes, &list).unwrap();
-    // A model without LiDAR attributes pays nothing for them: header and three sections.
+    // A model without LiDAR attributes pays nothing for them: header, three sections
+    // and the chunk table.
     let n = list.nodes.len();
-    assert_eq!(bytes.len(), 256 + n * (32 + 4 + 16));
+    let size = 256 + n * (32 + 4 + 16);
+    assert_eq!(bytes.len(), size + list.chunks.len() * 48);
+    // Version 2: no attributes section, no chunk table.
+    bytes.truncate(size);
     bytes[8..12].copy_from_slice(&2u32.to_le_bytes());
-    bytes[188..200].fill(0);
+    bytes[160..168].copy_from_slice(&(size as u64).to_le_bytes());
+    bytes[188..224].fill(0);
     assert!(spt::tree::spt_file::reseal(&mut bytes));
     let dir = common::temp_dir();
     let path = dir.path().join("v2.spt");
     std::fs::write(&path, &bytes).unwrap();
     let file = SptFile::open(&path).unwrap();
     assert_eq!(file.version, 2);
-    assert_eq!(file.to_list(), list);
+    // Read as one chunk over the whole list.
+    let back = file.to_list();
+    assert_eq!(
+        (back.nodes, back.shapes, back.parents),
+        (list.nodes, list.shapes, list.parents)
+    );
+    assert_eq!(back.chunks.len(), 1);
+    assert_eq!(back.chunks[0].count as usize, n);
 }
 
 #[test]

@@ -19,7 +19,7 @@ fn tree_of(points: &[[f64; 3]], what: &str) -> SequentialList {
         "{what}: {} nodes",
         list.meta.node_count
     );
-    let view = TreeView::new(&list.meta, &list.nodes);
+    let view = TreeView::new(&list.meta, &list.nodes, &list.chunks);
     let stats = check_views(
         &view,
         &list.parents,

@@ -50,13 +50,9 @@ fn frame(viewer: &mut Viewer) -> (u64, usize, Vec<u8>) {
         .gpu
         .drawn
         .expect("compute culling counts the splats drawn");
-    let prefix = stats
-        .frame
-        .as_ref()
-        .expect("a frame was recorded")
-        .prefix_len;
+    let prefix = stats.frame.as_ref().expect("a frame was recorded").tested;
     assert!(drawn as usize <= prefix, "drawn {drawn} > prefix {prefix}");
-    assert_eq!(stats.measured_prefix, prefix, "counters of this very frame");
+    assert_eq!(stats.measured_tested, prefix, "counters of this very frame");
     (drawn, prefix, viewer.read_pixels().expect("pixels").2)
 }
 

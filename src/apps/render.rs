@@ -39,13 +39,19 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     let (image, stats) = last.expect("at least one frame");
     image.save_png(output)?;
     println!(
-        "splats    {} drawn of {} nodes, prefix {}",
+        "splats    {} drawn of {} nodes; the GPU tested {} nodes in {} ranges of {} chunks",
         count(stats.selected as u64),
         count(scene.nodes().len() as u64),
-        count(stats.prefix_len as u64)
+        count(stats.tested as u64),
+        count(stats.chunks_tested as u64),
+        count(stats.chunks as u64),
     );
     if let Some(n) = stats.gpu_drawn {
-        println!("culled    {} splats survived the compute culling", count(n));
+        println!(
+            "culled    {} splats survived the compute culling: {:.2} nodes tested per survivor",
+            count(n),
+            stats.tested as f64 / n.max(1) as f64
+        );
     }
     let summary = |v: &mut Vec<f64>| match Summary::of(v) {
         Some(s) if s.count > 1 => format!(

@@ -6,6 +6,7 @@
 use glam::{DVec3, Mat4};
 
 use crate::tree::TreeMeta;
+use crate::tree::select::ViewCone;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Camera {
@@ -97,14 +98,45 @@ impl Camera {
         Camera::orbit(meta, azimuth_deg, elevation_deg, distance, fov_y)
     }
 
-    /// World-aligned camera-relative → view space (rotation only), f32.
-    pub fn view_rotation(&self) -> Mat4 {
+    /// The near plane: a small fraction of the model, never beyond its nearest point.
+    pub fn near_plane(&self, meta: &TreeMeta) -> f64 {
+        let (centre, radius) = bounding_sphere(meta);
+        (radius * 1e-4)
+            .max((centre - self.eye).length() * 1e-6)
+            .max(f64::MIN_POSITIVE)
+    }
+
+    /// Unit right, up and forward axes of the view (those of [`Camera::view_rotation`]).
+    fn axes(&self) -> (DVec3, DVec3, DVec3) {
         let forward = (self.target - self.eye).normalize_or(DVec3::NEG_Y);
         let up = if forward.cross(self.up).length_squared() < 1e-12 {
             DVec3::Y
         } else {
             self.up
         };
+        let right = forward.cross(up).normalize();
+        (right, right.cross(forward), forward)
+    }
+
+    /// What the GPU's frustum test sees, relative to the model's origin, for an image of
+    /// `aspect` (width / height) with splats scaled by `radius_scale`.
+    pub fn view_cone(&self, meta: &TreeMeta, aspect: f64, radius_scale: f64) -> ViewCone {
+        let (right, up, forward) = self.axes();
+        let tan_y = (self.fov_y * 0.5).tan();
+        ViewCone {
+            eye: self.eye - DVec3::from(meta.origin),
+            right,
+            up,
+            forward,
+            tan_half_fov: [tan_y * aspect, tan_y],
+            near: self.near_plane(meta),
+            radius_scale,
+        }
+    }
+
+    /// World-aligned camera-relative → view space (rotation only), f32.
+    pub fn view_rotation(&self) -> Mat4 {
+        let (_, up, forward) = self.axes();
         glam::camera::rh::view::look_to_mat4(glam::Vec3::ZERO, forward.as_vec3(), up.as_vec3())
     }
 

@@ -1,17 +1,19 @@
-//! Compute culling: each node of a slice's share of the prefix is tested once against
-//! the selection test (and the frustum, and back faces when asked); survivors are
-//! appended to the slice's survivor list, whose length becomes the instance count of
-//! the indirect draw that follows (`splats.rs`, 4 vertices per survivor). WGSL:
+//! Compute culling: each node of a slice's share of the frame's ranges (the visible
+//! chunks' prefixes) is tested once against the selection test (and the frustum, and
+//! back faces when asked); survivors are appended to the slice's survivor list, whose
+//! length becomes the instance count of the indirect draw that follows (`splats.rs`, 4
+//! vertices per survivor). One dispatch per slice covers all its ranges: thread i
+//! finds its range by binary search over their running ends ([`TestRange`]). WGSL:
 //! `shaders/cull.wgsl`.
 
 use bytemuck::{Pod, Zeroable};
 
-use super::gpu_scene::Slice;
+use super::gpu_scene::Share;
 use super::shaders::{WORKGROUP_SIZE, module};
 
 /// A slice's compaction record (`struct Compaction` in cull.wgsl): the indirect draw's
-/// arguments, whose instance count the pass counts up, then the slice's share of the
-/// prefix.
+/// arguments, whose instance count the pass counts up, then the nodes of the slice to
+/// test and in how many ranges.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub(super) struct Compaction {
@@ -20,6 +22,35 @@ pub(super) struct Compaction {
     pub first_vertex: u32,
     pub first_instance: u32,
     pub count: u32,
+    pub range_count: u32,
+}
+
+/// One range of a slice to test (`struct TestRange` in cull.wgsl): its first node
+/// (relative to the slice) and the running total of the nodes of the slice's ranges up
+/// to and including it. Thread i tests node `start + i − (end of the range before)`
+/// of the first range whose `end` exceeds i.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+pub(super) struct TestRange {
+    pub start: u32,
+    pub end: u32,
+}
+
+impl TestRange {
+    /// The records of a share's ranges.
+    pub fn of(ranges: &[std::ops::Range<u32>]) -> Vec<TestRange> {
+        let mut end = 0;
+        ranges
+            .iter()
+            .map(|r| {
+                end += r.len() as u32;
+                TestRange {
+                    start: r.start,
+                    end,
+                }
+            })
+            .collect()
+    }
 }
 
 const _: () = assert!(
@@ -27,14 +58,16 @@ const _: () = assert!(
 );
 
 impl Compaction {
-    /// Before culling: 4 vertices per splat, no survivor yet, `count` nodes to test.
-    pub fn reset(count: u32) -> Compaction {
+    /// Before culling: 4 vertices per splat, no survivor yet, `count` nodes to test in
+    /// `range_count` ranges.
+    pub fn reset(count: u32, range_count: u32) -> Compaction {
         Compaction {
             vertex_count: 4,
             instance_count: 0,
             first_vertex: 0,
             first_instance: 0,
             count,
+            range_count,
         }
     }
 
@@ -71,6 +104,7 @@ impl CullPass {
                 storage(0, true, node),
                 storage(1, false, 4),
                 storage(2, false, std::mem::size_of::<Compaction>() as u64),
+                storage(3, true, std::mem::size_of::<TestRange>() as u64),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -89,19 +123,24 @@ impl CullPass {
         CullPass { layout, pipeline }
     }
 
-    /// Resets every slice's compaction record to its share of the prefix (through the
-    /// queue: it takes effect at the next submit), then records the culling of each
-    /// slice that holds part of the prefix.
+    /// Writes every slice's compaction record and ranges for its share (through the
+    /// queue: they take effect at the next submit), then records the culling of each
+    /// slice with nodes to test.
     pub fn encode(
         &self,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         frame_bind: &wgpu::BindGroup,
-        shares: &[(&Slice, u32)],
+        shares: &[Share],
     ) {
-        for (slice, n) in shares {
-            let record = Compaction::reset(*n);
+        for share in shares {
+            let slice = share.slice;
+            let record = Compaction::reset(share.count, share.ranges.len() as u32);
             queue.write_buffer(&slice.compaction, 0, bytemuck::bytes_of(&record));
+            if !share.ranges.is_empty() {
+                let ranges = TestRange::of(&share.ranges);
+                queue.write_buffer(&slice.ranges, 0, bytemuck::cast_slice(&ranges));
+            }
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("cull"),
@@ -109,17 +148,28 @@ impl CullPass {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, frame_bind, &[]);
-        for (slice, n) in shares.iter().filter(|(_, n)| *n > 0) {
-            pass.set_bind_group(1, &slice.cull, &[]);
-            pass.dispatch_workgroups(n.div_ceil(WORKGROUP_SIZE), 1, 1);
+        for share in shares.iter().filter(|s| s.count > 0) {
+            pass.set_bind_group(1, &share.slice.cull, &[]);
+            pass.dispatch_workgroups(share.count.div_ceil(WORKGROUP_SIZE), 1, 1);
         }
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use super::TestRange;
+
     #[test]
     fn the_compaction_record_has_the_size_of_the_wgsl_struct() {
         super::super::shaders::assert_wgsl_size::<super::Compaction>("cull", "Compaction");
+        super::super::shaders::assert_wgsl_size::<TestRange>("cull", "TestRange");
+    }
+
+    #[test]
+    fn test_ranges_carry_running_ends() {
+        let r = TestRange::of(&[3..5, 10..11, 20..24]);
+        let ends: Vec<u32> = r.iter().map(|t| t.end).collect();
+        assert_eq!(ends, [2, 3, 7]);
+        assert_eq!(r[2].start, 20);
     }
 }

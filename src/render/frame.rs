@@ -4,7 +4,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
-use super::camera::{Camera, bounding_sphere};
+use super::camera::Camera;
 use super::settings::{DEPTH_PUSH, Mode, PREFILTER_PX, Settings};
 use crate::tree::TreeMeta;
 
@@ -92,11 +92,7 @@ impl FrameUniform {
         lod_eps: f64,
     ) -> FrameUniform {
         let eye_rel = camera.eye - DVec3::from(meta.origin);
-        let (centre, radius) = bounding_sphere(meta);
-        // Near plane: a small fraction of the model, never beyond its nearest point.
-        let near = (radius * 1e-4)
-            .max((centre - camera.eye).length() * 1e-6)
-            .max(f64::MIN_POSITIVE);
+        let near = camera.near_plane(meta);
         let aspect = width as f64 / height as f64;
         let tan_y = (camera.fov_y * 0.5).tan();
         let mode = match settings.mode {

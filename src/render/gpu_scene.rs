@@ -2,6 +2,8 @@
 //! storage binding, each with the buffers compute culling compacts into, and the mesh's
 //! vertex and index buffers. Made by `upload.rs`; drawn by the passes.
 
+use std::ops::Range;
+
 /// One slice of the list on the GPU, with what compute culling needs.
 pub(super) struct Slice {
     pub count: u32,
@@ -12,8 +14,18 @@ pub(super) struct Slice {
     /// Nodes and survivors, for the compacted draw.
     pub compacted: wgpu::BindGroup,
     /// The slice's [`super::cull::Compaction`]: indirect draw arguments, then the
-    /// slice's share of the prefix.
+    /// slice's share of the nodes to test.
     pub compaction: wgpu::Buffer,
+    /// The slice's [`super::cull::TestRange`]s of the frame, for the cull pass.
+    pub ranges: wgpu::Buffer,
+}
+
+/// What one frame tests of a slice: its part of the frame's ranges, relative to the
+/// slice's first node, and the nodes in them.
+pub(super) struct Share<'a> {
+    pub slice: &'a Slice,
+    pub ranges: Vec<Range<u32>>,
+    pub count: u32,
 }
 
 /// The mesh of the reference pass on the GPU.
@@ -62,15 +74,25 @@ impl GpuScene {
         self.mesh = Some(mesh.0);
     }
 
-    /// The slices that hold part of a prefix of `prefix_len` nodes, each with its share.
-    pub(super) fn shares(&self, prefix_len: usize) -> Vec<(&Slice, u32)> {
-        let mut left = prefix_len as u32;
+    /// Each uploaded slice with its share of `ranges` (list indices, ascending; the
+    /// parts past the uploaded slices are left out).
+    pub(super) fn shares(&self, ranges: &[Range<usize>]) -> Vec<Share<'_>> {
+        let mut first = 0;
         self.slices
             .iter()
             .map(|slice| {
-                let n = left.min(slice.count);
-                left -= n;
-                (slice, n)
+                let end = first + slice.count as usize;
+                let local: Vec<Range<u32>> = ranges
+                    .iter()
+                    .filter(|r| r.start < end && r.end > first)
+                    .map(|r| (r.start.max(first) - first) as u32..(r.end.min(end) - first) as u32)
+                    .collect();
+                first = end;
+                Share {
+                    slice,
+                    count: local.iter().map(|r| r.len() as u32).sum(),
+                    ranges: local,
+                }
             })
             .collect()
     }

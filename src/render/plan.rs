@@ -1,25 +1,30 @@
 //! What the CPU decides for a frame before the GPU draws it (DESIGN.md §5): ε from the
-//! budget in pixels, the eye the level of detail is chosen for, and the prefix of the
-//! list to hand over, found by binary search. While a model uploads, ε is raised until
-//! its prefix is on the GPU (a coarser cut, never a holed one).
+//! budget in pixels, the eye the level of detail is chosen for, the chunks the view
+//! cone can see and, by binary search, each one's prefix: the list ranges to hand over.
+//! While a model uploads, ε is raised until its ranges are on the GPU (a coarser cut,
+//! never a holed one).
+
+use std::ops::Range;
 
 use glam::DVec3;
 
 use super::camera::Camera;
 use super::settings::Settings;
 use crate::tree::scene::Scene;
-use crate::tree::select::error_per_distance;
+use crate::tree::select::{ViewCone, error_per_distance, tested};
 
 /// What the CPU decided for one recorded frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EncodedFrame {
-    /// Nodes handed to the GPU (the CPU prefix).
-    pub prefix_len: usize,
+    /// The list ranges handed to the GPU: each visible chunk's prefix, ascending.
+    pub ranges: Vec<Range<usize>>,
+    /// Nodes in `ranges`: what the GPU tests.
+    pub tested: usize,
     /// Compute culling ran: the survivor counts can be read back.
     pub compute: bool,
     /// ε of the selection test, world error per unit of distance.
     pub eps: f64,
-    /// ε had to be raised above the settings' because the prefix they ask for is not
+    /// ε had to be raised above the settings' because the ranges they ask for are not
     /// all on the GPU yet (while a model uploads): the frame is a coarser cut.
     pub coarsened: bool,
     /// Slices of the list on the GPU when the frame was recorded.
@@ -28,24 +33,29 @@ pub struct EncodedFrame {
     pub lod_eye: DVec3,
 }
 
-/// The least ε ≥ `eps` whose prefix (seen from `eye`) lies within the first `uploaded`
-/// nodes, and that prefix. Any ε gives a complete cut of the tree, so a frame drawn
-/// while the list uploads is coarser, never holed. The prefix shrinks as ε grows, so
-/// the least fitting ε is found by doubling, then bisection.
-pub(super) fn fitting_eps(scene: &Scene, eye: DVec3, eps: f64, uploaded: usize) -> (f64, usize) {
+/// The least ε ≥ `eps` whose ranges (seen from `eye`, chunks culled by `cone`) lie
+/// within the first `uploaded` nodes, and those ranges. Any ε gives a complete cut of
+/// the tree, so a frame drawn while the list uploads is coarser, never holed. The
+/// ranges shrink as ε grows, so the least fitting ε is found by doubling, then
+/// bisection. (An eye within reach of a chunk not uploaded yet needs part of it at any
+/// ε: the ranges are then cut at what is there.)
+pub(super) fn fitting_eps(
+    scene: &Scene,
+    (eye, cone): (DVec3, &ViewCone),
+    eps: f64,
+    uploaded: usize,
+) -> (f64, Vec<Range<usize>>) {
     let nodes = scene.nodes();
-    let prefix = |e: f64| scene.index.prefix_len(nodes, eye, e);
-    let wanted = prefix(eps);
-    if wanted <= uploaded {
-        return (eps, wanted);
-    }
-    if uploaded == 0 {
-        return (eps, 0);
+    let ranges = |e: f64| scene.index.ranges(nodes, eye, e, Some(cone));
+    let end = |r: &[Range<usize>]| r.last().map_or(0, |r| r.end);
+    let wanted = ranges(eps);
+    if end(&wanted) <= uploaded || uploaded == 0 {
+        return (eps, if uploaded == 0 { Vec::new() } else { wanted });
     }
     let mut lo = eps;
     let mut hi = eps.max(scene.meta().error_scale as f64 * 1e-9);
     for _ in 0..200 {
-        if prefix(hi) <= uploaded {
+        if end(&ranges(hi)) <= uploaded {
             break;
         }
         lo = hi;
@@ -53,31 +63,39 @@ pub(super) fn fitting_eps(scene: &Scene, eye: DVec3, eps: f64, uploaded: usize) 
     }
     for _ in 0..40 {
         let mid = 0.5 * (lo + hi);
-        if prefix(mid) <= uploaded {
+        if end(&ranges(mid)) <= uploaded {
             hi = mid;
         } else {
             lo = mid;
         }
     }
-    (hi, prefix(hi).min(uploaded))
+    let cut = ranges(hi)
+        .into_iter()
+        .filter_map(|r| (r.start < uploaded).then(|| r.start..r.end.min(uploaded)))
+        .collect();
+    (hi, cut)
 }
 
-/// Plans a frame of `scene` seen by `camera` over `height` pixels, with `uploaded`
-/// nodes on the GPU in `slices` slices. `compute`: whether compute culling will run.
+/// Plans a frame of `scene` seen by `camera` over `size` pixels, with `uploaded` nodes
+/// on the GPU in `slices` slices. `compute`: whether compute culling will run.
 pub(super) fn plan(
     scene: &Scene,
     camera: &Camera,
     settings: &Settings,
-    height: u32,
+    (width, height): (u32, u32),
     (uploaded, slices): (usize, usize),
     compute: bool,
 ) -> EncodedFrame {
     let eps = error_per_distance(settings.error_px, camera.fov_y, height);
     let wanted_eps = if settings.lod { eps } else { 0.0 };
-    let lod_eye = settings.lod_eye.unwrap_or(camera.eye) - DVec3::from(scene.meta().origin);
-    let (lod_eps, prefix_len) = fitting_eps(scene, lod_eye, wanted_eps, uploaded);
+    let meta = scene.meta();
+    let lod_eye = settings.lod_eye.unwrap_or(camera.eye) - DVec3::from(meta.origin);
+    let aspect = width as f64 / height.max(1) as f64;
+    let cone = camera.view_cone(meta, aspect, settings.radius_scale as f64);
+    let (lod_eps, ranges) = fitting_eps(scene, (lod_eye, &cone), wanted_eps, uploaded);
     EncodedFrame {
-        prefix_len,
+        tested: tested(&ranges),
+        ranges,
         compute,
         eps: lod_eps,
         coarsened: lod_eps != wanted_eps,

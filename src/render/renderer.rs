@@ -3,7 +3,7 @@
 //! own), or rendered offline and read back (pixels, coverage, depth and counters).
 //!
 //! ```text
-//! CPU: plan (ε, prefix by binary search) ─► per slice of the list: instanced quads
+//! CPU: plan (ε, visible chunks, their prefixes by binary search) ─► per slice: quads
 //! cull (compute, optional): survivors of the selection test ─► indirect draw
 //! pass 1 visibility:  depth only, pushed back by a fraction of the radius
 //! pass 2 attributes:  depth test against pass 1, additive (colour·w, w), (normal·w, z·w)
@@ -46,9 +46,13 @@ pub struct Image {
 
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct FrameStats {
-    /// Nodes handed to the GPU (the CPU prefix).
-    pub prefix_len: usize,
-    /// Nodes that pass the exact selection test (CPU reference of the GPU test).
+    /// Nodes handed to the GPU to test (the visible chunks' prefixes).
+    pub tested: usize,
+    /// Chunks of the model, and those with nodes to test.
+    pub chunks: usize,
+    pub chunks_tested: usize,
+    /// Nodes that pass the exact selection test in the ranges handed over (CPU
+    /// reference of the GPU test, frustum aside).
     pub selected: usize,
     /// GPU time of the frame (timestamp queries), when the adapter has them.
     pub gpu_ms: Option<f64>,
@@ -112,11 +116,11 @@ impl Renderer {
         }
         let compute = settings.culling == Culling::Compute && settings.mode != Mode::Mesh;
         let uploaded = (gpu_scene.uploaded_nodes(), gpu_scene.slices.len());
-        let frame = plan(scene, camera, settings, targets.size.1, uploaded, compute);
+        let frame = plan(scene, camera, settings, targets.size, uploaded, compute);
         let uniform = FrameUniform::new(scene.meta(), camera, settings, targets.size, frame.eps);
         let queue = &self.gpu.queue;
         queue.write_buffer(&targets.frame_buffer, 0, bytemuck::bytes_of(&uniform));
-        let shares = gpu_scene.shares(frame.prefix_len);
+        let shares = gpu_scene.shares(&frame.ranges);
         if compute {
             self.cull
                 .encode(queue, encoder, &targets.frame_bind, &shares);
@@ -201,12 +205,23 @@ impl Renderer {
     /// to be pushed in order.
     pub fn upload_slice(&self, scene: &Scene, range: std::ops::Range<usize>) -> SliceUpload {
         let attributes = scene.attributes().get(range.clone()).unwrap_or(&[]);
-        let chunk = (
+        let max_ranges = scene
+            .index
+            .chunks()
+            .iter()
+            .filter(|c| c.range().start < range.end && c.range().end > range.start)
+            .count();
+        let slice = (
             &scene.nodes()[range.clone()],
             &scene.shapes()[range],
             attributes,
         );
-        upload::upload_slice(&self.gpu.device, (&self.splats, &self.cull), chunk)
+        upload::upload_slice(
+            &self.gpu.device,
+            (&self.splats, &self.cull),
+            slice,
+            max_ranges,
+        )
     }
 
     /// Uploads the mesh reference of a scene that has one.
@@ -273,8 +288,11 @@ impl Renderer {
             height,
         );
         let meta = scene.meta();
-        let selected = scene.nodes()[..frame.prefix_len]
+        let nodes = scene.nodes();
+        let selected = frame
+            .ranges
             .par_iter()
+            .flat_map(|r| nodes[r.clone()].par_iter())
             .filter(|r| is_drawn(r, meta.error_scale, frame.lod_eye, frame.eps))
             .count();
         Ok((
@@ -286,7 +304,9 @@ impl Renderer {
                 depth,
             },
             FrameStats {
-                prefix_len: frame.prefix_len,
+                tested: frame.tested,
+                chunks: scene.index.chunks().len(),
+                chunks_tested: frame.ranges.len(),
                 selected,
                 gpu_ms: counters.gpu_ms,
                 gpu_drawn: counters.drawn,

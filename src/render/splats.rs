@@ -7,7 +7,7 @@
 //! shape (16 bytes, [`SplatShape`]); the cull pass reads only the record.
 
 use super::gbuffer::{ADD, color_targets, depth_state};
-use super::gpu_scene::Slice;
+use super::gpu_scene::Share;
 use super::shaders::module;
 use crate::tree::NodeRecord;
 use crate::tree::record::{PointAttributes, SplatShape};
@@ -141,25 +141,28 @@ impl SplatPasses {
         }
     }
 
-    /// Draws each slice's share of the prefix with `pipeline`: the compacted survivors
-    /// (indirect) after compute culling, else every node of the share.
+    /// Draws each slice's share of the frame's ranges with `pipeline`: the compacted
+    /// survivors (indirect) after compute culling, else every node of each range (its
+    /// instances are its nodes' slice indices).
     pub fn draw(
         &self,
         pass: &mut wgpu::RenderPass,
         pipeline: &wgpu::RenderPipeline,
         frame_bind: &wgpu::BindGroup,
-        shares: &[(&Slice, u32)],
+        shares: &[Share],
         compacted: bool,
     ) {
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, frame_bind, &[]);
-        for (slice, n) in shares.iter().filter(|(_, n)| *n > 0) {
+        for share in shares.iter().filter(|s| s.count > 0) {
             if compacted {
-                pass.set_bind_group(1, &slice.compacted, &[]);
-                pass.draw_indirect(&slice.compaction, 0);
+                pass.set_bind_group(1, &share.slice.compacted, &[]);
+                pass.draw_indirect(&share.slice.compaction, 0);
             } else {
-                pass.set_bind_group(1, &slice.direct, &[]);
-                pass.draw(0..4, 0..*n);
+                pass.set_bind_group(1, &share.slice.direct, &[]);
+                for r in &share.ranges {
+                    pass.draw(0..4, r.clone());
+                }
             }
         }
     }

@@ -5,7 +5,7 @@
 
 use wgpu::util::DeviceExt;
 
-use super::cull::{Compaction, CullPass};
+use super::cull::{Compaction, CullPass, TestRange};
 use super::gpu::Gpu;
 use super::gpu_scene::{GpuScene, Slice, SliceUpload};
 use super::shaders::WORKGROUP_SIZE;
@@ -61,11 +61,13 @@ fn bind(
 
 /// Uploads one slice of the list (a range of [`slice_plan`]): its node records, their
 /// shapes and LiDAR attributes (empty for a model without: one zero is bound in their
-/// place), bound for both culling strategies, to be pushed in order.
+/// place), bound for both culling strategies, with room for `max_ranges` test ranges,
+/// to be pushed in order.
 pub(super) fn upload_slice(
     device: &wgpu::Device,
     (splats, cull): (&SplatPasses, &CullPass),
     (chunk, chunk_shapes, chunk_attributes): (&[NodeRecord], &[SplatShape], &[PointAttributes]),
+    max_ranges: usize,
 ) -> SliceUpload {
     assert_eq!(chunk.len(), chunk_shapes.len());
     assert!(chunk_attributes.is_empty() || chunk_attributes.len() == chunk.len());
@@ -102,6 +104,12 @@ pub(super) fn upload_slice(
             | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
+    let ranges = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test ranges"),
+        size: (std::mem::size_of::<TestRange>() * max_ranges.max(1)) as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
     SliceUpload(Slice {
         count: chunk.len() as u32,
         direct: bind(
@@ -112,7 +120,7 @@ pub(super) fn upload_slice(
         cull: bind(
             device,
             &cull.layout,
-            &[(0, &nodes), (1, &survivors), (2, &compaction)],
+            &[(0, &nodes), (1, &survivors), (2, &compaction), (3, &ranges)],
         ),
         compacted: bind(
             device,
@@ -120,5 +128,6 @@ pub(super) fn upload_slice(
             &[(0, &nodes), (1, &survivors), (2, &shapes), (3, &attributes)],
         ),
         compaction,
+        ranges,
     })
 }

@@ -10,6 +10,7 @@
 //! file), telling a [`report::Report`] each step.
 
 pub mod attributes;
+pub mod chunks;
 pub mod errors;
 pub mod hierarchy;
 pub mod parent_shape;
@@ -29,6 +30,7 @@ use crate::io::{Bounds, PointAttributes};
 use crate::surfel::LeafSurfels;
 use crate::surfel::Surfel;
 use crate::surfel::shape::{Shape, SplatShape};
+use chunks::Chunk;
 use errors::{Disk, node_error, parent_disk};
 use hierarchy::Hierarchy;
 use parent_shape::{Child, parent_shape};
@@ -60,8 +62,32 @@ pub struct TreeMeta {
     pub intensity_range: [u16; 2],
 }
 
-/// A tree as built in memory: the nodes in list order (sorted by parent error,
-/// descending) and each node's parent as a list index (u32::MAX for the root).
+impl TreeMeta {
+    /// The description of a tree with nothing in it yet, errors relative to `scale`.
+    pub fn empty(error_scale: f32) -> TreeMeta {
+        TreeMeta {
+            origin: [0.0; 3],
+            bounds: Bounds {
+                min: [0.0; 3],
+                max: [0.0; 3],
+            },
+            centre_min: [0.0; 3],
+            centre_max: [0.0; 3],
+            error_scale,
+            leaf_count: 0,
+            node_count: 0,
+            depth: 0,
+            has_colors: false,
+            oriented_normals: false,
+            has_attributes: false,
+            intensity_range: [0, 0],
+        }
+    }
+}
+
+/// A tree as built in memory: the nodes in list order (chunk by chunk, each chunk
+/// sorted by parent error, descending: [`chunks`]) and each node's parent as a list
+/// index (u32::MAX for the root).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SequentialList {
     pub meta: TreeMeta,
@@ -73,6 +99,8 @@ pub struct SequentialList {
     /// ([`attributes`]): read by the splat passes of the attribute display modes.
     pub attributes: Vec<PointAttributes>,
     pub parents: Vec<u32>,
+    /// The chunks, in list order, covering it: the top chunk (with the root) first.
+    pub chunks: Vec<Chunk>,
 }
 
 /// The hierarchy and its nodes in id order (leaves first, internal in post-order).
@@ -210,10 +238,101 @@ fn link_parents(
 
 /// Stage 2: node disks and errors bottom-up, one level at a time (nodes of a level are
 /// independent), then each node's parent error, δ and level top-down. `report` hears
-/// internal nodes done.
+/// internal nodes done. Errors are stored relative to the size of the leaves' box.
 pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Report) -> NodeSet {
-    let n = leaves.surfels.len();
     let scale = error_scale(&leaves.surfels);
+    build_records_scaled(leaves, hierarchy, scale, report)
+}
+
+/// The records, shapes and attributes (when `attributes` is not empty) of the internal
+/// nodes of `hierarchy` from those of its leaves, which the slices hold first: one
+/// level at a time, deepest first. `report` hears internal nodes done.
+fn fill_internal(
+    hierarchy: &Hierarchy,
+    levels: &[u16],
+    (records, shapes, attributes): (&mut [NodeRecord], &mut [SplatShape], &mut [PointAttributes]),
+    (scale, oriented): (f32, bool),
+    report: &dyn Report,
+) {
+    let n = hierarchy.leaf_count as usize;
+    let depth = levels.iter().copied().max().unwrap_or(0);
+    // Internal nodes grouped by level, deepest first.
+    let mut by_level: Vec<Vec<u32>> = vec![Vec::new(); depth as usize + 1];
+    for k in 0..hierarchy.internal.len() {
+        let id = (n + k) as u32;
+        by_level[levels[id as usize] as usize].push(id);
+    }
+    for ids in by_level.iter().rev() {
+        let done: Vec<(u32, (NodeRecord, SplatShape))> = ids
+            .par_iter()
+            .with_min_len(256)
+            .map(|&id| {
+                let node = &hierarchy.internal[id as usize - n];
+                (
+                    id,
+                    internal_record(node, (records, shapes), scale, oriented),
+                )
+            })
+            .collect();
+        for (id, (rec, shape)) in done {
+            records[id as usize] = rec;
+            shapes[id as usize] = shape;
+        }
+        if !attributes.is_empty() {
+            for &id in ids {
+                let node = &hierarchy.internal[id as usize - n];
+                attributes[id as usize] = internal_attributes(node, records, shapes, attributes);
+            }
+        }
+        report.advance(ids.len() as u64);
+    }
+}
+
+/// The nodes above subtrees built apart (the top tree of an out-of-core build): given
+/// the subtrees' roots (records, shapes, attributes: empty when the model has none) as
+/// the leaves of `hierarchy`, the internal nodes' records as [`build_records`] makes
+/// them, then every node's parent error, δ and level, the roots' included. Returns the
+/// nodes in id order (the roots first) and each one's parent id.
+pub fn build_above(
+    hierarchy: &Hierarchy,
+    (mut records, mut shapes, mut attributes): (
+        Vec<NodeRecord>,
+        Vec<SplatShape>,
+        Vec<PointAttributes>,
+    ),
+    (scale, oriented): (f32, bool),
+) -> (NodeSet, Vec<u32>) {
+    let n = records.len();
+    let total = hierarchy.node_count();
+    records.resize(total, NodeRecord::new(Vec3::ZERO, 0.0, Vec3::Z, [0; 4]));
+    shapes.resize(total, SplatShape::circle(Vec3::Z));
+    if !attributes.is_empty() {
+        attributes.resize(total, PointAttributes::default());
+    }
+    let levels = hierarchy.levels();
+    let slices = (&mut records[..], &mut shapes[..], &mut attributes[..]);
+    fill_internal(hierarchy, &levels, slices, (scale, oriented), &Silent);
+    let parent_ids = hierarchy.parents();
+    link_parents(&mut records, &parent_ids, &levels, n, scale);
+    let set = NodeSet {
+        hierarchy: hierarchy.clone(),
+        records,
+        shapes,
+        attributes,
+        parent_ids: parent_ids.clone(),
+        meta: TreeMeta::empty(scale),
+    };
+    (set, parent_ids)
+}
+
+/// [`build_records`] with errors stored relative to `scale` (> 0).
+pub fn build_records_scaled(
+    leaves: LeafSurfels,
+    hierarchy: Hierarchy,
+    scale: f32,
+    report: &dyn Report,
+) -> NodeSet {
+    let n = leaves.surfels.len();
     let oriented = leaves.oriented_normals;
     let bounds = leaf_bounds(&leaves);
     let (mut records, mut shapes): (Vec<NodeRecord>, Vec<SplatShape>) = leaves
@@ -238,36 +357,8 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Rep
 
     let levels = hierarchy.levels();
     let depth = levels.iter().copied().max().unwrap_or(0);
-    // Internal nodes grouped by level, deepest first.
-    let mut by_level: Vec<Vec<u32>> = vec![Vec::new(); depth as usize + 1];
-    for k in 0..hierarchy.internal.len() {
-        let id = (n + k) as u32;
-        by_level[levels[id as usize] as usize].push(id);
-    }
-    for ids in by_level.iter().rev() {
-        let done: Vec<(u32, (NodeRecord, SplatShape))> = ids
-            .par_iter()
-            .with_min_len(256)
-            .map(|&id| {
-                let node = &hierarchy.internal[id as usize - n];
-                (
-                    id,
-                    internal_record(node, (&records, &shapes), scale, oriented),
-                )
-            })
-            .collect();
-        for (id, (rec, shape)) in done {
-            records[id as usize] = rec;
-            shapes[id as usize] = shape;
-        }
-        if !attributes.is_empty() {
-            for &id in ids {
-                let node = &hierarchy.internal[id as usize - n];
-                attributes[id as usize] = internal_attributes(node, &records, &shapes, &attributes);
-            }
-        }
-        report.advance(ids.len() as u64);
-    }
+    let slices = (&mut records[..], &mut shapes[..], &mut attributes[..]);
+    fill_internal(&hierarchy, &levels, slices, (scale, oriented), report);
     let parent_ids = hierarchy.parents();
     link_parents(&mut records, &parent_ids, &levels, n, scale);
     let (centre_min, centre_max) = records
@@ -319,8 +410,9 @@ fn leaf_bounds(leaves: &LeafSurfels) -> (Bounds, DVec3, bool) {
     (bounds, o, leaves.has_colors)
 }
 
-/// Stage 3: the sequential list, sorted by parent error descending (ties by node id,
-/// so the order is the same on every machine), with parents as list indices.
+/// Stage 3: the sequential list: the tree cut into chunks ([`chunks::cut`]), each
+/// sorted by parent error descending (ties by node id, so the order is the same on
+/// every machine), with parents as list indices.
 pub fn sort_list(set: NodeSet) -> SequentialList {
     let NodeSet {
         hierarchy,
@@ -330,15 +422,16 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
         parent_ids,
         meta,
     } = set;
+    let max_nodes = chunks::chunk_nodes_for(records.len());
+    let cut = chunks::cut(&hierarchy, max_nodes);
     drop(hierarchy);
-    let mut keys: Vec<u64> = records
-        .par_iter()
-        .enumerate()
-        .map(|(id, r)| ((0xffff - r.parent_error as u64) << 32) | id as u64)
-        .collect();
-    keys.par_sort_unstable();
-    let order: Vec<u32> = keys.par_iter().map(|k| *k as u32).collect();
-    drop(keys);
+    let mut cut = chunks::by_level(cut, max_nodes / 16, |id| records[id as usize].level);
+    cut.chunks.par_iter_mut().for_each(|ids| {
+        ids.sort_unstable_by_key(|&id| (0xffff - records[id as usize].parent_error, id))
+    });
+    let counts: Vec<usize> = cut.chunks.iter().map(Vec::len).collect();
+    let order: Vec<u32> = cut.chunks.concat();
+    drop(cut);
     let mut position = vec![0u32; order.len()];
     for (i, &id) in order.iter().enumerate() {
         position[id as usize] = i as u32;
@@ -361,12 +454,14 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
             p => position[p as usize],
         })
         .collect();
+    let chunks = Chunk::table(&nodes, &counts);
     SequentialList {
         meta,
         nodes,
         shapes,
         attributes,
         parents,
+        chunks,
     }
 }
 

@@ -43,7 +43,7 @@ pub struct Scene {
 
 impl Scene {
     pub fn from_list(list: SequentialList, mesh: Option<MeshData>) -> Scene {
-        let index = PrefixIndex::new(&list.meta, &list.nodes);
+        let index = PrefixIndex::new(&list.meta, &list.chunks, &list.nodes);
         Scene {
             tree: TreeSource::Memory(list),
             index,
@@ -63,7 +63,7 @@ impl Scene {
             report.step(Step::Check, 0);
             let file = SptFile::open(path)?;
             report.step(Step::Index, 0);
-            let index = PrefixIndex::new(&file.meta, file.nodes());
+            let index = PrefixIndex::new(&file.meta, file.chunks(), file.nodes());
             return Ok(Scene {
                 tree: TreeSource::File(file),
                 index,

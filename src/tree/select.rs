@@ -1,5 +1,6 @@
-//! The selection of the nodes to draw (DESIGN.md §5): the CPU reference that tests and
-//! the renderer's tests use as ground truth.
+//! The selection of the nodes to draw (DESIGN.md §5): the CPU's part each frame (which
+//! chunks, and which prefix of each, the GPU tests), and the CPU reference that tests
+//! and the renderer's tests use as ground truth.
 //!
 //! With ε = ε_px · θ (world error per unit of distance; θ = 2 tan(fov/2) / h is the
 //! angle of one pixel) and d the distance from the eye to a node's centre, node n is
@@ -12,17 +13,22 @@
 //!
 //! Every leaf then has a drawn ancestor-or-self: the first node on its path from the
 //! root that is fine enough is drawn, because its parent's distance is at least
-//! d_n − δ_n. The list is sorted by e_parent descending; nodes past the first i with
-//! e_parent[i] ≤ ε · (d_min − Δ[i]) cannot pass the second test (d_min: eye to the box
-//! of all node centres, Δ[i]: the largest δ from i on), and that predicate is monotone
-//! in i, so a binary search finds the prefix. Δ is kept per block of [`BLOCK`] nodes
-//! (the largest δ from the block's start on): the prefix may include up to a block more
-//! than needed, never less.
+//! d_n − δ_n. Each chunk of the list ([`super::chunks`]) is sorted by e_parent
+//! descending; nodes past the first i with e_parent[i] ≤ ε · (d_min − Δ[i]) cannot pass
+//! the second test (d_min: eye to the box of the chunk's node centres, Δ[i]: the
+//! largest δ from i to the chunk's end), and that predicate is monotone in i, so a
+//! binary search finds the chunk's prefix. Δ is kept per block of [`BLOCK`] nodes of a
+//! chunk (the largest δ from the block's start on): a prefix may include up to a block
+//! more than needed, never less. Chunks outside the view cone are skipped
+//! ([`ViewCone`]); the chunks module says why no hole opens across their boundaries.
+
+use std::ops::Range;
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::chunks::Chunk;
 use super::{NodeRecord, TreeMeta};
 
 /// Nodes per block of the suffix maximum of δ.
@@ -34,59 +40,182 @@ pub fn error_per_distance(eps_px: f64, fov_y: f64, height_px: u32) -> f64 {
     eps_px * 2.0 * (fov_y / 2.0).tan() / height_px.max(1) as f64
 }
 
-/// What the prefix search needs besides the nodes: the box of all node centres and
-/// the largest δ (model units) from the start of each block of [`BLOCK`] nodes to the
-/// end of the list. Built once per tree (one pass over the nodes).
+/// What the GPU's frustum test sees (`splat_visible` in common.wgsl), relative to the
+/// model's origin: a sphere (centre c, radius r) with view coordinates (x, y, depth)
+/// is outside when depth + r < near or |x| − r·√(1 + tx²) > tx · depth (and the same in
+/// y), tx and ty the tangents of the half fields of view.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ViewCone {
+    pub eye: DVec3,
+    /// Unit view axes: right, up, and forward (toward the target).
+    pub right: DVec3,
+    pub up: DVec3,
+    pub forward: DVec3,
+    pub tan_half_fov: [f64; 2],
+    pub near: f64,
+    /// Splats are drawn this many times their stored radius.
+    pub radius_scale: f64,
+}
+
+impl ViewCone {
+    /// Whether a sphere may be seen (false only when the GPU's test would cull every
+    /// splat inside it; 10⁻⁴ of slack for its f32 arithmetic).
+    pub fn sees_sphere(&self, centre: DVec3, r: f64) -> bool {
+        let v = centre - self.eye;
+        let (x, y, depth) = (v.dot(self.right), v.dot(self.up), v.dot(self.forward));
+        let r = r + 1e-4 * (v.length() + r);
+        let [tx, ty] = self.tan_half_fov;
+        let (sx, sy) = ((1.0 + tx * tx).sqrt(), (1.0 + ty * ty).sqrt());
+        depth + r >= self.near && x.abs() - r * sx <= tx * depth && y.abs() - r * sy <= ty * depth
+    }
+
+    /// Whether any splat of `chunk` may be seen: the sphere around its box of centres,
+    /// grown by its largest (scaled) radius.
+    pub fn sees_chunk(&self, chunk: &Chunk) -> bool {
+        let lo = Vec3::from(chunk.centre_min).as_dvec3();
+        let hi = Vec3::from(chunk.centre_max).as_dvec3();
+        let r = 0.5 * (hi - lo).length() + chunk.radius_max as f64 * self.radius_scale.max(1.0);
+        self.sees_sphere(0.5 * (lo + hi), r)
+    }
+}
+
+/// Consecutive chunks per page: a frame tests a page's bounds before its chunks'.
+pub const PAGE: usize = 64;
+
+/// The bounds of a page of [`PAGE`] consecutive chunks (which lie close together: the
+/// list orders the chunks of a level band in the hierarchy's spatial order), as one
+/// [`Chunk`]: skipping a page skips its chunks, whose bounds lie within its own.
+fn page_of(chunks: &[Chunk]) -> Chunk {
+    let mut page = chunks[0];
+    for c in &chunks[1..] {
+        for k in 0..3 {
+            page.centre_min[k] = page.centre_min[k].min(c.centre_min[k]);
+            page.centre_max[k] = page.centre_max[k].max(c.centre_max[k]);
+        }
+        page.radius_max = page.radius_max.max(c.radius_max);
+        page.error_min = page.error_min.min(c.error_min);
+    }
+    page
+}
+
+/// Distances from `eye` to the nearest and farthest points of a chunk's box of centres.
+fn distances(chunk: &Chunk, eye: DVec3) -> (f64, f64) {
+    let lo = Vec3::from(chunk.centre_min).as_dvec3();
+    let hi = Vec3::from(chunk.centre_max).as_dvec3();
+    let far = (eye - lo).abs().max((hi - eye).abs());
+    ((eye.clamp(lo, hi) - eye).length(), far.length())
+}
+
+/// What the prefix searches need besides the nodes: the chunks and their pages, and
+/// per chunk the largest δ (model units) from the start of each of its blocks of
+/// [`BLOCK`] nodes to the chunk's end. Built once per tree (one pass over the nodes).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PrefixIndex {
-    centre_min: DVec3,
-    centre_max: DVec3,
+    chunks: Vec<Chunk>,
+    pages: Vec<Chunk>,
     error_scale: f32,
+    /// The suffix maxima of all chunks' blocks; chunk c's start at `block_at[c]`.
     delta_suffix: Vec<f64>,
+    block_at: Vec<usize>,
 }
 
 impl PrefixIndex {
-    pub fn new(meta: &TreeMeta, nodes: &[NodeRecord]) -> Self {
+    pub fn new(meta: &TreeMeta, chunks: &[Chunk], nodes: &[NodeRecord]) -> Self {
         let scale = meta.error_scale;
-        let blocks = nodes.len().div_ceil(BLOCK);
-        let block_max: Vec<f64> = (0..blocks)
-            .into_par_iter()
-            .map(|b| {
-                let block = &nodes[b * BLOCK..((b + 1) * BLOCK).min(nodes.len())];
-                block.iter().map(|r| r.delta(scale)).fold(0.0, f64::max)
+        let per_chunk: Vec<Vec<f64>> = chunks
+            .par_iter()
+            .map(|c| {
+                let chunk = &nodes[c.range()];
+                let mut suffix: Vec<f64> = chunk
+                    .chunks(BLOCK)
+                    .map(|block| block.iter().map(|r| r.delta(scale)).fold(0.0, f64::max))
+                    .collect();
+                for b in (0..suffix.len().saturating_sub(1)).rev() {
+                    suffix[b] = suffix[b].max(suffix[b + 1]);
+                }
+                suffix
             })
             .collect();
-        let mut delta_suffix = block_max;
-        for b in (0..blocks.saturating_sub(1)).rev() {
-            delta_suffix[b] = delta_suffix[b].max(delta_suffix[b + 1]);
+        let mut block_at = Vec::with_capacity(chunks.len());
+        let mut at = 0;
+        for s in &per_chunk {
+            block_at.push(at);
+            at += s.len();
         }
         PrefixIndex {
-            centre_min: Vec3::from(meta.centre_min).as_dvec3(),
-            centre_max: Vec3::from(meta.centre_max).as_dvec3(),
+            chunks: chunks.to_vec(),
+            pages: chunks.chunks(PAGE).map(page_of).collect(),
             error_scale: scale,
-            delta_suffix,
+            delta_suffix: per_chunk.concat(),
+            block_at,
         }
     }
 
-    /// Distance from `eye` (relative to the origin) to the box of all node centres.
-    pub fn min_distance(&self, eye: DVec3) -> f64 {
-        (eye.clamp(self.centre_min, self.centre_max) - eye).length()
+    pub fn chunks(&self) -> &[Chunk] {
+        &self.chunks
     }
 
-    /// Length of the prefix of `nodes` that holds every node the exact test can draw.
-    pub fn prefix_len(&self, nodes: &[NodeRecord], eye: DVec3, eps: f64) -> usize {
-        let d_min = self.min_distance(eye);
+    /// Whether no node of `chunk` (or page) is fine enough to draw: e_min > ε · d_max.
+    fn too_coarse(&self, chunk: &Chunk, eye: DVec3, eps: f64) -> bool {
+        let e_min = chunk.error_min as f64 * self.error_scale as f64;
+        e_min > eps * distances(chunk, eye).1
+    }
+
+    /// Whether the frame skips `chunk` (or page) whole: too coarse, or unseen by `cone`.
+    fn skipped(&self, chunk: &Chunk, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> bool {
+        self.too_coarse(chunk, eye, eps) || cone.is_some_and(|v| !v.sees_chunk(chunk))
+    }
+
+    /// Length of the prefix of chunk `c` that holds every node of it the exact test
+    /// can draw.
+    pub fn chunk_prefix(&self, c: usize, nodes: &[NodeRecord], eye: DVec3, eps: f64) -> usize {
+        let chunk = &nodes[self.chunks[c].range()];
+        let suffix = &self.delta_suffix[self.block_at[c]..];
+        let d_min = distances(&self.chunks[c], eye).0;
         // First i where e_parent[i] ≤ ε (d_min − Δ(i)); false before, true after.
-        let beyond = |i: usize| {
-            nodes[i].parent_error(self.error_scale) <= eps * (d_min - self.delta_suffix[i / BLOCK])
-        };
-        let (mut lo, mut hi) = (0, nodes.len());
+        let beyond =
+            |i: usize| chunk[i].parent_error(self.error_scale) <= eps * (d_min - suffix[i / BLOCK]);
+        let (mut lo, mut hi) = (0, chunk.len());
         while lo < hi {
             let mid = lo + (hi - lo) / 2;
             if beyond(mid) { hi = mid } else { lo = mid + 1 }
         }
         lo
     }
+
+    /// The list ranges the GPU tests for a level of detail chosen from `eye` with `eps`:
+    /// each chunk's prefix, the chunks too coarse to draw and those that `cone` (when
+    /// given) cannot see left out. Non-empty, ascending, adjacent ones joined.
+    pub fn ranges(
+        &self,
+        nodes: &[NodeRecord],
+        eye: DVec3,
+        eps: f64,
+        cone: Option<&ViewCone>,
+    ) -> Vec<Range<usize>> {
+        let mut out: Vec<Range<usize>> = Vec::new();
+        let pages = self.pages.iter().enumerate();
+        let seen = pages.filter(|(_, page)| !self.skipped(page, eye, eps, cone));
+        for c in seen.flat_map(|(p, _)| p * PAGE..((p + 1) * PAGE).min(self.chunks.len())) {
+            let chunk = &self.chunks[c];
+            if self.skipped(chunk, eye, eps, cone) {
+                continue;
+            }
+            let start = chunk.start as usize;
+            let n = self.chunk_prefix(c, nodes, eye, eps);
+            match out.last_mut() {
+                _ if n == 0 => {}
+                Some(last) if last.end == start => last.end = start + n,
+                _ => out.push(start..start + n),
+            }
+        }
+        out
+    }
+}
+
+/// Nodes in `ranges`.
+pub fn tested(ranges: &[Range<usize>]) -> usize {
+    ranges.iter().map(|r| r.len()).sum()
 }
 
 /// The exact test for one node, with the eye relative to the origin.
@@ -107,23 +236,26 @@ pub struct TreeView<'a> {
 /// What one view draws.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Selection {
-    /// Nodes the CPU hands to the GPU (list indices `0..prefix_len`).
-    pub prefix_len: usize,
+    /// The list ranges the CPU hands to the GPU (each chunk's prefix).
+    pub ranges: Vec<Range<usize>>,
     /// List indices of the nodes the exact test draws, ascending.
     pub drawn: Vec<u32>,
 }
 
+impl Selection {
+    /// Nodes the GPU tests.
+    pub fn tested(&self) -> usize {
+        tested(&self.ranges)
+    }
+}
+
 impl<'a> TreeView<'a> {
-    pub fn new(meta: &'a TreeMeta, nodes: &'a [NodeRecord]) -> Self {
+    pub fn new(meta: &'a TreeMeta, nodes: &'a [NodeRecord], chunks: &[Chunk]) -> Self {
         TreeView {
             meta,
             nodes,
-            index: PrefixIndex::new(meta, nodes),
+            index: PrefixIndex::new(meta, chunks, nodes),
         }
-    }
-
-    pub fn min_distance(&self, eye: DVec3) -> f64 {
-        self.index.min_distance(eye)
     }
 
     /// The exact test for node `i` (list index).
@@ -131,14 +263,15 @@ impl<'a> TreeView<'a> {
         is_drawn(&self.nodes[i], self.meta.error_scale, eye, eps)
     }
 
-    pub fn prefix_len(&self, eye: DVec3, eps: f64) -> usize {
-        self.index.prefix_len(self.nodes, eye, eps)
+    /// The ranges the GPU tests (no frustum: every chunk).
+    pub fn ranges(&self, eye: DVec3, eps: f64) -> Vec<Range<usize>> {
+        self.index.ranges(self.nodes, eye, eps, None)
     }
 
-    /// The prefix and, by the exact test over the whole list, the drawn nodes.
+    /// The ranges and, by the exact test over the whole list, the drawn nodes.
     pub fn select(&self, eye: DVec3, eps: f64) -> Selection {
         Selection {
-            prefix_len: self.prefix_len(eye, eps),
+            ranges: self.ranges(eye, eps),
             drawn: (0..self.nodes.len())
                 .filter(|&i| self.is_drawn(i, eye, eps))
                 .map(|i| i as u32)
@@ -153,12 +286,20 @@ pub struct ViewStats {
     pub views: usize,
     /// Leaves without a drawn ancestor-or-self, summed over the views (must be 0).
     pub holes: u64,
-    /// Nodes the exact test draws that lie past the CPU prefix, summed (must be 0).
+    /// Nodes the exact test draws that lie outside the CPU's ranges, summed (must be 0).
     pub past_prefix: u64,
     /// Mean over views and leaves of the drawn nodes on a leaf's path to the root.
     pub drawn_per_leaf_path: f64,
-    pub mean_prefix_len: f64,
+    /// Mean nodes the GPU tests (in the ranges) and mean nodes drawn.
+    pub mean_tested: f64,
     pub mean_drawn: f64,
+}
+
+impl ViewStats {
+    /// Nodes tested per node drawn, over all views.
+    pub fn tested_per_drawn(&self) -> f64 {
+        self.mean_tested / self.mean_drawn.max(1e-9)
+    }
 }
 
 /// Checks the selection for each (eye, ε) pair; `parents` are list indices.
@@ -179,10 +320,14 @@ pub fn check_views(view: &TreeView, parents: &[u32], cameras: &[(DVec3, f64)]) -
             for &i in &sel.drawn {
                 drawn[i as usize] = true;
             }
+            let mut in_ranges = vec![false; n];
+            for r in &sel.ranges {
+                in_ranges[r.clone()].fill(true);
+            }
             let past = sel
                 .drawn
                 .iter()
-                .filter(|&&i| i as usize >= sel.prefix_len)
+                .filter(|&&i| !in_ranges[i as usize])
                 .count() as u64;
             let (mut holes, mut on_paths) = (0u64, 0u64);
             for &leaf in &leaves {
@@ -198,7 +343,7 @@ pub fn check_views(view: &TreeView, parents: &[u32], cameras: &[(DVec3, f64)]) -
                 holes += (k == 0) as u64;
                 on_paths += k;
             }
-            (holes, past, on_paths, sel.prefix_len, sel.drawn.len())
+            (holes, past, on_paths, sel.tested(), sel.drawn.len())
         })
         .collect();
     let v = cameras.len().max(1) as f64;
@@ -208,7 +353,7 @@ pub fn check_views(view: &TreeView, parents: &[u32], cameras: &[(DVec3, f64)]) -
         past_prefix: per_view.iter().map(|r| r.1).sum(),
         drawn_per_leaf_path: per_view.iter().map(|r| r.2).sum::<u64>() as f64
             / (v * leaves.len().max(1) as f64),
-        mean_prefix_len: per_view.iter().map(|r| r.3).sum::<usize>() as f64 / v,
+        mean_tested: per_view.iter().map(|r| r.3).sum::<usize>() as f64 / v,
         mean_drawn: per_view.iter().map(|r| r.4).sum::<usize>() as f64 / v,
     }
 }

@@ -3,8 +3,9 @@
 //! ```text
 //! offset  size  field (little-endian)
 //!      0     8  magic "spt-tree"
-//!      8     4  format version (3; version 2, read as well, had no attributes
-//!                 section; version 1 no shapes section)
+//!      8     4  format version (4; versions 3 and 2, read as well, had no chunk
+//!                 table (their list is one chunk), version 2 no attributes section;
+//!                 version 1 no shapes section)
 //!     12     4  header size (256)
 //!     16     4  flags: 1 = has colours, 2 = oriented normals, 4 = LiDAR attributes
 //!     20     4  depth (largest level)
@@ -25,12 +26,17 @@
 //!                 an empty section when flag 4 is clear)
 //!    196     4  attribute size (4)
 //!    200     4  intensity range: 1st and 99th percentile of the leaves, 2 × u16
-//!    204    52  zero
+//!    204     8  offset of the chunk table (after the attributes)
+//!    212     4  chunk record size (40)
+//!    216     8  chunk count (≥ 1)
+//!    224    32  zero
 //! ```
 //!
 //! Sections follow the header in this order: node records (what the culling pass
 //! reads), parents (the CPU's), splat shapes (what only the splat passes read), LiDAR
-//! attributes (what the attribute display modes read; a model without pays nothing).
+//! attributes (what the attribute display modes read; a model without pays nothing),
+//! the chunk table ([`Chunk`]: each chunk's range of the list, box and largest radius;
+//! the chunks follow each other and cover the list).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -39,6 +45,7 @@ use memmap2::Mmap;
 use thiserror::Error;
 use xxhash_rust::xxh3::Xxh3;
 
+use super::chunks::Chunk;
 use super::select::TreeView;
 use super::validate;
 use super::{NodeRecord, SequentialList, TreeMeta};
@@ -47,13 +54,14 @@ use crate::io::{Bounds, PointAttributes};
 use crate::surfel::shape::SplatShape;
 
 pub const MAGIC: &[u8; 8] = b"spt-tree";
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 /// The oldest version read: version 2 files are version 3 files without attributes.
 pub const OLDEST_READ: u32 = 2;
 pub const HEADER_BYTES: usize = 256;
 const RECORD_BYTES: usize = std::mem::size_of::<NodeRecord>();
 const SHAPE_BYTES: usize = std::mem::size_of::<SplatShape>();
 const ATTRIBUTE_BYTES: usize = std::mem::size_of::<PointAttributes>();
+const CHUNK_BYTES: usize = std::mem::size_of::<Chunk>();
 const CHECKSUM_AT: usize = 168;
 
 #[derive(Debug, Error)]
@@ -123,7 +131,8 @@ fn header_bytes(list: &SequentialList, checksum: u64) -> Vec<u8> {
     let parents_at = nodes_at + (list.nodes.len() * RECORD_BYTES) as u64;
     let shapes_at = parents_at + 4 * list.parents.len() as u64;
     let attributes_at = shapes_at + (list.shapes.len() * SHAPE_BYTES) as u64;
-    let size = attributes_at + (list.attributes.len() * ATTRIBUTE_BYTES) as u64;
+    let chunks_at = attributes_at + (list.attributes.len() * ATTRIBUTE_BYTES) as u64;
+    let size = chunks_at + (list.chunks.len() * CHUNK_BYTES) as u64;
     for v in [nodes_at, parents_at, size, checksum, shapes_at] {
         h.extend_from_slice(&v.to_le_bytes());
     }
@@ -133,6 +142,9 @@ fn header_bytes(list: &SequentialList, checksum: u64) -> Vec<u8> {
     for v in m.intensity_range {
         h.extend_from_slice(&v.to_le_bytes());
     }
+    h.extend_from_slice(&chunks_at.to_le_bytes());
+    h.extend_from_slice(&(CHUNK_BYTES as u32).to_le_bytes());
+    h.extend_from_slice(&(list.chunks.len() as u64).to_le_bytes());
     h.resize(HEADER_BYTES, 0);
     h
 }
@@ -164,11 +176,12 @@ pub fn reseal(bytes: &mut [u8]) -> bool {
 
 /// Writes the list in `.spt` form to `w` (little-endian hosts write their memory as is).
 pub fn write_to(w: &mut dyn Write, list: &SequentialList) -> std::io::Result<()> {
-    let sections: [&[u8]; 4] = [
+    let sections: [&[u8]; 5] = [
         bytemuck::cast_slice(&list.nodes),
         bytemuck::cast_slice(&list.parents),
         bytemuck::cast_slice(&list.shapes),
         bytemuck::cast_slice(&list.attributes),
+        bytemuck::cast_slice(&list.chunks),
     ];
     let checksum = payload_checksum(&header_bytes(list, 0), &sections);
     w.write_all(&header_bytes(list, checksum))?;
@@ -190,6 +203,9 @@ struct Sections {
     parents_at: u64,
     shapes_at: u64,
     attributes_at: u64,
+    /// Where the chunk table starts and its chunks (0 before version 4).
+    chunks_at: u64,
+    chunk_count: u64,
     size: u64,
 }
 
@@ -206,6 +222,14 @@ fn sections(b: &[u8], version: u32) -> Result<Sections, String> {
         _ => (u64_at(b, 188), u32_at(b, 196)),
     };
     let attribute_nodes = if has_attributes { node_count } else { 0 };
+    let attributes_end = attribute_nodes
+        .checked_mul(ATTRIBUTE_BYTES as u64)
+        .and_then(|n| n.checked_add(attributes_at));
+    // Before version 4: no chunk table (it ends the file, empty).
+    let (chunks_at, chunk_bytes, chunk_count) = match version {
+        ..=3 => (attributes_end.unwrap_or(u64::MAX), CHUNK_BYTES as u32, 0),
+        _ => (u64_at(b, 204), u32_at(b, 212), u64_at(b, 216)),
+    };
     let after = |at: u64, count: u64, bytes: usize| {
         count
             .checked_mul(bytes as u64)
@@ -217,12 +241,15 @@ fn sections(b: &[u8], version: u32) -> Result<Sections, String> {
         || Some(attributes_at) != after(shapes_at, node_count, SHAPE_BYTES)
         || attribute_bytes as usize != ATTRIBUTE_BYTES
         || (version == 2 && has_attributes)
-        || Some(size) != after(attributes_at, attribute_nodes, ATTRIBUTE_BYTES)
+        || Some(chunks_at) != attributes_end
+        || chunk_bytes as usize != CHUNK_BYTES
+        || (version >= 4 && !(1..=node_count).contains(&chunk_count))
+        || Some(size) != after(chunks_at, chunk_count, CHUNK_BYTES)
         || leaf_count > node_count
         || node_count == 0
     {
         return Err(format!(
-            "{node_count} nodes, {leaf_count} leaves, sections at {nodes_at} and {parents_at}, size {size}"
+            "{node_count} nodes, {leaf_count} leaves, {chunk_count} chunks, sections at {nodes_at} and {parents_at}, size {size}"
         ));
     }
     Ok(Sections {
@@ -230,6 +257,8 @@ fn sections(b: &[u8], version: u32) -> Result<Sections, String> {
         parents_at,
         shapes_at,
         attributes_at,
+        chunks_at,
+        chunk_count,
         size,
     })
 }
@@ -269,6 +298,9 @@ pub struct SptFile {
     parents_at: usize,
     shapes_at: usize,
     attributes_at: usize,
+    chunks_at: usize,
+    /// The chunk table (read from the file; before version 4, the whole list as one chunk).
+    chunks: Vec<Chunk>,
 }
 
 fn u32_at(b: &[u8], at: usize) -> u32 {
@@ -299,6 +331,7 @@ impl SptFile {
     pub fn validate(&self) -> Result<(), SptError> {
         validate::check_meta(&self.meta)
             .and_then(|_| validate::check_nodes(&self.meta, self.nodes(), self.parents()))
+            .and_then(|_| validate::check_chunks(self.nodes(), &self.chunks))
             .map_err(|what| SptError::Invalid {
                 path: self.path.clone(),
                 what,
@@ -349,6 +382,8 @@ impl SptFile {
             parents_at,
             shapes_at,
             attributes_at,
+            chunks_at,
+            chunk_count,
             size,
         } = sections(b, version).map_err(bad)?;
         if (b.len() as u64) < size {
@@ -366,6 +401,15 @@ impl SptFile {
         }
         let meta = meta_of(b);
         let checksum = u64_at(b, CHECKSUM_AT);
+        let chunks = if chunk_count == 0 {
+            let nodes = bytemuck::cast_slice(&b[nodes_at as usize..parents_at as usize]);
+            vec![Chunk::of(0, nodes)]
+        } else {
+            b[chunks_at as usize..size as usize]
+                .chunks_exact(CHUNK_BYTES)
+                .map(bytemuck::pod_read_unaligned)
+                .collect()
+        };
         Ok(SptFile {
             path: p(),
             meta,
@@ -375,6 +419,8 @@ impl SptFile {
             parents_at: parents_at as usize,
             shapes_at: shapes_at as usize,
             attributes_at: attributes_at as usize,
+            chunks_at: chunks_at as usize,
+            chunks,
             map,
         })
     }
@@ -410,7 +456,12 @@ impl SptFile {
 
     /// Each node's LiDAR attributes, in list order (empty when the model has none).
     pub fn attributes(&self) -> &[PointAttributes] {
-        bytemuck::cast_slice(&self.map[self.attributes_at..])
+        bytemuck::cast_slice(&self.map[self.attributes_at..self.chunks_at])
+    }
+
+    /// The chunks, in list order ([`Chunk`]).
+    pub fn chunks(&self) -> &[Chunk] {
+        &self.chunks
     }
 
     pub fn file_bytes(&self) -> u64 {
@@ -418,7 +469,7 @@ impl SptFile {
     }
 
     pub fn view(&self) -> TreeView<'_> {
-        TreeView::new(&self.meta, self.nodes())
+        TreeView::new(&self.meta, self.nodes(), &self.chunks)
     }
 
     /// A copy in memory, as `spt convert` built it.
@@ -429,6 +480,7 @@ impl SptFile {
             shapes: self.shapes().to_vec(),
             attributes: self.attributes().to_vec(),
             parents: self.parents().to_vec(),
+            chunks: self.chunks.clone(),
         }
     }
 }

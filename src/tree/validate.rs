@@ -9,10 +9,14 @@
 //!   index in range. Local checks only: O(n), in parallel, no random access.
 //! * [`check_structure`]: the list as a tree: one root, first, with e_parent = +∞ and
 //!   δ = 0; each node's e_parent a bit copy of its parent's e and its level one more;
-//!   δ ≥ the distance to the parent; sorted by e_parent, descending.
+//!   δ ≥ the distance to the parent; each chunk sorted by e_parent, descending.
+//! * [`check_chunks`]: the chunks follow each other from 0 and cover the list, each
+//!   non-empty, and each node's centre lies in its chunk's box and its radius is at most
+//!   the chunk's largest (what culling chunks by the frustum relies on).
 
 use rayon::prelude::*;
 
+use super::chunks::Chunk;
 use super::record::half_value;
 use super::{NodeRecord, TreeMeta};
 
@@ -98,12 +102,58 @@ pub fn check_nodes(meta: &TreeMeta, nodes: &[NodeRecord], parents: &[u32]) -> Re
     }
 }
 
-/// The list as a tree (module doc). Assumes [`check_nodes`] passed.
+/// The chunk table against the nodes (module doc).
+pub fn check_chunks(nodes: &[NodeRecord], chunks: &[Chunk]) -> Result<(), String> {
+    let mut at = 0u64;
+    for (c, chunk) in chunks.iter().enumerate() {
+        let (lo, hi) = (chunk.centre_min, chunk.centre_max);
+        if chunk.start != at || chunk.count == 0 {
+            return Err(format!(
+                "chunk {c} starts at {} with {} nodes; expected a non-empty chunk at {at}",
+                chunk.start, chunk.count
+            ));
+        }
+        at += chunk.count as u64;
+        if at > nodes.len() as u64 {
+            return Err(format!(
+                "chunk {c} ends at {at}, past the {} nodes",
+                nodes.len()
+            ));
+        }
+        let inside = |r: &NodeRecord| {
+            let p = r.position();
+            (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]) && r.radius() <= chunk.radius_max
+        };
+        if let Some(i) = nodes[chunk.range()]
+            .par_iter()
+            .position_first(|r| !inside(r))
+        {
+            return Err(format!(
+                "node {}: outside the box or above the largest radius of its chunk {c}",
+                chunk.start as usize + i
+            ));
+        }
+    }
+    if at != nodes.len() as u64 {
+        return Err(format!(
+            "the chunks cover {at} of the {} nodes",
+            nodes.len()
+        ));
+    }
+    Ok(())
+}
+
+/// The list as a tree (module doc). Assumes [`check_nodes`] and [`check_chunks`] passed.
 pub fn check_structure(
     meta: &TreeMeta,
     nodes: &[NodeRecord],
     parents: &[u32],
+    chunks: &[Chunk],
 ) -> Result<(), String> {
+    let mut chunk_start = vec![false; nodes.len()];
+    for c in chunks {
+        chunk_start[c.start as usize] = true;
+    }
     let roots = parents.iter().filter(|&&p| p == u32::MAX).count();
     if roots != 1 || parents.first() != Some(&u32::MAX) {
         return Err(format!("{roots} roots; the root must be alone and first"));
@@ -114,8 +164,8 @@ pub fn check_structure(
     }
     let scale = meta.error_scale;
     for (i, (r, &p)) in nodes.iter().zip(parents).enumerate().skip(1) {
-        if r.parent_error > nodes[i - 1].parent_error {
-            return Err(format!("node {i}: the list is not sorted by parent error"));
+        if !chunk_start[i] && r.parent_error > nodes[i - 1].parent_error {
+            return Err(format!("node {i}: its chunk is not sorted by parent error"));
         }
         let parent = &nodes[p as usize];
         if r.parent_error != parent.error || r.level != parent.level.wrapping_add(1) {

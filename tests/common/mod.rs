@@ -179,8 +179,13 @@ pub fn assert_covers(g: &Geometry, leaves: &LeafSurfels, what: &str) -> usize {
 
 /// The invariants of a sequential list: one root with parent error +∞ and δ 0; each
 /// node's error ≤ its parent's and its parent error a bit copy of it; δ ≥ the distance
-/// to the parent; the list sorted by parent error, descending; everything finite.
+/// to the parent; each chunk sorted by parent error, descending, the chunks covering the
+/// list with their boxes holding their nodes; everything finite.
 pub fn assert_tree_invariants(list: &SequentialList, what: &str) {
+    spt::tree::validate::check_chunks(&list.nodes, &list.chunks)
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+    let chunk_starts: std::collections::HashSet<u64> =
+        list.chunks.iter().map(|c| c.start).collect();
     let s = list.meta.error_scale;
     assert!(s > 0.0 && s.is_finite(), "{what}: error scale {s}");
     let roots: Vec<usize> = (0..list.nodes.len())
@@ -199,7 +204,7 @@ pub fn assert_tree_invariants(list: &SequentialList, what: &str) {
         );
         let e = half_value(r.error);
         assert!(e.is_finite() && e >= 0.0, "{what}: node {i} error {e}");
-        if i > 0 {
+        if i > 0 && !chunk_starts.contains(&(i as u64)) {
             assert!(
                 r.parent_error <= list.nodes[i - 1].parent_error,
                 "{what}: list not sorted at {i}"

@@ -22,7 +22,7 @@ use spt::io::ply::read_ply;
 use spt::surfel::leaf_surfels;
 use spt::tree::select::PrefixIndex;
 use spt::tree::spt_file::{SptFile, write_to};
-use spt::tree::validate::{check_meta, check_nodes, check_structure};
+use spt::tree::validate::{check_chunks, check_meta, check_nodes, check_structure};
 use spt::tree::{SequentialList, build_sequential_list};
 
 use crate::seeds::Kind;
@@ -53,14 +53,15 @@ fn round_trip(list: &SequentialList, at: &Path) -> Result<(), Outcome> {
 
 /// The prefix search from the centre, a corner and far away, at a few budgets.
 fn select(list: &SequentialList) -> Result<(), Outcome> {
-    let index = PrefixIndex::new(&list.meta, &list.nodes);
+    let index = PrefixIndex::new(&list.meta, &list.chunks, &list.nodes);
     let lo = DVec3::from(list.meta.centre_min.map(f64::from));
     let hi = DVec3::from(list.meta.centre_max.map(f64::from));
     for eye in [(lo + hi) * 0.5, lo, hi * 10.0 + DVec3::ONE] {
         for eps in [0.0, 1e-3, 1.0] {
-            let n = index.prefix_len(&list.nodes, eye, eps);
-            if n > list.nodes.len() {
-                return Err(Outcome::Violation(format!("prefix {n} beyond the list")));
+            for r in index.ranges(&list.nodes, eye, eps, None) {
+                if r.end > list.nodes.len() || r.is_empty() {
+                    return Err(Outcome::Violation(format!("range {r:?} beyond the list")));
+                }
             }
         }
     }
@@ -75,7 +76,9 @@ fn build(geometry: &Geometry, path: &Path) -> Result<Outcome, Outcome> {
     let list = build_sequential_list(leaves);
     check_meta(&list.meta).map_err(violation("tree meta"))?;
     check_nodes(&list.meta, &list.nodes, &list.parents).map_err(violation("tree nodes"))?;
-    check_structure(&list.meta, &list.nodes, &list.parents).map_err(violation("tree"))?;
+    check_chunks(&list.nodes, &list.chunks).map_err(violation("tree chunks"))?;
+    check_structure(&list.meta, &list.nodes, &list.parents, &list.chunks)
+        .map_err(violation("tree"))?;
     select(&list)?;
     round_trip(&list, path)?;
     Ok(Outcome::Accepted)
@@ -102,6 +105,7 @@ fn spt(path: &Path) -> Result<Outcome, Outcome> {
     let list = file.to_list();
     check_meta(&list.meta).map_err(violation("meta"))?;
     check_nodes(&list.meta, &list.nodes, &list.parents).map_err(violation("nodes"))?;
+    check_chunks(&list.nodes, &list.chunks).map_err(violation("chunks"))?;
     select(&list)?;
     round_trip(&list, path)?;
     Ok(Outcome::Accepted)

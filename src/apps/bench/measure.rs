@@ -1,5 +1,5 @@
 //! One configuration of `spt bench` measured over its cameras: warm-up frames, then
-//! timed frames (GPU timestamps and wall time), the splats drawn, the prefix, and the
+//! timed frames (GPU timestamps and wall time), the splats drawn, the nodes tested, and the
 //! last frame's error against the reference images of the same camera: PSNR, hole and
 //! spill rates against the reference at 1×, FLIP and SSIM against it supersampled.
 
@@ -32,7 +32,8 @@ pub struct Measured {
     /// Splats drawn per frame: the GPU's count with compute culling, else the CPU
     /// reference of the same test; mean over the cameras.
     pub splats: f64,
-    pub prefix: f64,
+    /// Nodes the GPU tested per frame (the visible chunks' prefixes), mean.
+    pub tested: f64,
     /// Over every timed frame of every camera.
     pub gpu_ms_median: Option<f64>,
     pub gpu_ms_p95: Option<f64>,
@@ -98,7 +99,7 @@ pub fn measure_runs(
         for (m, frame) in measured.iter_mut().zip(last) {
             let (image, stats) = frame.expect("at least one frame");
             m.splats += stats.gpu_drawn.map_or(stats.selected as f64, |d| d as f64);
-            m.prefix += stats.prefix_len as f64;
+            m.tested += stats.tested as f64;
             let c = compare(&image, &reference.aliased);
             m.flip += flip_mean(&image, &reference.antialiased);
             m.ssim += ssim_mean(&image, &reference.antialiased);
@@ -110,7 +111,7 @@ pub fn measure_runs(
     let n = cameras.len().max(1) as f64;
     for (run, m) in measured.iter_mut().enumerate() {
         m.splats /= n;
-        m.prefix /= n;
+        m.tested /= n;
         m.psnr_db /= n;
         m.hole_rate /= n;
         m.spill_rate /= n;

@@ -2,7 +2,7 @@
 //! (orbits near, mid and far, and a fly-through into the model) and each ε of the sweep,
 //! SPT with both culling strategies; at the orbits, a random subset of leaves with as
 //! many splats drawn as SPT drew; leaves only (no LOD) at ε = 0. Each configuration:
-//! warm-up frames, timed frames (GPU timestamps, wall), splats, prefix, and PSNR, hole
+//! warm-up frames, timed frames (GPU timestamps, wall), splats, nodes tested, and PSNR, hole
 //! and spill rates against the mesh (models with faces) or the leaves-only image (point
 //! clouds). Then one configuration again, to check that the numbers are stable.
 //! Writes `results.csv`, `summary.md` and `speed_vs_error.png`.
@@ -477,23 +477,23 @@ fn write_results(
     Ok(())
 }
 
-/// Two runs of one configuration, frames interleaved: identical splat counts and prefix (also
+/// Two runs of one configuration, frames interleaved: identical splat counts and nodes tested (also
 /// equal to the sweep's), and median GPU times within 10 %. Returns the findings and
 /// whether they hold.
 fn stability(swept: &Row, once: &Measured, twice: &Measured) -> (Vec<String>, bool) {
-    let same = |a: &Measured, b: &Measured| a.splats == b.splats && a.prefix == b.prefix;
+    let same = |a: &Measured, b: &Measured| a.splats == b.splats && a.tested == b.tested;
     let counts = same(&swept.m, once) && same(once, twice);
     let mut checks = vec![format!(
         "{} ε {} px, compute culling, run twice more: splats {:.1} and {:.1} (sweep {:.1}), \
-         prefix {:.1} and {:.1} (sweep {:.1}): {}",
+         tested {:.1} and {:.1} (sweep {:.1}): {}",
         swept.path,
         swept.eps_px,
         once.splats,
         twice.splats,
         swept.m.splats,
-        once.prefix,
-        twice.prefix,
-        swept.m.prefix,
+        once.tested,
+        twice.tested,
+        swept.m.tested,
         if counts { "identical" } else { "DIFFERENT" }
     )];
     let timing = match (once.gpu_ms_median, twice.gpu_ms_median) {
@@ -520,13 +520,13 @@ fn stability(swept: &Row, once: &Measured, twice: &Measured) -> (Vec<String>, bo
 
 fn print_row(r: &Row) {
     println!(
-        "{:<12} {:<7} {:<8} ε {:<5} splats {:>10.0} prefix {:>10.0} gpu {:>9} ms  psnr {:>6.2} dB  holes {:.3} %  flip {:.4}",
+        "{:<12} {:<7} {:<8} ε {:<5} splats {:>10.0} tested {:>10.0} gpu {:>9} ms  psnr {:>6.2} dB  holes {:.3} %  flip {:.4}",
         r.path,
         r.strategy.name(),
         culling_name(r.culling),
         r.eps_px,
         r.m.splats,
-        r.m.prefix,
+        r.m.tested,
         r.m.gpu_ms_median.map_or("–".into(), |v| format!("{v:.2}")),
         r.m.psnr_db,
         r.m.hole_rate * 100.0,

@@ -5,6 +5,7 @@
 
 use crate::render::Scene;
 use crate::surfel::shape::SplatShape;
+use crate::tree::chunks::Chunk;
 use crate::tree::record::NodeRecord;
 use crate::tree::{SequentialList, TreeMeta};
 
@@ -77,6 +78,7 @@ pub fn random_subset(
     // Compared in shaded mode only: the subset leaves the LiDAR attributes behind.
     meta.has_attributes = false;
     let parents = vec![u32::MAX; nodes.len()];
+    let chunks = vec![Chunk::of(0, &nodes)];
     Scene::from_list(
         SequentialList {
             meta,
@@ -84,6 +86,7 @@ pub fn random_subset(
             shapes,
             attributes: Vec::new(),
             parents,
+            chunks,
         },
         None,
     )

@@ -111,7 +111,7 @@ fn field(s: &str) -> String {
 
 pub fn write_csv(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result<()> {
     let mut out = String::from(
-        "model,path,strategy,culling,eps_px,cameras,splats,prefix,gpu_ms_median,gpu_ms_p95,\
+        "model,path,strategy,culling,eps_px,cameras,splats,tested,gpu_ms_median,gpu_ms_p95,\
          wall_ms_median,psnr_db,hole_rate,spill_rate,flip,ssim,reference,width,height,adapter,backend,driver,\
          machine,date\n",
     );
@@ -127,7 +127,7 @@ pub fn write_csv(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result
             r.eps_px,
             r.cameras,
             m.splats,
-            m.prefix,
+            m.tested,
             opt(m.gpu_ms_median),
             opt(m.gpu_ms_p95),
             m.wall_ms_median,
@@ -175,7 +175,7 @@ pub fn summary(env: &Environment, rows: &[Row], checks: &[String]) -> String {
         let _ = writeln!(s, "### {path}\n");
         let _ = writeln!(
             s,
-            "| strategy | culling | ε px | splats | prefix | GPU ms median | GPU ms p95 | wall ms | PSNR dB | holes | spill | FLIP | SSIM |"
+            "| strategy | culling | ε px | splats | tested | GPU ms median | GPU ms p95 | wall ms | PSNR dB | holes | spill | FLIP | SSIM |"
         );
         let _ = writeln!(
             s,
@@ -190,7 +190,7 @@ pub fn summary(env: &Environment, rows: &[Row], checks: &[String]) -> String {
                 culling_name(r.culling),
                 r.eps_px,
                 m.splats,
-                m.prefix,
+                m.tested,
                 opt(m.gpu_ms_median),
                 opt(m.gpu_ms_p95),
                 m.wall_ms_median,

@@ -395,10 +395,10 @@ impl App {
         let stats = &w.viewer.stats;
         if let Some(m) = &w.viewer.model {
             println!(
-                "splats    {} drawn of {} nodes, prefix {}",
+                "splats    {} drawn of {} nodes, {} tested",
                 stats.gpu.drawn.map_or("–".into(), count),
                 count(m.scene.nodes().len() as u64),
-                count(stats.frame.as_ref().map_or(0, |f| f.prefix_len) as u64)
+                count(stats.frame.as_ref().map_or(0, |f| f.tested) as u64)
             );
         }
         for (name, values) in [

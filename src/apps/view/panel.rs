@@ -200,7 +200,14 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
                 },
             );
             if let Some(f) = &st.frame {
-                row("prefix", count(f.prefix_len as u64));
+                row(
+                    "tested",
+                    format!(
+                        "{} in {} chunks",
+                        count(f.tested as u64),
+                        count(f.ranges.len() as u64)
+                    ),
+                );
                 if f.coarsened {
                     row("", "coarser until uploaded".into());
                 }

@@ -38,7 +38,7 @@ pub struct Stats {
     pub cpu_ms: f64,
     /// The newest GPU measurement (a few frames late), and its frame's prefix.
     pub gpu: GpuCounters,
-    pub measured_prefix: usize,
+    pub measured_tested: usize,
     /// The frame just recorded (prefix, ε, whether it was coarsened while uploading).
     pub frame: Option<EncodedFrame>,
     recent: VecDeque<Instant>,
@@ -328,7 +328,7 @@ impl Viewer {
             && let Some((frame, counters)) = m.counters.poll(&self.renderer.gpu)
         {
             self.stats.gpu = counters;
-            self.stats.measured_prefix = frame.prefix_len;
+            self.stats.measured_tested = frame.tested;
         }
     }
 

@@ -20,11 +20,13 @@ use std::time::{Duration, Instant};
 use las::{PointData, PointDataBuilder, Reader};
 use serde::Serialize;
 
+mod batches;
 mod checks;
 
 use super::geometry::{Geometry, GeometryStats, PointAttributes, assemble};
 use super::ply::fields::{Field, VertexFields, VertexRows};
 use super::ply::scalar::Scalar;
+pub use batches::{LasBatches, PointBatch};
 pub use checks::MAX_CHUNK_BYTES;
 use checks::{check_layout, check_laz};
 

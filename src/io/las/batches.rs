@@ -1,0 +1,115 @@
+//! A LAS or LAZ file read a batch at a time, for builders that never hold all of a
+//! file's points ([`crate::tree::out_of_core`]): the same checks as [`super::read_las`]
+//! before the decoder sees the file, then batches of positions (f64, the file's
+//! coordinates), 16-bit colours and attributes.
+
+use std::fs::File;
+use std::io::{BufReader, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
+
+use las::{PointData, PointDataBuilder, Reader};
+
+use super::checks::{check_layout, check_laz};
+use super::{BATCH, LAZ_BATCH, LasError, fill_contained};
+use crate::io::PointAttributes;
+
+/// One batch of points.
+#[derive(Debug, Default, Clone)]
+pub struct PointBatch {
+    pub xyz: Vec<[f64; 3]>,
+    /// 16-bit channels; empty when the file has no colours.
+    pub rgb: Vec<[u16; 3]>,
+    pub attributes: Vec<PointAttributes>,
+}
+
+/// A LAS or LAZ file open for reading in batches.
+pub struct LasBatches {
+    path: PathBuf,
+    reader: Reader,
+    data: PointData,
+    per_batch: u64,
+    read: u64,
+    expected: u64,
+    has_color: bool,
+}
+
+impl LasBatches {
+    pub fn open(path: &Path) -> Result<LasBatches, LasError> {
+        let fail = |message: String| LasError {
+            path: path.to_owned(),
+            message,
+        };
+        let io = |e: std::io::Error| fail(format!("cannot read: {e}"));
+        let mut file = File::open(path).map_err(io)?;
+        let file_bytes = file.metadata().map_err(io)?.len();
+        check_layout(&mut file, file_bytes).map_err(fail)?;
+        file.seek(SeekFrom::Start(0)).map_err(io)?;
+        let header =
+            las::Header::new(BufReader::new(&mut file)).map_err(|e| fail(format!("{e}")))?;
+        if header.point_format().is_compressed {
+            check_laz(&mut file, &header).map_err(fail)?;
+        }
+        file.seek(SeekFrom::Start(0)).map_err(io)?;
+        let reader = Reader::new(BufReader::new(file)).map_err(|e| fail(format!("{e}")))?;
+        let header = reader.header();
+        let format = header.point_format();
+        Ok(LasBatches {
+            path: path.to_owned(),
+            data: PointDataBuilder::new().for_header(header).build(),
+            per_batch: if format.is_compressed {
+                LAZ_BATCH
+            } else {
+                BATCH
+            },
+            read: 0,
+            expected: header.number_of_points(),
+            has_color: format.has_color,
+            reader,
+        })
+    }
+
+    /// Points the header announces.
+    pub fn point_count(&self) -> u64 {
+        self.expected
+    }
+
+    pub fn has_color(&self) -> bool {
+        self.has_color
+    }
+
+    /// Reads the next batch into `out` (cleared first); false once every point is read.
+    pub fn next_batch(&mut self, out: &mut PointBatch) -> Result<bool, LasError> {
+        out.xyz.clear();
+        out.rgb.clear();
+        out.attributes.clear();
+        if self.read >= self.expected {
+            return Ok(false);
+        }
+        let want = self.per_batch.min(self.expected - self.read);
+        let n = fill_contained(&mut self.reader, want, &mut self.data).map_err(|e| LasError {
+            path: self.path.clone(),
+            message: format!(
+                "the header announces {} points; decoding failed after {} ({e}): the file is \
+                 damaged or truncated",
+                self.expected, self.read
+            ),
+        })?;
+        if n == 0 {
+            return Ok(false);
+        }
+        self.read += n;
+        let d = &self.data;
+        out.xyz
+            .extend(d.x().zip(d.y()).zip(d.z()).map(|((x, y), z)| [x, y, z]));
+        if let Some(colors) = d.rgb() {
+            out.rgb.extend(colors.map(|(r, g, b)| [r, g, b]));
+        }
+        out.attributes.extend(
+            d.intensity()
+                .zip(d.classification())
+                .zip(d.return_number().zip(d.number_of_returns()))
+                .map(|((i, c), (r, n))| PointAttributes::new(i, c, r, n)),
+        );
+        Ok(true)
+    }
+}
