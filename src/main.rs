@@ -72,12 +72,21 @@ enum Command {
     /// Builds the sequential point tree of a PLY, LAS or LAZ model and writes it as an .spt file,
     /// which opens instantly (memory-mapped). Shows each stage (load, surfels, tree,
     /// errors, sort, write) with its time, then a summary. The output is written to a
-    /// temporary file and renamed: a failed convert never leaves a partial file.
+    /// temporary file and renamed: a failed convert never leaves a partial file. A LAS
+    /// or LAZ file too large for the memory budget is built out of core: scanned,
+    /// split into jobs spilled to disk beside the output, each job built alone, then
+    /// joined and streamed into the file.
     Convert {
         /// The model: a PLY, LAS or LAZ file.
         input: PathBuf,
         /// The .spt file to write (replaced if it exists).
         output: PathBuf,
+        /// Memory budget in MiB (default: half of the machine's memory).
+        #[arg(long, value_name = "MIB")]
+        memory: Option<u64>,
+        /// Build a LAS or LAZ file out of core even when it would fit in memory.
+        #[arg(long)]
+        out_of_core: bool,
     },
 }
 
@@ -101,7 +110,20 @@ fn main() -> ExitCode {
         Command::View(args) => spt::apps::view::run(*args),
         Command::Bench(args) => spt::apps::bench::run(&args),
         Command::Info { file, json } => spt::apps::info::run(&file, json),
-        Command::Convert { input, output } => spt::apps::convert::run(&input, &output),
+        Command::Convert {
+            input,
+            output,
+            memory,
+            out_of_core,
+        } => {
+            use spt::apps::convert_large;
+            let memory = memory.map_or_else(convert_large::default_memory, |m| m << 20);
+            match convert_large::wanted(&input, memory, out_of_core) {
+                Ok(true) => convert_large::run(&input, &output, memory),
+                Ok(false) => spt::apps::convert::run(&input, &output),
+                Err(e) => Err(e),
+            }
+        }
         Command::Render {
             model,
             output,

@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod cloud_quality;
 pub mod convert;
+pub mod convert_large;
 pub mod frame_args;
 pub mod info;
 pub mod progress;

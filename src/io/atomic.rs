@@ -14,15 +14,15 @@ pub fn temporary_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
 }
 
-/// Calls `write` on a buffered writer to a temporary file, then renames it to `path`.
-pub fn write_atomically<T>(
+/// Like [`write_atomically`], with a writer that can also seek (to fill in a header
+/// once what follows it is written).
+pub fn write_atomically_seekable<T>(
     path: &Path,
-    write: impl FnOnce(&mut dyn Write) -> std::io::Result<T>,
+    write: impl FnOnce(&mut BufWriter<std::fs::File>) -> std::io::Result<T>,
 ) -> std::io::Result<T> {
     let tmp = temporary_path(path);
     let result = (|| {
-        let file = std::fs::File::create(&tmp)?;
-        let mut w = BufWriter::with_capacity(1 << 20, file);
+        let mut w = BufWriter::with_capacity(1 << 20, std::fs::File::create(&tmp)?);
         let value = write(&mut w)?;
         let file = w.into_inner().map_err(|e| e.into_error())?;
         file.sync_all()?;
@@ -34,4 +34,12 @@ pub fn write_atomically<T>(
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// Calls `write` on a buffered writer to a temporary file, then renames it to `path`.
+pub fn write_atomically<T>(
+    path: &Path,
+    write: impl FnOnce(&mut dyn Write) -> std::io::Result<T>,
+) -> std::io::Result<T> {
+    write_atomically_seekable(path, |w| write(w))
 }

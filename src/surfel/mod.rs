@@ -131,6 +131,20 @@ pub fn unit_scale(extent: f64, reach: f64) -> f32 {
 /// Builds the leaf surfels of a model: per vertex from its faces for a mesh, from its
 /// nearest neighbours for a point cloud (or a mesh's isolated vertices).
 pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
+    leaf_surfels_of(g, g.positions.len())
+}
+
+/// The leaf surfels of the first `own` points of a point cloud (no triangles), whose
+/// neighbourhoods see all of its points: a piece of a larger cloud followed by the
+/// points around it (its halo, [`crate::tree::out_of_core`]). The halo's own surfels
+/// are not made.
+pub fn leaf_surfels_of(g: &Geometry, own: usize) -> LeafSurfels {
+    let mut leaves = leaf_surfels_among(g, own);
+    leaves.surfels.truncate(own);
+    leaves
+}
+
+fn leaf_surfels_among(g: &Geometry, own: usize) -> LeafSurfels {
     let reach = (DVec3::from(g.bounds.min) - g.origin)
         .abs()
         .max((DVec3::from(g.bounds.max) - g.origin).abs())
@@ -160,7 +174,7 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
         })
         .collect();
     let oriented = if g.triangles.is_empty() {
-        let all: Vec<u32> = (0..surfels.len() as u32).collect();
+        let all: Vec<u32> = (0..own as u32).collect();
         cloud::neighbour_disks(
             &g.positions,
             scale,
@@ -171,12 +185,15 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
             &mut stats,
         );
         let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
-        surfels.par_iter_mut().enumerate().for_each(|(i, s)| {
-            if given.is_none_or(|n| n[i] == Vec3::ZERO) {
-                s.normal = orientation.apply(s.position, s.normal);
-            }
-        });
-        given.is_some() && stats.given_normals == surfels.len() as u64
+        surfels[..own]
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(i, s)| {
+                if given.is_none_or(|n| n[i] == Vec3::ZERO) {
+                    s.normal = orientation.apply(s.position, s.normal);
+                }
+            });
+        given.is_some() && stats.given_normals == own as u64
     } else {
         mesh::vertex_disks(
             &g.positions,

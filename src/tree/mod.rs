@@ -13,6 +13,7 @@ pub mod attributes;
 pub mod chunks;
 pub mod errors;
 pub mod hierarchy;
+pub mod out_of_core;
 pub mod parent_shape;
 pub mod record;
 pub mod report;
@@ -301,7 +302,7 @@ pub fn build_above(
         Vec<PointAttributes>,
     ),
     (scale, oriented): (f32, bool),
-) -> (NodeSet, Vec<u32>) {
+) -> NodeSet {
     let n = records.len();
     let total = hierarchy.node_count();
     records.resize(total, NodeRecord::new(Vec3::ZERO, 0.0, Vec3::Z, [0; 4]));
@@ -314,15 +315,14 @@ pub fn build_above(
     fill_internal(hierarchy, &levels, slices, (scale, oriented), &Silent);
     let parent_ids = hierarchy.parents();
     link_parents(&mut records, &parent_ids, &levels, n, scale);
-    let set = NodeSet {
+    NodeSet {
         hierarchy: hierarchy.clone(),
         records,
         shapes,
         attributes,
-        parent_ids: parent_ids.clone(),
+        parent_ids,
         meta: TreeMeta::empty(scale),
-    };
-    (set, parent_ids)
+    }
 }
 
 /// [`build_records`] with errors stored relative to `scale` (> 0).
@@ -414,6 +414,12 @@ fn leaf_bounds(leaves: &LeafSurfels) -> (Bounds, DVec3, bool) {
 /// sorted by parent error descending (ties by node id, so the order is the same on
 /// every machine), with parents as list indices.
 pub fn sort_list(set: NodeSet) -> SequentialList {
+    let max_nodes = chunks::chunk_nodes_for(set.records.len());
+    sort_list_chunked(set, max_nodes)
+}
+
+/// [`sort_list`] with subtrees of at most `max_nodes` nodes ([`chunks::cut`]).
+pub fn sort_list_chunked(set: NodeSet, max_nodes: usize) -> SequentialList {
     let NodeSet {
         hierarchy,
         records,
@@ -422,7 +428,6 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
         parent_ids,
         meta,
     } = set;
-    let max_nodes = chunks::chunk_nodes_for(records.len());
     let cut = chunks::cut(&hierarchy, max_nodes);
     drop(hierarchy);
     let mut cut = chunks::by_level(cut, max_nodes / 16, |id| records[id as usize].level);

@@ -108,7 +108,15 @@ pub fn is_spt(path: &Path) -> bool {
 }
 
 fn header_bytes(list: &SequentialList, checksum: u64) -> Vec<u8> {
-    let m = &list.meta;
+    debug_assert_eq!(list.attributes.is_empty(), !list.meta.has_attributes);
+    header_for(&list.meta, list.chunks.len() as u64, checksum)
+}
+
+/// The header of a file of the tree `m` describes (its node count and attributes flag
+/// give the sections' sizes) with `chunk_count` chunks.
+pub fn header_for(m: &TreeMeta, chunk_count: u64, checksum: u64) -> Vec<u8> {
+    let nodes = m.node_count as usize;
+    let attribute_nodes = if m.has_attributes { nodes } else { 0 };
     let mut h = Vec::with_capacity(HEADER_BYTES);
     h.extend_from_slice(MAGIC);
     h.extend_from_slice(&VERSION.to_le_bytes());
@@ -128,11 +136,11 @@ fn header_bytes(list: &SequentialList, checksum: u64) -> Vec<u8> {
     h.extend_from_slice(&m.error_scale.to_le_bytes());
     h.extend_from_slice(&(RECORD_BYTES as u32).to_le_bytes());
     let nodes_at = HEADER_BYTES as u64;
-    let parents_at = nodes_at + (list.nodes.len() * RECORD_BYTES) as u64;
-    let shapes_at = parents_at + 4 * list.parents.len() as u64;
-    let attributes_at = shapes_at + (list.shapes.len() * SHAPE_BYTES) as u64;
-    let chunks_at = attributes_at + (list.attributes.len() * ATTRIBUTE_BYTES) as u64;
-    let size = chunks_at + (list.chunks.len() * CHUNK_BYTES) as u64;
+    let parents_at = nodes_at + (nodes * RECORD_BYTES) as u64;
+    let shapes_at = parents_at + 4 * nodes as u64;
+    let attributes_at = shapes_at + (nodes * SHAPE_BYTES) as u64;
+    let chunks_at = attributes_at + (attribute_nodes * ATTRIBUTE_BYTES) as u64;
+    let size = chunks_at + chunk_count * CHUNK_BYTES as u64;
     for v in [nodes_at, parents_at, size, checksum, shapes_at] {
         h.extend_from_slice(&v.to_le_bytes());
     }
@@ -144,10 +152,13 @@ fn header_bytes(list: &SequentialList, checksum: u64) -> Vec<u8> {
     }
     h.extend_from_slice(&chunks_at.to_le_bytes());
     h.extend_from_slice(&(CHUNK_BYTES as u32).to_le_bytes());
-    h.extend_from_slice(&(list.chunks.len() as u64).to_le_bytes());
+    h.extend_from_slice(&chunk_count.to_le_bytes());
     h.resize(HEADER_BYTES, 0);
     h
 }
+
+/// Where the checksum lies in the header.
+pub const CHECKSUM_OFFSET: u64 = CHECKSUM_AT as u64;
 
 /// XXH3-64 of the header (checksum zeroed) and the `sections` that follow it, in order.
 fn payload_checksum(header: &[u8], sections: &[&[u8]]) -> u64 {

@@ -1,0 +1,291 @@
+//! The end of an out-of-core build: the top tree over the jobs' subtrees, and the file.
+//!
+//! The jobs' split is a binary tree whose leaves are the jobs: it is the top tree's
+//! hierarchy, its leaves the subtrees' roots ([`crate::tree::build_above`] makes the
+//! internal nodes' records, errors and shapes from the roots', and gives each root its
+//! parent error, δ and level). The file lists the top tree's internal nodes first (one
+//! chunk, sorted by parent error, the root first), then each job's list as its part
+//! file holds it, with its nodes' levels shifted by its root's, its parent indices and
+//! chunk starts by its place in the file, and its root's record replaced by the linked
+//! one. The sections are streamed from the part files, hashed as they are written; the
+//! header, known before, gets the checksum last.
+
+use std::fs::File;
+use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+
+use glam::Vec3;
+use xxhash_rust::xxh3::Xxh3;
+
+use super::job::{Model, Part};
+use super::spill::Split;
+use crate::io::PointAttributes;
+use crate::io::atomic::write_atomically_seekable;
+use crate::surfel::shape::SplatShape;
+use crate::tree::chunks::Chunk;
+use crate::tree::hierarchy::{Hierarchy, Internal};
+use crate::tree::spt_file::{CHECKSUM_OFFSET, header_for};
+use crate::tree::{NodeRecord, TreeMeta, attributes, build_above};
+
+/// The top tree in file order, and how each part joins it.
+struct Top {
+    records: Vec<NodeRecord>,
+    shapes: Vec<SplatShape>,
+    attributes: Vec<PointAttributes>,
+    parents: Vec<u32>,
+    /// Per part: its root's linked record and its root's parent (a top list index).
+    roots: Vec<(NodeRecord, u32)>,
+}
+
+/// The split as a hierarchy whose leaves are the jobs (internal nodes in post-order).
+fn hierarchy_of(split: &Split, jobs: usize) -> Hierarchy {
+    fn walk(s: &Split, jobs: u32, out: &mut Vec<Internal>) -> u32 {
+        match s {
+            Split::Job(j) => *j as u32,
+            Split::Node(a, b) => {
+                let (a, b) = (walk(a, jobs, out), walk(b, jobs, out));
+                out.push(Internal {
+                    children: [a, b, 0, 0],
+                    child_count: 2,
+                });
+                jobs + out.len() as u32 - 1
+            }
+        }
+    }
+    let mut internal = Vec::new();
+    walk(split, jobs as u32, &mut internal);
+    Hierarchy {
+        leaf_count: jobs as u32,
+        internal,
+    }
+}
+
+fn top_tree(split: &Split, parts: &[Part], model: &Model, oriented: bool) -> Top {
+    let j = parts.len();
+    let hierarchy = hierarchy_of(split, j);
+    let roots = (
+        parts.iter().map(|p| p.root.0).collect(),
+        parts.iter().map(|p| p.root.1).collect(),
+        if model.has_attributes {
+            parts.iter().map(|p| p.root.2).collect()
+        } else {
+            Vec::new()
+        },
+    );
+    let set = build_above(&hierarchy, roots, (model.error_scale, oriented));
+    // The internal nodes, sorted by parent error (the root, +∞, first).
+    let mut order: Vec<usize> = (j..set.records.len()).collect();
+    order.sort_by_key(|&id| (0xffff - set.records[id].parent_error, id));
+    let mut position = vec![u32::MAX; set.records.len()];
+    for (k, &id) in order.iter().enumerate() {
+        position[id] = k as u32;
+    }
+    let parent_at = |id: usize| match set.parent_ids[id] {
+        u32::MAX => u32::MAX,
+        p => position[p as usize],
+    };
+    Top {
+        records: order.iter().map(|&id| set.records[id]).collect(),
+        shapes: order.iter().map(|&id| set.shapes[id]).collect(),
+        attributes: if model.has_attributes {
+            order.iter().map(|&id| set.attributes[id]).collect()
+        } else {
+            Vec::new()
+        },
+        parents: order.iter().map(|&id| parent_at(id)).collect(),
+        roots: (0..j).map(|k| (set.records[k], parent_at(k))).collect(),
+    }
+}
+
+/// A writer that hashes what it writes.
+struct Hashed<'a> {
+    w: &'a mut BufWriter<File>,
+    hash: Xxh3,
+}
+
+impl Hashed<'_> {
+    fn put(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.hash.update(bytes);
+        self.w.write_all(bytes)
+    }
+}
+
+/// Nodes per slab streamed from a part file.
+const SLAB: usize = 1 << 20;
+
+/// Streams `count` records of `T` from `file` at `at`, each slab changed by `fix`
+/// (given the index of its first record) before it is written.
+fn stream<T: bytemuck::Pod>(
+    file: &mut File,
+    (at, count): (u64, usize),
+    out: &mut Hashed,
+    mut fix: impl FnMut(usize, &mut [T]),
+) -> std::io::Result<()> {
+    file.seek(SeekFrom::Start(at))?;
+    let mut slab = vec![T::zeroed(); SLAB.min(count)];
+    let mut done = 0;
+    while done < count {
+        let n = SLAB.min(count - done);
+        file.read_exact(bytemuck::cast_slice_mut(&mut slab[..n]))?;
+        fix(done, &mut slab[..n]);
+        out.put(bytemuck::cast_slice(&slab[..n]))?;
+        done += n;
+    }
+    Ok(())
+}
+
+/// The meta of the whole tree.
+fn meta(model: &Model, parts: &[Part], top: &Top, oriented: bool) -> TreeMeta {
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for p in parts {
+        lo = lo.min(p.centre_min);
+        hi = hi.max(p.centre_max);
+    }
+    for r in &top.records {
+        lo = lo.min(r.position());
+        hi = hi.max(r.position());
+    }
+    let samples: Vec<PointAttributes> = parts.iter().flat_map(|p| p.intensities.clone()).collect();
+    let level = |k: usize| top.roots.get(k).map_or(0, |r| r.0.level as u32);
+    TreeMeta {
+        origin: model.origin.to_array(),
+        bounds: model.bounds,
+        centre_min: lo.to_array(),
+        centre_max: hi.to_array(),
+        error_scale: model.error_scale,
+        leaf_count: parts.iter().map(|p| p.leaves).sum(),
+        node_count: top.records.len() as u64 + parts.iter().map(|p| p.nodes).sum::<u64>(),
+        depth: (0..parts.len())
+            .map(|k| parts[k].depth + level(k))
+            .max()
+            .unwrap_or(0),
+        has_colors: model.has_colors,
+        oriented_normals: oriented,
+        has_attributes: model.has_attributes,
+        intensity_range: attributes::intensity_range(&samples),
+    }
+}
+
+/// Writes the `.spt` file of the jobs' `parts`, joined by the top tree of `split`,
+/// atomically; returns its meta.
+pub fn write_file(
+    path: &std::path::Path,
+    model: &Model,
+    (split, parts): (&Split, &[Part]),
+) -> anyhow::Result<TreeMeta> {
+    let oriented = parts.iter().all(|p| p.oriented);
+    let top = if parts.len() > 1 {
+        top_tree(split, parts, model, oriented)
+    } else {
+        let root = parts[0].root.0;
+        Top {
+            records: Vec::new(),
+            shapes: Vec::new(),
+            attributes: Vec::new(),
+            parents: Vec::new(),
+            roots: vec![(root, u32::MAX)],
+        }
+    };
+    let meta = meta(model, parts, &top, oriented);
+    let t = top.records.len();
+    let mut bases = Vec::with_capacity(parts.len());
+    let mut at = t as u64;
+    for p in parts {
+        bases.push(at);
+        at += p.nodes;
+    }
+    let top_chunk = (t > 0).then(|| Chunk::of(0, &top.records));
+    let chunk_count = top_chunk.iter().count() as u64 + parts.iter().map(|p| p.chunks).sum::<u64>();
+    write_atomically_seekable(path, |w| {
+        let header = header_for(&meta, chunk_count, 0);
+        let mut out = Hashed {
+            w,
+            hash: Xxh3::new(),
+        };
+        out.put(&header)?;
+        write_sections(
+            &mut out,
+            (parts, &bases),
+            &top,
+            (top_chunk, model.has_attributes),
+        )?;
+        let checksum = out.hash.digest();
+        w.seek(SeekFrom::Start(CHECKSUM_OFFSET))?;
+        w.write_all(&checksum.to_le_bytes())?;
+        Ok(())
+    })?;
+    Ok(meta)
+}
+
+/// The five sections, each from the top tree then every part.
+fn write_sections(
+    out: &mut Hashed,
+    (parts, bases): (&[Part], &[u64]),
+    top: &Top,
+    (top_chunk, has_attributes): (Option<Chunk>, bool),
+) -> std::io::Result<()> {
+    let mut files: Vec<File> = parts
+        .iter()
+        .map(|p| File::open(&p.path))
+        .collect::<Result<_, _>>()?;
+    let record = std::mem::size_of::<NodeRecord>() as u64;
+    let shape = std::mem::size_of::<SplatShape>() as u64;
+    let attribute = std::mem::size_of::<PointAttributes>() as u64;
+    // Offsets of a part's sections, from its node count.
+    let offsets = |n: u64| {
+        let parents = n * record;
+        let shapes = parents + 4 * n;
+        let attributes = shapes + n * shape;
+        let chunks = attributes + if has_attributes { n * attribute } else { 0 };
+        (parents, shapes, attributes, chunks)
+    };
+    out.put(bytemuck::cast_slice(&top.records))?;
+    for (k, (p, f)) in parts.iter().zip(&mut files).enumerate() {
+        let (root, _) = top.roots[k];
+        let shift = root.level;
+        stream::<NodeRecord>(f, (0, p.nodes as usize), out, |first, slab| {
+            for r in slab.iter_mut() {
+                r.level += shift;
+            }
+            if first == 0 {
+                slab[0] = root;
+            }
+        })?;
+    }
+    out.put(bytemuck::cast_slice(&top.parents))?;
+    for (k, (p, f)) in parts.iter().zip(&mut files).enumerate() {
+        let (base, up) = (bases[k] as u32, top.roots[k].1);
+        stream::<u32>(f, (offsets(p.nodes).0, p.nodes as usize), out, |_, slab| {
+            for q in slab.iter_mut() {
+                *q = if *q == u32::MAX { up } else { *q + base };
+            }
+        })?;
+    }
+    out.put(bytemuck::cast_slice(&top.shapes))?;
+    for (p, f) in parts.iter().zip(&mut files) {
+        stream::<SplatShape>(f, (offsets(p.nodes).1, p.nodes as usize), out, |_, _| {})?;
+    }
+    if has_attributes {
+        out.put(bytemuck::cast_slice(&top.attributes))?;
+        for (p, f) in parts.iter().zip(&mut files) {
+            stream::<PointAttributes>(f, (offsets(p.nodes).2, p.nodes as usize), out, |_, _| {})?;
+        }
+    }
+    if let Some(c) = top_chunk {
+        out.put(bytemuck::bytes_of(&c))?;
+    }
+    for (k, (p, f)) in parts.iter().zip(&mut files).enumerate() {
+        let (base, shift) = (bases[k], top.roots[k].0.level as u32);
+        stream::<Chunk>(
+            f,
+            (offsets(p.nodes).3, p.chunks as usize),
+            out,
+            |_, slab| {
+                for c in slab.iter_mut() {
+                    c.start += base;
+                    c.level += shift;
+                }
+            },
+        )?;
+    }
+    Ok(())
+}

@@ -1,0 +1,137 @@
+//! One job of an out-of-core build: its points and halo in, its subtree out. The job
+//! reads its spill files, makes the leaf surfels of its own points (their
+//! neighbourhoods see the halo: the points beyond its border), builds their tree with
+//! the model's error scale, cuts it into chunks, and writes the list to a part file.
+//! What the top tree and the final file need is kept in [`Part`]: the subtree's root,
+//! its sizes, its box, a sample of its intensities. Given its input points, a job
+//! depends on nothing else, so jobs can run anywhere.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use glam::{DVec3, Vec3};
+
+use super::spill::{SpillPoint, read_spill};
+use crate::io::{Bounds, Geometry, PointAttributes};
+use crate::surfel::leaf_surfels_of;
+use crate::surfel::shape::SplatShape;
+use crate::tree::chunks::Chunk;
+use crate::tree::report::Silent;
+use crate::tree::{
+    NodeRecord, SequentialList, build_hierarchy, build_records_scaled, sort_list_chunked,
+};
+
+/// Intensities kept per job for the model's intensity range, at most.
+const INTENSITY_SAMPLE: usize = 1 << 16;
+
+/// What the model shares with every job.
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub origin: DVec3,
+    pub bounds: Bounds,
+    pub error_scale: f32,
+    pub has_colors: bool,
+    pub has_attributes: bool,
+    /// Nodes per subtree chunk ([`crate::tree::chunks::chunk_nodes_for`] of the whole
+    /// model, so that chunks do not depend on how it was split into jobs).
+    pub chunk_nodes: usize,
+}
+
+/// A job's subtree, written to `path` as its list's sections back to back: nodes,
+/// parents (u32::MAX for the root, first), shapes, attributes (when the model has
+/// them), chunks.
+#[derive(Debug, Clone)]
+pub struct Part {
+    pub path: PathBuf,
+    pub root: (NodeRecord, SplatShape, PointAttributes),
+    pub nodes: u64,
+    pub leaves: u64,
+    pub chunks: u64,
+    pub depth: u32,
+    pub centre_min: Vec3,
+    pub centre_max: Vec3,
+    pub oriented: bool,
+    pub intensities: Vec<PointAttributes>,
+}
+
+/// The geometry of a job: its own points first, then its halo.
+fn geometry(model: &Model, own: &[SpillPoint], halo: &[SpillPoint]) -> Geometry {
+    let all = || own.iter().chain(halo);
+    Geometry {
+        origin: model.origin,
+        bounds: model.bounds,
+        core: model.bounds,
+        positions: all().map(|p| Vec3::from(p.position)).collect(),
+        normals: None,
+        colors: model.has_colors.then(|| all().map(|p| p.color).collect()),
+        triangles: Vec::new(),
+        rows: None,
+        attributes: model
+            .has_attributes
+            .then(|| all().map(|p| p.attributes).collect()),
+    }
+}
+
+/// Builds the job of spill files `own` and `halo` into `part`.
+pub fn build(model: &Model, (own, halo): (&Path, &Path), part: &Path) -> anyhow::Result<Part> {
+    let own_points = read_spill(own)?;
+    anyhow::ensure!(
+        !own_points.is_empty(),
+        "{}: a job without points",
+        own.display()
+    );
+    let halo_points = read_spill(halo)?;
+    let g = geometry(model, &own_points, &halo_points);
+    let step = (own_points.len() / INTENSITY_SAMPLE).max(1);
+    let intensities: Vec<PointAttributes> = if model.has_attributes {
+        own_points
+            .iter()
+            .step_by(step)
+            .map(|p| p.attributes)
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let own_count = own_points.len();
+    drop((own_points, halo_points));
+    let mut leaves = leaf_surfels_of(&g, own_count);
+    drop(g);
+    let leaf_count = leaves.surfels.len() as u64;
+    let oriented = leaves.oriented_normals;
+    let hierarchy = build_hierarchy(&mut leaves, &Silent);
+    let set = build_records_scaled(leaves, hierarchy, model.error_scale, &Silent);
+    let list = sort_list_chunked(set, model.chunk_nodes);
+    write_part(&list, part)?;
+    Ok(Part {
+        path: part.to_owned(),
+        root: (
+            list.nodes[0],
+            list.shapes[0],
+            list.attributes.first().copied().unwrap_or_default(),
+        ),
+        nodes: list.nodes.len() as u64,
+        leaves: leaf_count,
+        chunks: list.chunks.len() as u64,
+        depth: list.meta.depth,
+        centre_min: Vec3::from(list.meta.centre_min),
+        centre_max: Vec3::from(list.meta.centre_max),
+        oriented,
+        intensities,
+    })
+}
+
+fn write_part(list: &SequentialList, path: &Path) -> std::io::Result<()> {
+    let mut w = BufWriter::with_capacity(1 << 20, File::create(path)?);
+    let sections: [&[u8]; 5] = [
+        bytemuck::cast_slice(&list.nodes),
+        bytemuck::cast_slice(&list.parents),
+        bytemuck::cast_slice(&list.shapes),
+        bytemuck::cast_slice(&list.attributes),
+        bytemuck::cast_slice::<Chunk, u8>(&list.chunks),
+    ];
+    for s in sections {
+        w.write_all(s)?;
+    }
+    w.flush()
+}

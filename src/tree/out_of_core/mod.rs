@@ -1,0 +1,164 @@
+//! Out-of-core builds (DESIGN.md §5, "Chunks"): a point cloud larger than memory turned
+//! into an `.spt` file while holding only a bounded part of it, in passes over the
+//! input (LAS or LAZ):
+//!
+//! ```text
+//! scan ─► count per grid cell ─► split into jobs ─► spill to job files ─► build each job ─► top tree, file
+//! (bounds)  (64³ cells)        (k-d, ≤ N points)   (own + halo)         (surfels, tree,   (streamed from
+//!                                                                          chunks: a part)   the parts)
+//! ```
+//!
+//! A job holds at most N points (from the memory budget, [`Options::job_points`]) and
+//! the points of its halo: those of the neighbouring cells within a quarter cell of
+//! its border, so that the neighbourhoods of its points near the border see past it.
+//! Each job is built alone from its files ([`job::build`]) into a part file and
+//! dropped; the jobs' roots are joined by the top tree of their split, and the file is
+//! streamed from the parts ([`assemble`]). Selection needs nothing more: the nodes of
+//! every job are chunks of the list (see [`crate::tree::chunks`] for why no hole opens
+//! between them).
+//!
+//! **On many machines.** A job's input is two files and the model's shared values
+//! ([`job::Model`]: origin, bounds, error scale); its output is a part file and a
+//! [`job::Part`] of a few hundred bytes plus a sample of intensities. On an engine such
+//! as Spark or a batch queue, the spill would write the job files to shared storage
+//! (one writer per input split, files concatenated per job), a map stage would run
+//! [`job::build`] per job, and a single reducer would run [`assemble::write_file`]
+//! over the parts it collects: the only step that sees every part, and it streams them.
+
+pub mod assemble;
+pub mod job;
+pub mod spill;
+
+use std::path::Path;
+
+use glam::{DVec3, IVec3};
+
+use crate::tree::TreeMeta;
+use job::{Model, Part};
+use spill::{GRID, Grid};
+
+/// Bytes of memory a job takes per point at its peak (its surfels, k-d tree, nodes and
+/// list: measured on clouds of 1–10 M points, with room to spare).
+pub const BYTES_PER_JOB_POINT: u64 = 320;
+
+/// How an out-of-core build runs.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Points per job at most (a cell of the counting grid holding more is one job).
+    pub job_points: u64,
+    /// Bytes of write buffers for the spill files, all together.
+    pub spill_buffers: u64,
+    /// Where the spill and part files go (removed afterwards).
+    pub temp_dir: std::path::PathBuf,
+}
+
+impl Options {
+    /// The options for a budget of `memory` bytes: jobs of half the budget over
+    /// [`BYTES_PER_JOB_POINT`] (at least 2¹⁶ points), an eighth of it for the spill's
+    /// buffers, the rest for the grid, the parts' roots and the page cache.
+    pub fn for_memory(memory: u64, temp_dir: std::path::PathBuf) -> Options {
+        Options {
+            job_points: (memory / 2 / BYTES_PER_JOB_POINT).max(1 << 16),
+            spill_buffers: memory / 8,
+            temp_dir,
+        }
+    }
+}
+
+/// What a build did.
+#[derive(Debug, Clone)]
+pub struct Built {
+    pub meta: TreeMeta,
+    pub jobs: usize,
+}
+
+/// Hears how a build goes: a stage starts (with its total of points, 0 if unknown),
+/// points go by; the next stage's start ends the one before.
+pub trait Progress: Sync {
+    fn stage(&self, name: &'static str, total: u64);
+    fn advance(&self, points: u64);
+}
+
+/// Builds the `.spt` file of the LAS or LAZ file `input` at `output` within `options`.
+pub fn build_file(
+    input: &Path,
+    output: &Path,
+    options: &Options,
+    progress: &dyn Progress,
+) -> anyhow::Result<Built> {
+    progress.stage("scan", 0);
+    let scan = spill::scan(input)?;
+    progress.stage("count", scan.count);
+    let grid = Grid::over(&scan.bounds);
+    let counts = spill::count_cells(input, &grid)?;
+    let mut jobs = Vec::new();
+    let whole = (IVec3::ZERO, IVec3::splat(GRID));
+    let split = spill::split(&counts, &grid, whole, options.job_points, &mut jobs);
+    let table = spill::cell_jobs(&jobs);
+    let dir = tempfile::Builder::new()
+        .prefix("spt-build-")
+        .tempdir_in(&options.temp_dir)?;
+    progress.stage("spill", scan.count);
+    let lo = DVec3::from(scan.bounds.min);
+    let origin = (lo + DVec3::from(scan.bounds.max)) * 0.5;
+    let buffer = (options.spill_buffers / (2 * jobs.len() as u64)).clamp(1 << 12, 1 << 20) as usize;
+    let files = spill::spill(
+        input,
+        (&grid, &table, jobs.len()),
+        (origin, scan.eight_bit),
+        dir.path(),
+        buffer,
+        |n| progress.advance(n),
+    )?;
+    let model = Model {
+        origin,
+        bounds: scan.bounds,
+        error_scale: (DVec3::from(scan.bounds.max) - lo).max_element().max(1e-30) as f32,
+        has_colors: scan.has_color,
+        has_attributes: true,
+        // A cloud's tree has about 1.5 nodes per point.
+        chunk_nodes: crate::tree::chunks::chunk_nodes_for((scan.count + scan.count / 2) as usize),
+    };
+    progress.stage("build", scan.count);
+    let mut parts: Vec<Part> = Vec::with_capacity(jobs.len());
+    for (j, job) in jobs.iter().enumerate() {
+        if job.points == 0 {
+            continue;
+        }
+        let part = dir.path().join(format!("job{j}.part"));
+        parts.push(job::build(&model, (&files.own[j], &files.halo[j]), &part)?);
+        std::fs::remove_file(&files.own[j])?;
+        std::fs::remove_file(&files.halo[j])?;
+        progress.advance(job.points);
+    }
+    progress.stage("write", 0);
+    let split = drop_empty(split, &jobs);
+    let meta = assemble::write_file(output, &model, (&split, &parts))?;
+    Ok(Built {
+        meta,
+        jobs: parts.len(),
+    })
+}
+
+/// The split without its empty jobs, the rest renumbered in order.
+fn drop_empty(split: spill::Split, jobs: &[spill::JobBox]) -> spill::Split {
+    use spill::Split;
+    let mut number = vec![usize::MAX; jobs.len()];
+    let mut k = 0;
+    for (j, job) in jobs.iter().enumerate() {
+        if job.points > 0 {
+            number[j] = k;
+            k += 1;
+        }
+    }
+    fn walk(s: Split, number: &[usize]) -> Option<Split> {
+        match s {
+            Split::Job(j) => (number[j] != usize::MAX).then(|| Split::Job(number[j])),
+            Split::Node(a, b) => match (walk(*a, number), walk(*b, number)) {
+                (Some(a), Some(b)) => Some(Split::Node(Box::new(a), Box::new(b))),
+                (a, b) => a.or(b),
+            },
+        }
+    }
+    walk(split, &number).expect("a cloud with points has a job with points")
+}

@@ -1,0 +1,330 @@
+//! The passes over the input before any tree is built: a scan (bounds, count, whether
+//! colours fit 8 bits), a count of the points per cell of a grid over the bounds, the
+//! split of the grid into jobs of at most a given number of points (a k-d tree over
+//! the cells, halving the count at each split), and the spill of every point to its
+//! job's file, and to its neighbours' halo files when it lies within a margin of their
+//! cells.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DVec3, IVec3};
+
+use crate::io::las::{LasBatches, PointBatch};
+use crate::io::{Bounds, PointAttributes};
+
+/// Cells per axis of the counting grid.
+pub const GRID: i32 = 64;
+/// A point near a cell's face (within this fraction of the cell) is also spilled to the
+/// job across that face, as part of its halo.
+pub const HALO: f64 = 0.25;
+
+/// A point as the spill files hold it (20 bytes): position relative to the origin,
+/// colour and LiDAR attributes.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct SpillPoint {
+    pub position: [f32; 3],
+    pub color: [u8; 4],
+    pub attributes: PointAttributes,
+}
+
+/// What the scan found.
+#[derive(Debug, Clone)]
+pub struct Scan {
+    pub count: u64,
+    pub bounds: Bounds,
+    pub has_color: bool,
+    /// No colour channel exceeds 255: LAS colours are taken as 8-bit.
+    pub eight_bit: bool,
+}
+
+/// Calls `f` on every batch of the file, finite points only.
+pub fn for_each_batch(path: &Path, mut f: impl FnMut(&PointBatch)) -> anyhow::Result<()> {
+    let mut reader = LasBatches::open(path)?;
+    let mut batch = PointBatch::default();
+    while reader.next_batch(&mut batch)? {
+        f(&batch);
+    }
+    Ok(())
+}
+
+/// Pass 1: bounds of the finite points, their count, colours.
+pub fn scan(path: &Path) -> anyhow::Result<Scan> {
+    let has_color = LasBatches::open(path)?.has_color();
+    let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+    let (mut count, mut eight_bit) = (0u64, true);
+    for_each_batch(path, |b| {
+        for p in b
+            .xyz
+            .iter()
+            .map(|p| DVec3::from(*p))
+            .filter(|p| p.is_finite())
+        {
+            lo = lo.min(p);
+            hi = hi.max(p);
+            count += 1;
+        }
+        eight_bit &= b.rgb.iter().flatten().all(|&c| c <= 255);
+    })?;
+    anyhow::ensure!(
+        count > 0,
+        "{}: the file holds no finite point",
+        path.display()
+    );
+    Ok(Scan {
+        count,
+        bounds: Bounds {
+            min: lo.to_array(),
+            max: hi.to_array(),
+        },
+        has_color,
+        eight_bit,
+    })
+}
+
+/// The counting grid over the bounds.
+#[derive(Debug, Clone)]
+pub struct Grid {
+    pub min: DVec3,
+    pub cell: DVec3,
+}
+
+impl Grid {
+    pub fn over(bounds: &Bounds) -> Grid {
+        let min = DVec3::from(bounds.min);
+        let extent = (DVec3::from(bounds.max) - min).max(DVec3::splat(1e-30));
+        Grid {
+            min,
+            cell: extent / GRID as f64,
+        }
+    }
+
+    /// The cell of `p` (clamped to the grid) and its position within it, 0–1 per axis.
+    pub fn locate(&self, p: DVec3) -> (IVec3, DVec3) {
+        let f = (p - self.min) / self.cell;
+        let i = f
+            .floor()
+            .as_ivec3()
+            .clamp(IVec3::ZERO, IVec3::splat(GRID - 1));
+        (i, f - i.as_dvec3())
+    }
+
+    pub fn index(i: IVec3) -> usize {
+        ((i.z * GRID + i.y) * GRID + i.x) as usize
+    }
+}
+
+/// A job of the split: a box of cells (`lo..hi` per axis) and its points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JobBox {
+    pub lo: IVec3,
+    pub hi: IVec3,
+    pub points: u64,
+}
+
+/// The split of the grid into jobs: a binary tree whose leaves are the jobs.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Split {
+    Job(usize),
+    Node(Box<Split>, Box<Split>),
+}
+
+/// Pass 2: points per cell.
+pub fn count_cells(path: &Path, grid: &Grid) -> anyhow::Result<Vec<u64>> {
+    let mut counts = vec![0u64; (GRID * GRID * GRID) as usize];
+    for_each_batch(path, |b| {
+        for p in b
+            .xyz
+            .iter()
+            .map(|p| DVec3::from(*p))
+            .filter(|p| p.is_finite())
+        {
+            counts[Grid::index(grid.locate(p).0)] += 1;
+        }
+    })?;
+    Ok(counts)
+}
+
+fn box_count(counts: &[u64], lo: IVec3, hi: IVec3) -> u64 {
+    let mut n = 0;
+    for z in lo.z..hi.z {
+        for y in lo.y..hi.y {
+            for x in lo.x..hi.x {
+                n += counts[Grid::index(IVec3::new(x, y, z))];
+            }
+        }
+    }
+    n
+}
+
+/// Splits the cells `lo..hi` until each part holds at most `max_points` (or is one
+/// cell): along the axis of the box's longest extent, at the cell plane nearest to
+/// half its points. Jobs are numbered in the order of the tree's leaves.
+pub fn split(
+    counts: &[u64],
+    grid: &Grid,
+    (lo, hi): (IVec3, IVec3),
+    max_points: u64,
+    jobs: &mut Vec<JobBox>,
+) -> Split {
+    let points = box_count(counts, lo, hi);
+    let size = hi - lo;
+    let extent = size.as_dvec3() * grid.cell;
+    let axis = (0..3)
+        .filter(|&k| size[k] > 1)
+        .max_by(|&a, &b| extent[a].total_cmp(&extent[b]));
+    let Some(axis) = axis.filter(|_| points > max_points) else {
+        jobs.push(JobBox { lo, hi, points });
+        return Split::Job(jobs.len() - 1);
+    };
+    // The plane where the running count first reaches half, kept inside the box.
+    let mut running = 0;
+    let mut at = lo[axis] + 1;
+    for plane in lo[axis]..hi[axis] - 1 {
+        let (mut a, mut b) = (lo, hi);
+        a[axis] = plane;
+        b[axis] = plane + 1;
+        running += box_count(counts, a, b);
+        at = plane + 1;
+        if 2 * running >= points {
+            break;
+        }
+    }
+    let (mut left_hi, mut right_lo) = (hi, lo);
+    left_hi[axis] = at;
+    right_lo[axis] = at;
+    let left = split(counts, grid, (lo, left_hi), max_points, jobs);
+    let right = split(counts, grid, (right_lo, hi), max_points, jobs);
+    Split::Node(Box::new(left), Box::new(right))
+}
+
+/// Each cell's job.
+pub fn cell_jobs(jobs: &[JobBox]) -> Vec<u32> {
+    let mut table = vec![0u32; (GRID * GRID * GRID) as usize];
+    for (j, job) in jobs.iter().enumerate() {
+        for z in job.lo.z..job.hi.z {
+            for y in job.lo.y..job.hi.y {
+                for x in job.lo.x..job.hi.x {
+                    table[Grid::index(IVec3::new(x, y, z))] = j as u32;
+                }
+            }
+        }
+    }
+    table
+}
+
+/// The spill files of the jobs: each job's own points, and its halo.
+pub struct SpillFiles {
+    pub own: Vec<PathBuf>,
+    pub halo: Vec<PathBuf>,
+}
+
+/// The jobs other than `job` whose cells lie within [`HALO`] of `p`'s cell faces.
+fn halo_jobs(table: &[u32], (cell, frac): (IVec3, DVec3), job: u32, out: &mut Vec<u32>) {
+    out.clear();
+    let steps = |k: usize| {
+        let mut s = vec![0];
+        if frac[k] < HALO && cell[k] > 0 {
+            s.push(-1);
+        }
+        if frac[k] > 1.0 - HALO && cell[k] < GRID - 1 {
+            s.push(1);
+        }
+        s
+    };
+    let (sx, sy, sz) = (steps(0), steps(1), steps(2));
+    if sx.len() + sy.len() + sz.len() == 3 {
+        return;
+    }
+    for &dz in &sz {
+        for &dy in &sy {
+            for &dx in &sx {
+                let other = table[Grid::index(cell + IVec3::new(dx, dy, dz))];
+                if other != job && !out.contains(&other) {
+                    out.push(other);
+                }
+            }
+        }
+    }
+}
+
+/// Pass 3: every finite point to its job's file and to the halo files of the jobs
+/// around it, relative to `origin`, colours as 8-bit RGBA.
+pub fn spill(
+    path: &Path,
+    (grid, table, job_count): (&Grid, &[u32], usize),
+    (origin, eight_bit): (DVec3, bool),
+    dir: &Path,
+    buffer_bytes: usize,
+    mut progress: impl FnMut(u64),
+) -> anyhow::Result<SpillFiles> {
+    let files = SpillFiles {
+        own: (0..job_count)
+            .map(|j| dir.join(format!("job{j}.own")))
+            .collect(),
+        halo: (0..job_count)
+            .map(|j| dir.join(format!("job{j}.halo")))
+            .collect(),
+    };
+    let open = |p: &PathBuf| -> std::io::Result<BufWriter<File>> {
+        Ok(BufWriter::with_capacity(buffer_bytes, File::create(p)?))
+    };
+    let mut own: Vec<BufWriter<File>> = files.own.iter().map(open).collect::<Result<_, _>>()?;
+    let mut halo: Vec<BufWriter<File>> = files.halo.iter().map(open).collect::<Result<_, _>>()?;
+    let mut failed: Option<std::io::Error> = None;
+    let mut around = Vec::new();
+    for_each_batch(path, |b| {
+        for (i, p) in b.xyz.iter().enumerate() {
+            let p = DVec3::from(*p);
+            if !p.is_finite() {
+                continue;
+            }
+            let color = b.rgb.get(i).map_or(crate::surfel::DEFAULT_COLOR, |c| {
+                let c = c.map(|v| if eight_bit { v as u8 } else { (v >> 8) as u8 });
+                [c[0], c[1], c[2], 255]
+            });
+            let point = SpillPoint {
+                position: (p - origin).as_vec3().to_array(),
+                color,
+                attributes: b.attributes[i],
+            };
+            let located = grid.locate(p);
+            let job = table[Grid::index(located.0)];
+            let bytes = bytemuck::bytes_of(&point);
+            let mut result = own[job as usize].write_all(bytes);
+            halo_jobs(table, located, job, &mut around);
+            for &other in &around {
+                result = result.and(halo[other as usize].write_all(bytes));
+            }
+            if let Err(e) = result {
+                failed.get_or_insert(e);
+            }
+        }
+        progress(b.xyz.len() as u64);
+    })?;
+    if let Some(e) = failed {
+        return Err(e.into());
+    }
+    for w in own.iter_mut().chain(halo.iter_mut()) {
+        w.flush()?;
+    }
+    Ok(files)
+}
+
+/// The points of a spill file, read straight into their vector.
+pub fn read_spill(path: &Path) -> anyhow::Result<Vec<SpillPoint>> {
+    let mut file = File::open(path)?;
+    let bytes = file.metadata()?.len() as usize;
+    let size = std::mem::size_of::<SpillPoint>();
+    anyhow::ensure!(
+        bytes.is_multiple_of(size),
+        "{}: a spill file of {bytes} bytes",
+        path.display()
+    );
+    let mut points = vec![SpillPoint::zeroed(); bytes / size];
+    std::io::Read::read_exact(&mut file, bytemuck::cast_slice_mut(&mut points))?;
+    Ok(points)
+}

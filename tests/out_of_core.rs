@@ -1,0 +1,59 @@
+//! Out-of-core builds (issue 15): a LAS cloud split into jobs, each built alone with
+//! the points around its border, joined by a top tree and streamed to an `.spt` file.
+//! The file opens and validates, its list is a tree whose chunks are each sorted, no
+//! leaf is left uncovered on random views and no drawn node lies outside the CPU's
+//! ranges, and it holds every point, as the in-memory build does.
+
+mod common;
+
+use spt::tree::out_of_core::{Options, Progress, build_file};
+use spt::tree::select::{TreeView, check_views, random_views};
+use spt::tree::spt_file::SptFile;
+use spt::tree::validate::check_structure;
+
+struct Quiet;
+
+impl Progress for Quiet {
+    fn stage(&self, _: &'static str, _: u64) {}
+    fn advance(&self, _: u64) {}
+}
+
+#[test]
+fn a_cloud_built_in_jobs_is_one_hole_free_tree() {
+    let dir = common::temp_dir();
+    let input = dir.path().join("tile.las");
+    std::fs::write(&input, common::las_files::sample(64 * 400, false)).unwrap();
+    let output = dir.path().join("tile.spt");
+    let options = Options {
+        job_points: 3000,
+        spill_buffers: 1 << 20,
+        temp_dir: dir.path().to_owned(),
+    };
+    let built = build_file(&input, &output, &options, &Quiet).unwrap();
+    assert!(built.jobs >= 8, "{} jobs", built.jobs);
+    let file = SptFile::open(&output).unwrap();
+    let list = file.to_list();
+    assert_eq!(list.meta.leaf_count, 64 * 400);
+    check_structure(&list.meta, &list.nodes, &list.parents, &list.chunks).unwrap();
+    common::assert_tree_invariants(&list, "out of core");
+    let view = TreeView::new(&list.meta, &list.nodes, &list.chunks);
+    let stats = check_views(
+        &view,
+        &list.parents,
+        &random_views(&list.meta, 200, 1.0, 100.0, 11),
+    );
+    eprintln!(
+        "{} jobs, {} chunks: {stats:?}",
+        built.jobs,
+        list.chunks.len()
+    );
+    assert_eq!((stats.holes, stats.past_prefix), (0, 0), "{stats:?}");
+    // Only the file is left beside the input.
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(left.len(), 2, "{left:?}");
+    // The in-memory build of the same file: the same leaves, about as many nodes.
+    let memory = spt::tree::scene::Scene::open(&input).unwrap();
+    assert_eq!(memory.meta().leaf_count, list.meta.leaf_count);
+    let ratio = list.meta.node_count as f64 / memory.meta().node_count as f64;
+    assert!((0.97..1.03).contains(&ratio), "{ratio}");
+}
