@@ -413,6 +413,9 @@ pub struct SptInfo {
     #[serde(flatten)]
     pub meta: TreeMeta,
     pub record_bytes: usize,
+    /// Chunks of the list (each sorted on its own, with its box), and the most nodes in one.
+    pub chunks: usize,
+    pub largest_chunk: u32,
     /// The root's error, model units.
     pub root_error: f64,
     pub open_seconds: f64,
@@ -432,6 +435,8 @@ impl SptInfo {
         } else {
             None
         };
+        let chunks = file.chunks().len();
+        let largest_chunk = file.chunks().iter().map(|c| c.count).max().unwrap_or(0);
         let scale = file.meta.error_scale;
         let root_error = file
             .nodes()
@@ -447,6 +452,8 @@ impl SptInfo {
             invalid,
             meta: file.meta.clone(),
             record_bytes: std::mem::size_of::<NodeRecord>(),
+            chunks,
+            largest_chunk,
             root_error,
             open_seconds,
             verify_seconds,
@@ -483,6 +490,14 @@ impl SptInfo {
                 count(m.node_count - m.leaf_count),
                 m.depth,
                 self.record_bytes
+            ),
+        );
+        line(
+            "chunks",
+            format!(
+                "{} (at most {} nodes each)",
+                count(self.chunks as u64),
+                count(self.largest_chunk as u64)
             ),
         );
         place_fields(&mut out, &m.bounds, m.origin);

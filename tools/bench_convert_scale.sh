@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# Conversion at scale (issue 15), against PotreeConverter 2 built from its public
+# source (tools/build_potree.sh): the Lucy-size mesh (14,028,800 vertices; spt reads the
+# PLY, Potree the same points as LAS, tools/ply_to_las.py) and a generated city tile of
+# 200 M points with colours (LAS, tools/gen_cloud.rs). Runs alternate spt and Potree on
+# one machine; wall time and peak resident memory from GNU time. Prints a Markdown table.
+#
+#   tools/bench_convert_scale.sh          # RUNS=3 on Lucy, 1 on the 200 M tile
+#   POINTS=50000000 tools/bench_convert_scale.sh   # a smaller tile
+set -euo pipefail
+cd "$(dirname "$0")/.."
+runs=${RUNS:-3}
+points=${POINTS:-200000000}
+memory=${MEMORY_MIB:-4096}
+cargo build --release --quiet --bin spt --example gen_model --example gen_cloud
+potree=$(tools/build_potree.sh)
+mkdir -p data/large
+lucy=data/large/lucy_knot.ply
+city=data/large/city_$((points / 1000000))m.las
+[ -f "$lucy" ] || ./target/release/examples/gen_model --preset lucy
+[ -f "${lucy%.ply}.las" ] || python3 tools/ply_to_las.py "$lucy" "${lucy%.ply}.las"
+[ -f "$city" ] || ./target/release/examples/gen_cloud --points "$points" --out "$city"
+logs=$(mktemp -d)
+# One timed run: "seconds peak_kib" appended to $logs/$1.
+timed() {
+  local name=$1; shift
+  /usr/bin/time -f "%e %M" -o "$logs/time" "$@" > "$logs/$name.out" 2>&1
+  cat "$logs/time" >> "$logs/$name"
+}
+for i in $(seq "$runs"); do
+  timed spt_lucy ./target/release/spt convert "$lucy" "$logs/lucy.spt"
+  rm -rf "$logs/potree_lucy"
+  timed potree_lucy "$potree" "${lucy%.ply}.las" -o "$logs/potree_lucy"
+done
+timed spt_city ./target/release/spt convert "$city" "$logs/city.spt" --memory "$memory"
+cp "$logs/spt_city.out" "$logs/spt_city.stages"
+rm -f "$logs/city.spt"
+if [ -z "${SKIP_POTREE_CITY:-}" ]; then
+  timed potree_city "$potree" "$city" -o "$logs/potree_city"
+  rm -rf "$logs/potree_city"
+fi
+python3 - "$logs" "$points" <<'PY'
+import sys, os, statistics, datetime
+logs, points = sys.argv[1], int(sys.argv[2])
+def runs(name):
+    path = os.path.join(logs, name)
+    if not os.path.exists(path):
+        return None
+    rows = [tuple(map(float, l.split())) for l in open(path) if l.strip()]
+    return statistics.median(r[0] for r in rows), max(r[1] for r in rows) / 2**20, len(rows)
+cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
+mem = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
+print(f"{datetime.date.today()}, {os.cpu_count()} cores ({cpu}), {mem:.0f} GiB; median wall time, largest peak memory.\n")
+print("| model | points | spt convert | PotreeConverter 2 | time spt / Potree | memory spt / Potree |")
+print("| --- | --- | --- | --- | --- | --- |")
+for label, n, a, b in [("Lucy-size mesh", 14028800, "spt_lucy", "potree_lucy"), (f"city tile", points, "spt_city", "potree_city")]:
+    s, p = runs(a), runs(b)
+    cell = lambda r: "–" if r is None else f"{r[0]:.1f} s, {r[1]:.2f} GiB ({n / r[0] / 1e6:.2f} M points/s, {r[2]} run{'s' if r[2] > 1 else ''})"
+    ratio = lambda k: "–" if p is None else f"{s[k] / p[k]:.2f}"
+    print(f"| {label} | {n:,} | {cell(s)} | {cell(p)} | {ratio(0)} | {ratio(1)} |")
+print("\nspt's stages on the city tile:\n\n```")
+print(open(os.path.join(logs, "spt_city.stages")).read().strip())
+print("```")
+PY

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Builds PotreeConverter 2 from its public source, for the conversion comparison of
+# issue 15 (tools/bench_convert_scale.sh). Its code stays out of this repository: it is
+# cloned (or taken from POTREE_SRC, a checkout) into target/potree and built there.
+#
+#   tools/build_potree.sh            # prints the path of the PotreeConverter binary
+#
+# Needs cmake, a C++20 compiler and libtbb (apt-get install -y cmake g++ libtbb-dev).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=target/potree
+mkdir -p "$root"
+if [ -n "${POTREE_SRC:-}" ]; then
+  rm -rf "$root/src" && mkdir -p "$root/src"
+  if [ -d "$POTREE_SRC/.git" ] || git -C "$POTREE_SRC" rev-parse --git-dir > /dev/null 2>&1; then
+    # What the build reads (a snapshot may lack the web viewer's large files).
+    git -C "$POTREE_SRC" archive HEAD CMakeLists.txt Converter LICENSE README.md | tar -x -C "$root/src"
+  else
+    cp -r "$POTREE_SRC"/. "$root/src"
+  fi
+elif [ ! -d "$root/src" ]; then
+  git clone --depth 1 https://github.com/potree/PotreeConverter "$root/src" >&2
+fi
+mkdir -p "$root/src/resources/page_template"
+cmake -S "$root/src" -B "$root/build" -DCMAKE_BUILD_TYPE=Release > "$root/cmake.log" 2>&1
+cmake --build "$root/build" -j "${JOBS:-2}" > "$root/build.log" 2>&1 || { tail -30 "$root/build.log" >&2; exit 1; }
+echo "$root/build/PotreeConverter"
