@@ -3,14 +3,11 @@
 //! before the decoder sees the file, then batches of positions (f64, the file's
 //! coordinates), 16-bit colours and attributes.
 
-use std::fs::File;
-use std::io::{BufReader, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 use las::{PointData, PointDataBuilder, Reader};
 
-use super::checks::{check_layout, check_laz};
-use super::{BATCH, LAZ_BATCH, LasError, fill_contained};
+use super::{BATCH, LAZ_BATCH, LasError, fill_contained, open_checked};
 use crate::io::PointAttributes;
 
 /// One batch of points.
@@ -35,22 +32,7 @@ pub struct LasBatches {
 
 impl LasBatches {
     pub fn open(path: &Path) -> Result<LasBatches, LasError> {
-        let fail = |message: String| LasError {
-            path: path.to_owned(),
-            message,
-        };
-        let io = |e: std::io::Error| fail(format!("cannot read: {e}"));
-        let mut file = File::open(path).map_err(io)?;
-        let file_bytes = file.metadata().map_err(io)?.len();
-        check_layout(&mut file, file_bytes).map_err(fail)?;
-        file.seek(SeekFrom::Start(0)).map_err(io)?;
-        let header =
-            las::Header::new(BufReader::new(&mut file)).map_err(|e| fail(format!("{e}")))?;
-        if header.point_format().is_compressed {
-            check_laz(&mut file, &header).map_err(fail)?;
-        }
-        file.seek(SeekFrom::Start(0)).map_err(io)?;
-        let reader = Reader::new(BufReader::new(file)).map_err(|e| fail(format!("{e}")))?;
+        let (reader, _) = open_checked(path)?;
         let header = reader.header();
         let format = header.point_format();
         Ok(LasBatches {

@@ -96,17 +96,7 @@ pub fn read_las(path: &Path) -> Result<LasModel, LasError> {
         path: path.to_owned(),
         message,
     };
-    let io = |e: std::io::Error| fail(format!("cannot read: {e}"));
-    let mut file = File::open(path).map_err(io)?;
-    let file_bytes = file.metadata().map_err(io)?.len();
-    check_layout(&mut file, file_bytes).map_err(fail)?;
-    file.seek(SeekFrom::Start(0)).map_err(io)?;
-    let header = las::Header::new(BufReader::new(&mut file)).map_err(|e| fail(format!("{e}")))?;
-    if header.point_format().is_compressed {
-        check_laz(&mut file, &header).map_err(fail)?;
-    }
-    file.seek(SeekFrom::Start(0)).map_err(io)?;
-    let mut reader = Reader::new(BufReader::new(file)).map_err(|e| fail(format!("{e}")))?;
+    let (mut reader, file_bytes) = open_checked(path)?;
     let points = decode(&mut reader, file_bytes).map_err(fail)?;
     let eight_bit = points.eight_bit_rgb();
     let summary = summarize(reader.header(), &points, eight_bit);
@@ -122,6 +112,27 @@ pub fn read_las(path: &Path) -> Result<LasModel, LasError> {
 }
 
 /// The decoded points: f64 positions and, when the format has them, 16-bit RGB.
+/// A reader of the file at `path`, once [`checks`] have held its sizes against the
+/// file, and the file's size.
+fn open_checked(path: &Path) -> Result<(Reader, u64), LasError> {
+    let fail = |message: String| LasError {
+        path: path.to_owned(),
+        message,
+    };
+    let io = |e: std::io::Error| fail(format!("cannot read: {e}"));
+    let mut file = File::open(path).map_err(io)?;
+    let file_bytes = file.metadata().map_err(io)?.len();
+    check_layout(&mut file, file_bytes).map_err(fail)?;
+    file.seek(SeekFrom::Start(0)).map_err(io)?;
+    let header = las::Header::new(BufReader::new(&mut file)).map_err(|e| fail(format!("{e}")))?;
+    if header.point_format().is_compressed {
+        check_laz(&mut file, &header).map_err(fail)?;
+    }
+    file.seek(SeekFrom::Start(0)).map_err(io)?;
+    let reader = Reader::new(BufReader::new(file)).map_err(|e| fail(format!("{e}")))?;
+    Ok((reader, file_bytes))
+}
+
 struct LasPoints {
     xyz: Vec<[f64; 3]>,
     rgb: Option<Vec<[u16; 3]>>,

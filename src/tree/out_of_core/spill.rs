@@ -41,7 +41,15 @@ pub struct Scan {
     pub eight_bit: bool,
 }
 
-/// Calls `f` on every batch of the file, finite points only.
+/// The finite positions of a batch.
+fn finite(b: &PointBatch) -> impl Iterator<Item = DVec3> + '_ {
+    b.xyz
+        .iter()
+        .map(|p| DVec3::from(*p))
+        .filter(|p| p.is_finite())
+}
+
+/// Calls `f` on every batch of the file.
 pub fn for_each_batch(path: &Path, mut f: impl FnMut(&PointBatch)) -> anyhow::Result<()> {
     let mut reader = LasBatches::open(path)?;
     let mut batch = PointBatch::default();
@@ -57,12 +65,7 @@ pub fn scan(path: &Path) -> anyhow::Result<Scan> {
     let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
     let (mut count, mut eight_bit) = (0u64, true);
     for_each_batch(path, |b| {
-        for p in b
-            .xyz
-            .iter()
-            .map(|p| DVec3::from(*p))
-            .filter(|p| p.is_finite())
-        {
+        for p in finite(b) {
             lo = lo.min(p);
             hi = hi.max(p);
             count += 1;
@@ -136,12 +139,7 @@ pub enum Split {
 pub fn count_cells(path: &Path, grid: &Grid) -> anyhow::Result<Vec<u64>> {
     let mut counts = vec![0u64; (GRID * GRID * GRID) as usize];
     for_each_batch(path, |b| {
-        for p in b
-            .xyz
-            .iter()
-            .map(|p| DVec3::from(*p))
-            .filter(|p| p.is_finite())
-        {
+        for p in finite(b) {
             counts[Grid::index(grid.locate(p).0)] += 1;
         }
     })?;
