@@ -30,11 +30,11 @@ pub fn default_memory() -> u64 {
 /// Whether `input` is a LAS or LAZ file that should be built out of core within
 /// `memory` bytes.
 pub fn wanted(input: &Path, memory: u64, forced: bool) -> anyhow::Result<bool> {
-    if !crate::io::las::is_las(
-        &std::fs::read(input)
-            .map(|b| b[..4.min(b.len())].to_vec())
-            .unwrap_or_default(),
-    ) {
+    // The magic alone: the file may be larger than memory.
+    let mut magic = [0u8; 4];
+    let read =
+        std::fs::File::open(input).and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic));
+    if read.is_err() || !crate::io::las::is_las(&magic) {
         anyhow::ensure!(
             !forced,
             "{}: --out-of-core reads LAS and LAZ files",
