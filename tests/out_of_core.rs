@@ -56,4 +56,24 @@ fn a_cloud_built_in_jobs_is_one_hole_free_tree() {
     assert_eq!(memory.meta().leaf_count, list.meta.leaf_count);
     let ratio = list.meta.node_count as f64 / memory.meta().node_count as f64;
     assert!((0.97..1.03).contains(&ratio), "{ratio}");
+    // The leaves carry the colours the in-memory reader gives the same points.
+    let memory_list = match &memory.tree {
+        spt::tree::scene::TreeSource::Memory(l) => l.clone(),
+        spt::tree::scene::TreeSource::File(f) => f.to_list(),
+    };
+    assert_eq!(leaf_colors(&list), leaf_colors(&memory_list));
+}
+
+/// The colours of a list's leaves (the nodes no node has as parent), sorted.
+fn leaf_colors(list: &spt::tree::SequentialList) -> Vec<[u8; 4]> {
+    let mut parent = vec![false; list.nodes.len()];
+    for &p in list.parents.iter().filter(|&&p| p != u32::MAX) {
+        parent[p as usize] = true;
+    }
+    let mut colors: Vec<[u8; 4]> = (0..list.nodes.len())
+        .filter(|&i| !parent[i])
+        .map(|i| list.nodes[i].color)
+        .collect();
+    colors.sort_unstable();
+    colors
 }

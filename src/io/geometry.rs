@@ -172,7 +172,7 @@ pub fn unit_vector(v: DVec3) -> Option<Vec3> {
 
 /// A colour channel of type `s` as 8 bits: integers are taken as 0–255 (ushort as
 /// 0–65535), floats as 0–1.
-fn channel(v: f64, s: Scalar) -> u8 {
+pub(crate) fn channel(v: f64, s: Scalar) -> u8 {
     let v = match s {
         Scalar::F32 | Scalar::F64 => v * 255.0,
         Scalar::U16 => v / 257.0,

@@ -280,10 +280,9 @@ pub fn spill(
             if !p.is_finite() {
                 continue;
             }
-            let color = b.rgb.get(i).map_or(crate::surfel::DEFAULT_COLOR, |c| {
-                let c = c.map(|v| if eight_bit { v as u8 } else { (v >> 8) as u8 });
-                [c[0], c[1], c[2], 255]
-            });
+            let color = b
+                .color(i, eight_bit)
+                .unwrap_or(crate::surfel::DEFAULT_COLOR);
             let point = SpillPoint {
                 position: (p - origin).as_vec3().to_array(),
                 color,
