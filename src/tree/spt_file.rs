@@ -388,15 +388,8 @@ impl SptFile {
                 u32_at(b, 184)
             )));
         }
-        let Sections {
-            nodes_at,
-            parents_at,
-            shapes_at,
-            attributes_at,
-            chunks_at,
-            chunk_count,
-            size,
-        } = sections(b, version).map_err(bad)?;
+        let s = sections(b, version).map_err(bad)?;
+        let size = s.size;
         if (b.len() as u64) < size {
             return Err(SptError::Truncated {
                 path: p(),
@@ -412,11 +405,11 @@ impl SptFile {
         }
         let meta = meta_of(b);
         let checksum = u64_at(b, CHECKSUM_AT);
-        let chunks = if chunk_count == 0 {
-            let nodes = bytemuck::cast_slice(&b[nodes_at as usize..parents_at as usize]);
+        let chunks = if s.chunk_count == 0 {
+            let nodes = bytemuck::cast_slice(&b[s.nodes_at as usize..s.parents_at as usize]);
             vec![Chunk::of(0, nodes)]
         } else {
-            b[chunks_at as usize..size as usize]
+            b[s.chunks_at as usize..size as usize]
                 .chunks_exact(CHUNK_BYTES)
                 .map(bytemuck::pod_read_unaligned)
                 .collect()
@@ -426,11 +419,11 @@ impl SptFile {
             meta,
             version,
             checksum,
-            nodes_at: nodes_at as usize,
-            parents_at: parents_at as usize,
-            shapes_at: shapes_at as usize,
-            attributes_at: attributes_at as usize,
-            chunks_at: chunks_at as usize,
+            nodes_at: s.nodes_at as usize,
+            parents_at: s.parents_at as usize,
+            shapes_at: s.shapes_at as usize,
+            attributes_at: s.attributes_at as usize,
+            chunks_at: s.chunks_at as usize,
             chunks,
             map,
         })

@@ -40,7 +40,6 @@ pub struct LasBatches {
     per_batch: u64,
     read: u64,
     expected: u64,
-    has_color: bool,
 }
 
 impl LasBatches {
@@ -58,7 +57,6 @@ impl LasBatches {
             },
             read: 0,
             expected: header.number_of_points(),
-            has_color: format.has_color,
             reader,
         })
     }
@@ -66,10 +64,6 @@ impl LasBatches {
     /// Points the header announces.
     pub fn point_count(&self) -> u64 {
         self.expected
-    }
-
-    pub fn has_color(&self) -> bool {
-        self.has_color
     }
 
     /// Reads the next batch into `out` (cleared first); false once every point is read.

@@ -61,15 +61,15 @@ pub fn for_each_batch(path: &Path, mut f: impl FnMut(&PointBatch)) -> anyhow::Re
 
 /// Pass 1: bounds of the finite points, their count, colours.
 pub fn scan(path: &Path) -> anyhow::Result<Scan> {
-    let has_color = LasBatches::open(path)?.has_color();
     let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
-    let (mut count, mut eight_bit) = (0u64, true);
+    let (mut count, mut eight_bit, mut has_color) = (0u64, true, false);
     for_each_batch(path, |b| {
         for p in finite(b) {
             lo = lo.min(p);
             hi = hi.max(p);
             count += 1;
         }
+        has_color |= !b.rgb.is_empty();
         eight_bit &= b.rgb.iter().flatten().all(|&c| c <= 255);
     })?;
     anyhow::ensure!(
