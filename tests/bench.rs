@@ -75,6 +75,7 @@ fn bench_writes_results_summary_and_plot() {
         "### fly-through",
         "### SPT against a random subset",
         "### Stability",
+        "### FLIP within a frame-time budget",
     ] {
         assert!(summary.contains(part), "no {part} in\n{summary}");
     }

@@ -6,9 +6,11 @@
 mod common;
 
 use std::sync::{Arc, OnceLock};
+use std::time::{Duration, Instant};
 
 use spt::apps::view::input::{Button, Command, Input, Move};
 use spt::apps::view::loader::Loading;
+use spt::apps::view::pacing::Pacer;
 use spt::apps::view::viewer::Viewer;
 use spt::render::{Camera, Gpu, Mode, Renderer, Settings};
 
@@ -230,4 +232,55 @@ fn held_keys_move_the_camera_and_frame_brings_the_model_back() {
     eprintln!("panned away: {drawn_away} drawn; framed: {drawn_framed}");
     assert_eq!(drawn_away, 0);
     assert!(drawn_framed > 0);
+}
+
+/// Issue 16, must-show 2, with a scripted camera: under a frame-time target below what
+/// the user's ε_px costs, moving frames are drawn coarser (fewer splats), and once the
+/// camera rests the next frame is at the user's ε_px again, within a second.
+#[test]
+fn a_frame_time_target_coarsens_moving_frames_and_rest_brings_the_users_error_back() {
+    let mut v = viewer_on(&common::default_model());
+    let user_px = v.settings.error_px;
+    let start = Instant::now();
+    let (resting_drawn, _, _) = frame(&mut v);
+    let resting_ms = start.elapsed().as_secs_f64() * 1e3;
+    v.pacer = Pacer::new(Some(resting_ms / 3.0));
+    let mut moving_drawn = Vec::new();
+    for _ in 0..12 {
+        let drag = Input::Drag {
+            button: Button::Left,
+            shift: false,
+            dx: 4.0,
+            dy: 0.0,
+        };
+        send(&mut v, drag);
+        moving_drawn.push(frame(&mut v).0);
+        assert!(v.stats.frame_error_px >= user_px);
+    }
+    let moving_px = v.stats.frame_error_px;
+    eprintln!(
+        "resting: {resting_drawn} splats in {resting_ms:.1} ms; moving under a {:.1} ms \
+         target: ε_px {moving_px:.2}, splats {moving_drawn:?}",
+        resting_ms / 3.0
+    );
+    assert!(
+        moving_px > user_px,
+        "moving frames coarsened: ε_px {moving_px}"
+    );
+    assert!(*moving_drawn.last().unwrap() < resting_drawn);
+    let rest = v
+        .refine_due()
+        .expect("a frame at the user's ε is due at rest");
+    let last_move = Instant::now();
+    assert!(rest.saturating_duration_since(last_move) <= Duration::from_secs(1));
+    std::thread::sleep(rest.saturating_duration_since(Instant::now()));
+    let (drawn, _, _) = frame(&mut v);
+    assert_eq!(v.stats.frame_error_px, user_px, "at rest: the user's ε_px");
+    assert!(!v.stats.frame.as_ref().unwrap().coarsened);
+    let fewest = *moving_drawn.iter().min().unwrap();
+    assert!(
+        drawn > 2 * fewest,
+        "{drawn} splats at rest, {fewest} moving"
+    );
+    assert!(v.refine_due().is_none());
 }

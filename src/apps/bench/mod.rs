@@ -59,6 +59,10 @@ pub struct BenchArgs {
     /// The ε sweep in pixels, comma-separated (0: leaves only).
     #[arg(long, value_delimiter = ',', default_value = "0,0.25,0.5,1,2,4,8")]
     pub eps: Vec<f64>,
+    /// Frame-time budgets in ms, comma-separated: for each, the least FLIP of the sweep
+    /// among the ε whose median GPU time (wall time without GPU timing) fits in it.
+    #[arg(long, value_delimiter = ',', default_value = "50,100,200,400")]
+    pub budget_ms: Vec<f64>,
     /// A short run (2 views, 3 fly-through steps, 1 + 2 frames, ε 0, 1, 4), for checks.
     #[arg(long)]
     pub quick: bool,
@@ -173,6 +177,9 @@ fn effective_args(args: &BenchArgs) -> anyhow::Result<BenchArgs> {
     }
     if args.eps.iter().any(|e| !e.is_finite() || *e < 0.0) {
         anyhow::bail!("--eps: every ε must be a finite number ≥ 0");
+    }
+    if args.budget_ms.iter().any(|b| !b.is_finite() || *b <= 0.0) {
+        anyhow::bail!("--budget-ms: every budget must be a finite number of ms > 0");
     }
     Ok(args)
 }
@@ -299,7 +306,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     for c in &checks {
         println!("stability {c}");
     }
-    write_results(&args.out, &env, &rows, &checks)?;
+    write_results(&args.out, &env, &rows, &checks, &args.budget_ms)?;
     if !stable {
         anyhow::bail!(
             "the numbers are not stable between two runs of the same configuration (see summary.md)"
@@ -452,9 +459,22 @@ fn write_results(
     env: &Environment,
     rows: &[Row],
     checks: &[String],
+    budgets: &[f64],
 ) -> anyhow::Result<()> {
     report::write_csv(&out.join("results.csv"), env, rows)?;
-    report::write_text(&out.join("summary.md"), &report::summary(env, rows, checks))?;
+    let summary = report::summary(env, rows, checks) + &report::budget_table(rows, budgets);
+    report::write_text(&out.join("summary.md"), &summary)?;
+    for (budget, path, best) in report::within_budgets(rows, budgets) {
+        println!(
+            "budget    {budget} ms, {path}: {}",
+            best.map_or("no ε of the sweep fits".into(), |r| format!(
+                "FLIP {:.4} at ε {} px ({} ms)",
+                r.m.flip,
+                r.eps_px,
+                report::frame_ms(r).map_or("–".into(), |t| format!("{t:.1}"))
+            ))
+        );
+    }
     plot::write(&out.join("speed_vs_error.png"), env, rows)?;
     for pair in report::equal_budget_pairs(rows) {
         if report::verdict(pair.0, pair.1) == "**no**" {

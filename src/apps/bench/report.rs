@@ -270,3 +270,90 @@ pub fn equal_budget_pairs(rows: &[Row]) -> Vec<(&Row, &Row)> {
         })
         .collect()
 }
+
+/// A row's frame time: the median GPU time, or the wall time where the adapter has no
+/// timestamps.
+pub fn frame_ms(row: &Row) -> Option<f64> {
+    row.m.gpu_ms_median.or(Some(row.m.wall_ms_median))
+}
+
+/// The fixed-frame-time path: for each budget (ms) and camera path, the SPT row
+/// (compute culling) with the least FLIP among those whose frame time fits the budget
+/// (None when no ε of the sweep does).
+pub fn within_budgets<'a>(
+    rows: &'a [Row],
+    budgets: &[f64],
+) -> Vec<(f64, &'a str, Option<&'a Row>)> {
+    let mut paths: Vec<&str> = rows.iter().map(|r| r.path.as_str()).collect();
+    paths.dedup();
+    let mut out = Vec::new();
+    for &budget in budgets {
+        for &path in &paths {
+            let best = rows
+                .iter()
+                .filter(|r| r.strategy == Strategy::Spt && r.culling == Culling::Compute)
+                .filter(|r| r.path == path && frame_ms(r).is_some_and(|t| t <= budget))
+                .min_by(|a, b| a.m.flip.total_cmp(&b.m.flip));
+            out.push((budget, path, best));
+        }
+    }
+    out
+}
+
+/// The fixed-frame-time table of summary.md.
+pub fn budget_table(rows: &[Row], budgets: &[f64]) -> String {
+    let mut s = String::from(
+        "### FLIP within a frame-time budget\n\nFor each budget, the least FLIP of the sweep \
+         (SPT, compute culling) among the ε whose median GPU time fits in it.\n\n\
+         | budget ms | path | ε px | GPU ms median | splats | FLIP |\n| --- | --- | --- | --- | --- | --- |\n",
+    );
+    for (budget, path, best) in within_budgets(rows, budgets) {
+        let _ = match best {
+            Some(r) => writeln!(
+                s,
+                "| {budget} | {path} | {} | {} | {:.0} | {:.4} |",
+                r.eps_px,
+                frame_ms(r).map_or("–".into(), |t| format!("{t:.1}")),
+                r.m.splats,
+                r.m.flip
+            ),
+            None => writeln!(s, "| {budget} | {path} | none fits | | | |"),
+        };
+    }
+    s.push('\n');
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::apps::bench::measure::Measured;
+
+    fn row(eps_px: f64, gpu_ms: f64, flip: f64) -> Row {
+        Row {
+            path: "orbit-mid".into(),
+            strategy: Strategy::Spt,
+            culling: Culling::Compute,
+            eps_px,
+            cameras: 1,
+            m: Measured {
+                gpu_ms_median: Some(gpu_ms),
+                flip,
+                ..Measured::default()
+            },
+        }
+    }
+
+    #[test]
+    fn a_budget_takes_the_least_flip_among_the_frames_that_fit() {
+        let rows = [
+            row(0.0, 300.0, 0.030),
+            row(1.0, 150.0, 0.032),
+            row(4.0, 60.0, 0.050),
+        ];
+        let found = within_budgets(&rows, &[50.0, 100.0, 200.0, 400.0]);
+        let eps: Vec<Option<f64>> = found.iter().map(|f| f.2.map(|r| r.eps_px)).collect();
+        assert_eq!(eps, [None, Some(4.0), Some(1.0), Some(0.0)]);
+        assert!(budget_table(&rows, &[50.0]).contains("| 50 | orbit-mid | none fits |"));
+    }
+}

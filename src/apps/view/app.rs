@@ -15,6 +15,7 @@ use winit::window::{Window, WindowId};
 use super::ViewArgs;
 use super::input::{Button, Command, Input, Move};
 use super::loader::{Loaded, Loading};
+use super::pacing::Pacer;
 use super::panel::{self, PanelStatus};
 use super::present::{Presented, Presenter};
 use super::viewer::Viewer;
@@ -43,6 +44,8 @@ struct Script {
     frames: u32,
     frame_ms: Vec<f64>,
     gpu_ms: Vec<f64>,
+    /// The ε_px each frame was drawn with (the pacer's while moving under --target-ms).
+    error_px: Vec<f64>,
 }
 
 pub struct App {
@@ -61,6 +64,9 @@ pub struct App {
     shift: bool,
     control: bool,
     last_frame: Option<Instant>,
+    /// The camera was moving when the last frame was drawn (its time counts for the
+    /// frame-time target).
+    last_frame_moving: bool,
     first_frame_logged: bool,
     screenshot_requested: bool,
     script: Script,
@@ -85,6 +91,7 @@ impl App {
             shift: false,
             control: false,
             last_frame: None,
+            last_frame_moving: false,
             first_frame_logged: false,
             screenshot_requested: false,
             script: Script::default(),
@@ -126,6 +133,7 @@ impl App {
         );
         let mut viewer = Viewer::new(renderer, self.args.render.settings());
         viewer.auto_mode = self.args.render.mode.is_none();
+        viewer.pacer = Pacer::new(self.args.target_ms);
         viewer.show_panel = !self.args.hide_panel;
         self.windowed = Some(Windowed {
             window,
@@ -270,12 +278,19 @@ impl App {
         if size.0 == 0 || size.1 == 0 {
             return; // minimized
         }
+        // The previous frame took `seconds` if the window drew it while the camera moved
+        // (after a pause the interval measures the pause).
+        if self.last_frame_moving {
+            w.viewer.frame_took(seconds * 1e3);
+        }
         w.viewer.advance(seconds.min(0.25));
         if self.args.spin != 0.0
             && let Some(m) = &mut w.viewer.model
         {
             m.camera.orbit(-self.args.spin / 0.3, 0.0);
+            w.viewer.pacer.moved(now);
         }
+        self.last_frame_moving = w.viewer.pacer.moving(now);
         let Some((output, primitives, commands)) = self.run_panel() else {
             return;
         };
@@ -363,6 +378,7 @@ impl App {
                 self.script.frame_ms.push(seconds * 1e3);
             }
             self.script.gpu_ms.extend(w.viewer.stats.gpu.gpu_ms);
+            self.script.error_px.push(w.viewer.stats.frame_error_px);
         }
         if self.screenshot_requested {
             self.screenshot_requested = false;
@@ -412,6 +428,16 @@ impl App {
                 );
             }
         }
+        if let Some(s) = Summary::of(&mut self.script.error_px)
+            && self.args.target_ms.is_some()
+        {
+            println!(
+                "ε_px      {:.3} median, {:.3} last (target {:.0} ms)",
+                s.median,
+                w.viewer.stats.frame_error_px,
+                self.args.target_ms.unwrap_or_default()
+            );
+        }
         println!("wrote     {}", path.display());
     }
 
@@ -434,6 +460,10 @@ impl App {
             event_loop.set_control_flow(ControlFlow::WaitUntil(
                 Instant::now() + Duration::from_millis(period),
             ));
+        } else if let Some(rest) = w.viewer.refine_due() {
+            // The last frame was coarsened for the frame-time target: draw the user's
+            // ε once the camera rests.
+            event_loop.set_control_flow(ControlFlow::WaitUntil(rest));
         } else {
             event_loop.set_control_flow(ControlFlow::Wait);
         }

@@ -14,6 +14,7 @@ pub mod controls;
 pub mod input;
 mod legend;
 pub mod loader;
+pub mod pacing;
 mod panel;
 mod present;
 pub mod viewer;
@@ -48,6 +49,19 @@ pub struct ViewArgs {
     /// to measure frame times while orbiting).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub spin: f64,
+    /// Hold this frame time while the camera moves, in ms: the level of detail coarsens
+    /// (ε_px grows) until frames take about this long, and returns to --error-px once the
+    /// camera has rested for 0.3 s.
+    #[arg(long, value_parser = parse_target_ms)]
+    pub target_ms: Option<f64>,
+}
+
+/// A frame-time target: a finite number of milliseconds, at least 1.
+fn parse_target_ms(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 1.0 => Ok(v),
+        _ => Err(format!("{s}: a frame time in ms, at least 1")),
+    }
 }
 
 /// The default model: `data/torus_knot.ply` under the current directory, else under the

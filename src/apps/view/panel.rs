@@ -121,6 +121,8 @@ fn lod_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
             .text("ε (pixels)"),
     )
     .on_hover_text("Largest screen-space error of the level of detail, in pixels");
+    pacing_rows(ui, viewer);
+    let s = &mut viewer.settings;
     let mut leaves_only = !s.lod;
     if ui
         .checkbox(&mut leaves_only, "Leaves only (no level of detail)")
@@ -136,6 +138,35 @@ fn lod_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
     {
         viewer.set_frozen(frozen);
     }
+}
+
+/// The frame-time target (`--target-ms`) and the ε_px the last frame was drawn with.
+fn pacing_rows(ui: &mut egui::Ui, viewer: &mut Viewer) {
+    let pacer = &mut viewer.pacer;
+    let mut on = pacer.target_ms.is_some();
+    ui.horizontal(|ui| {
+        if ui
+            .checkbox(&mut on, "Hold frame time")
+            .on_hover_text(
+                "While the camera moves, coarsen the level of detail so that frames take \
+                 this long; the ε above returns once the camera rests",
+            )
+            .changed()
+        {
+            pacer.target_ms = on.then_some(100.0);
+        }
+        if let Some(ms) = &mut pacer.target_ms {
+            ui.add(
+                egui::Slider::new(ms, 10.0..=1000.0)
+                    .logarithmic(true)
+                    .suffix(" ms"),
+            );
+        }
+    });
+    ui.label(format!(
+        "drawn at ε = {:.3} px",
+        viewer.stats.frame_error_px
+    ));
 }
 
 fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {

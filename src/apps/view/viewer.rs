@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 
 use super::controls::OrbitCamera;
 use super::input::{Button, Command, Input, Move};
+use super::pacing::Pacer;
 use crate::render::camera::bounding_sphere;
 use crate::render::{
     Camera, CounterReadback, EncodedFrame, FrameTargets, GpuCounters, GpuScene, MeshUpload, Mode,
@@ -41,6 +42,8 @@ pub struct Stats {
     pub measured_tested: usize,
     /// The frame just recorded (prefix, ε, whether it was coarsened while uploading).
     pub frame: Option<EncodedFrame>,
+    /// The ε_px that frame was asked for: the user's, or the pacer's while moving.
+    pub frame_error_px: f64,
     recent: VecDeque<Instant>,
 }
 
@@ -72,6 +75,8 @@ pub struct Viewer {
     pub auto_mode: bool,
     pub show_panel: bool,
     pub stats: Stats,
+    /// The frame-time target and the ε_px it adapts (`--target-ms`).
+    pub pacer: Pacer,
     targets: Option<FrameTargets>,
     held: HashSet<Move>,
 }
@@ -88,6 +93,7 @@ impl Viewer {
             auto_mode: false,
             show_panel: true,
             stats: Stats::default(),
+            pacer: Pacer::new(None),
             targets: None,
             held: HashSet::new(),
         }
@@ -151,6 +157,9 @@ impl Viewer {
     /// Applies one input; returns the commands the window layer carries out itself
     /// (screenshot, open).
     pub fn handle(&mut self, input: Input, viewport: (u32, u32)) -> Option<Command> {
+        if moves_camera(&input) {
+            self.pacer.moved(Instant::now());
+        }
         match input {
             Input::Hold(m, down) => {
                 if down {
@@ -254,6 +263,9 @@ impl Viewer {
 
     /// Moves the camera for the keys held over `seconds`.
     pub fn advance(&mut self, seconds: f64) {
+        if self.is_animating() {
+            self.pacer.moved(Instant::now());
+        }
         let Some(m) = &mut self.model else { return };
         let axis = |plus: Move, minus: Move| {
             (self.held.contains(&plus) as i32 - self.held.contains(&minus) as i32) as f64
@@ -291,6 +303,11 @@ impl Viewer {
         let start = Instant::now();
         self.targets(size)?;
         let targets = self.targets.as_ref().expect("made above");
+        let settings = Settings {
+            error_px: self.pacer.error_px(start, self.settings.error_px),
+            ..self.settings
+        };
+        self.stats.frame_error_px = settings.error_px;
         match &mut self.model {
             Some(m) => {
                 let camera = m.camera.camera();
@@ -300,7 +317,7 @@ impl Viewer {
                     &m.scene,
                     &m.gpu_scene,
                     &camera,
-                    &self.settings,
+                    &settings,
                 )?;
                 m.counters.record(encoder, targets, &m.gpu_scene, &frame);
                 self.stats.frame = Some(frame);
@@ -311,6 +328,23 @@ impl Viewer {
         }
         self.stats.cpu_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(())
+    }
+
+    /// The frame recorded last, drawn while the camera moved, took `frame_ms` (from its
+    /// start to the next one's, as the window sees it): the pacer adapts its ε_px to it.
+    pub fn frame_took(&mut self, frame_ms: f64) {
+        let used = self.stats.frame_error_px;
+        self.pacer
+            .frame_done(used, frame_ms, self.settings.error_px);
+    }
+
+    /// When a frame at the user's ε_px is due: the last frame was drawn coarser for the
+    /// frame-time target, and the camera rests from then on.
+    pub fn refine_due(&self) -> Option<Instant> {
+        let coarser = self.stats.frame_error_px != self.settings.error_px;
+        self.pacer
+            .rest_at()
+            .filter(|_| coarser && self.model.is_some())
     }
 
     /// After the submit of a drawn frame: starts reading its counters and takes those of
@@ -335,6 +369,8 @@ impl Viewer {
     /// Draws one frame without a window, waits for the GPU and takes its counters (the
     /// statistics a window would show a few frames later).
     pub fn frame_and_wait(&mut self, size: (u32, u32)) -> anyhow::Result<()> {
+        let start = Instant::now();
+        let moving = self.pacer.moving(start);
         let device = &self.renderer.gpu.device;
         let mut encoder = device.create_command_encoder(&Default::default());
         self.draw(&mut encoder, size)?;
@@ -345,6 +381,9 @@ impl Viewer {
             .device
             .poll(wgpu::PollType::wait_indefinitely())?;
         self.collect_counters();
+        if moving {
+            self.frame_took(start.elapsed().as_secs_f64() * 1e3);
+        }
         Ok(())
     }
 
@@ -361,6 +400,16 @@ impl Viewer {
     /// The targets of the last frame, for the window layer to draw over and present.
     pub fn current_targets(&self) -> Option<&FrameTargets> {
         self.targets.as_ref()
+    }
+}
+
+/// Whether `input` moves the camera (and so starts the pacer's moving frames).
+fn moves_camera(input: &Input) -> bool {
+    match input {
+        Input::Drag { button, .. } => *button != Button::Right,
+        Input::Wheel { .. } => true,
+        Input::Hold(_, down) => *down,
+        Input::Command(c) => matches!(c, Command::Frame | Command::Reset),
     }
 }
 
