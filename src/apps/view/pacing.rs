@@ -7,17 +7,21 @@
 //! dominate; near 0 where a fixed cost does, such as a software rasteriser's fragments,
 //! which coarser splats do not reduce), the ε that takes the target time T from a frame
 //! drawn at ε that took t is about ε·exp((ln T − ln t)/s). The pacer estimates s from its
-//! own steps (a running mean of Δln t / Δln ε), takes a share [`GAIN`] of that step (a
+//! own steps (a running mean of Δln t / Δln ε over the steps large enough to tell),
+//! takes a share [`GAIN`] of that step (a
 //! first-order filter: no overshoot when s is misjudged by less than half), at most
 //! ε × 1.5 or ÷ 1.5 a frame, and leaves ε as it is when t is within [`DEAD_BAND`]
-//! of T, so that the picture does not shimmer. Where s is flatter than [`MIN_SLOPE`],
-//! coarsening no longer buys time: ε is held rather than grown, so that an unreachable
+//! of T, so that the picture does not shimmer. Where s is flatter than [`MIN_SLOPE`]
+//! (the last step, and the running mean within twice that),
+//! coarsening no longer buys time: the step that showed it is undone and ε held (a
+//! coarser step is tried again every [`PROBE_AFTER`] frames), so that an unreachable
 //! target gives the coarsest useful picture instead of a few huge splats. The adapted
 //! ε never goes below the user's: the target only ever makes frames coarser.
 
 use std::time::{Duration, Instant};
 
-use super::viewer::ERROR_PX_RANGE;
+/// ε_px stays within these bounds (the panel slider's range; the pacer's too).
+pub const ERROR_PX_RANGE: (f64, f64) = (0.01, 256.0);
 
 /// How long the camera must be still before the user's ε_px is drawn again: at least
 /// this, and two of the last moving frames (a camera moved once a frame is still moving
@@ -35,6 +39,8 @@ const MAX_STEP: f64 = 0.405;
 const MIN_OBSERVED_STEP: f64 = 0.15;
 /// The slope assumed before the pacer has measured one.
 const FIRST_SLOPE: f64 = -1.0;
+/// Frames held where coarsening did not pay before trying a coarser step again.
+const PROBE_AFTER: u32 = 30;
 /// Frame times within this factor of the target leave ε as it is.
 const DEAD_BAND: f64 = 1.08;
 
@@ -54,6 +60,10 @@ pub struct Pacer {
     slope: f64,
     /// ln ε_px and ln t of the last moving frame.
     last: Option<(f64, f64)>,
+    /// The slope of the last step large enough to tell.
+    seen: f64,
+    /// Frames held since coarsening was last seen not to pay.
+    held: u32,
 }
 
 impl Pacer {
@@ -65,6 +75,8 @@ impl Pacer {
             frame: Duration::ZERO,
             slope: FIRST_SLOPE,
             last: None,
+            seen: FIRST_SLOPE,
+            held: 0,
         }
     }
 
@@ -72,6 +84,9 @@ impl Pacer {
     pub fn moved(&mut self, now: Instant) {
         self.last_motion = Some(now);
     }
+
+    /// ε_px stays within these bounds (the panel slider's range; the pacer's too).
+    pub const ERROR_PX_RANGE: (f64, f64) = (0.01, 256.0);
 
     /// How long the camera must be still to be at rest.
     fn rest(&self) -> Duration {
@@ -98,6 +113,12 @@ impl Pacer {
         }
     }
 
+    /// The last step was flatter than [`MIN_SLOPE`], and so are the recent ones on the
+    /// whole (within twice it: one noisy frame alone does not decide).
+    fn coarsening_stopped_paying(&self) -> bool {
+        self.seen > -MIN_SLOPE && self.slope > -2.0 * MIN_SLOPE
+    }
+
     /// A frame drawn with `used_px` while the camera moved took `frame_ms`: adapts ε_px
     /// toward the target. (Only moving frames are reported: a resting frame at the
     /// user's ε may take as long as it takes.)
@@ -108,20 +129,33 @@ impl Pacer {
         }
         self.frame = Duration::from_secs_f64(frame_ms.min(1e6) * 1e-3);
         let (x, y) = (used_px.ln(), frame_ms.ln());
-        if let Some((x0, y0)) = self.last
+        let previous = self.last.replace((x, y));
+        if let Some((x0, y0)) = previous
             && (x - x0).abs() > MIN_OBSERVED_STEP
         {
-            let seen = ((y - y0) / (x - x0)).clamp(-3.0, 0.0);
-            self.slope = 0.5 * (self.slope + seen);
+            self.seen = ((y - y0) / (x - x0)).clamp(-3.0, 0.0);
+            self.slope = 0.5 * (self.slope + self.seen);
+            self.held = 0;
         }
-        self.last = Some((x, y));
         let over = y - target.ln();
-        let step = if over.abs() < DEAD_BAND.ln() || (over > 0.0 && self.slope > -MIN_SLOPE) {
-            0.0
+        let next = if over.abs() < DEAD_BAND.ln() {
+            x
+        } else if over > 0.0 && self.coarsening_stopped_paying() {
+            // Coarsening stopped paying: back to the ε before the step that showed it,
+            // and hold; after PROBE_AFTER frames, try a step again (the view changes).
+            self.held += 1;
+            if self.held >= PROBE_AFTER {
+                // A step is taken; one more flat one and the mean is flat again.
+                (self.slope, self.seen, self.held) = (-2.0 * MIN_SLOPE, FIRST_SLOPE, 0);
+            }
+            match previous {
+                Some((x0, _)) if x0 < x => x0,
+                _ => x,
+            }
         } else {
-            (GAIN * over / -self.slope.min(-MIN_SLOPE)).clamp(-MAX_STEP, MAX_STEP)
-        };
-        let next = used_px * step.exp();
+            x + (GAIN * over / -self.slope.min(-MIN_SLOPE)).clamp(-MAX_STEP, MAX_STEP)
+        }
+        .exp();
         self.adapted_px = next.clamp(user_px.max(ERROR_PX_RANGE.0), ERROR_PX_RANGE.1);
     }
 }

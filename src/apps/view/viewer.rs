@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 
 use super::controls::OrbitCamera;
 use super::input::{Button, Command, Input, Move};
+pub use super::pacing::ERROR_PX_RANGE;
 use super::pacing::Pacer;
 use crate::render::camera::bounding_sphere;
 use crate::render::{
@@ -80,9 +81,6 @@ pub struct Viewer {
     targets: Option<FrameTargets>,
     held: HashSet<Move>,
 }
-
-/// ε_px stays within these bounds (the slider's range).
-pub const ERROR_PX_RANGE: (f64, f64) = (0.01, 256.0);
 
 impl Viewer {
     pub fn new(renderer: Arc<Renderer>, settings: Settings) -> Viewer {
