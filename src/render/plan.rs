@@ -52,24 +52,29 @@ pub(super) fn fitting_eps(
     if end(&wanted) <= uploaded || uploaded == 0 {
         return (eps, if uploaded == 0 { Vec::new() } else { wanted });
     }
+    // Invariant after the doubling: `at_hi` is ranges(hi) (which fits, unless 200
+    // doublings did not suffice), and ranges(lo) does not fit.
     let mut lo = eps;
     let mut hi = eps.max(scene.meta().error_scale as f64 * 1e-9);
+    let mut at_hi = if hi == eps { wanted } else { ranges(hi) };
     for _ in 0..200 {
-        if end(&ranges(hi)) <= uploaded {
+        if end(&at_hi) <= uploaded {
             break;
         }
         lo = hi;
         hi *= 2.0;
+        at_hi = ranges(hi);
     }
     for _ in 0..40 {
         let mid = 0.5 * (lo + hi);
-        if end(&ranges(mid)) <= uploaded {
-            hi = mid;
+        let at_mid = ranges(mid);
+        if end(&at_mid) <= uploaded {
+            (hi, at_hi) = (mid, at_mid);
         } else {
             lo = mid;
         }
     }
-    let cut = ranges(hi)
+    let cut = at_hi
         .into_iter()
         .filter_map(|r| (r.start < uploaded).then(|| r.start..r.end.min(uploaded)))
         .collect();

@@ -295,7 +295,7 @@ fn fill_internal(
 /// them, then every node's parent error, δ and level, the roots' included. Returns the
 /// nodes in id order (the roots first) and each one's parent id.
 pub fn build_above(
-    hierarchy: &Hierarchy,
+    hierarchy: Hierarchy,
     (mut records, mut shapes, mut attributes): (
         Vec<NodeRecord>,
         Vec<SplatShape>,
@@ -312,11 +312,11 @@ pub fn build_above(
     }
     let levels = hierarchy.levels();
     let slices = (&mut records[..], &mut shapes[..], &mut attributes[..]);
-    fill_internal(hierarchy, &levels, slices, (scale, oriented), &Silent);
+    fill_internal(&hierarchy, &levels, slices, (scale, oriented), &Silent);
     let parent_ids = hierarchy.parents();
     link_parents(&mut records, &parent_ids, &levels, n, scale);
     NodeSet {
-        hierarchy: hierarchy.clone(),
+        hierarchy,
         records,
         shapes,
         attributes,

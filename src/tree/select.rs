@@ -155,23 +155,30 @@ impl PrefixIndex {
         &self.chunks
     }
 
-    /// Whether no node of `chunk` (or page) is fine enough to draw: e_min > ε · d_max.
-    fn too_coarse(&self, chunk: &Chunk, eye: DVec3, eps: f64) -> bool {
+    /// Whether the frame skips `chunk` (or page) whole, its distances from the eye
+    /// being `(d_min, d_max)`: too coarse (no node fine enough to draw: e_min > ε ·
+    /// d_max), or unseen by `cone`.
+    fn skipped(
+        &self,
+        chunk: &Chunk,
+        (_, d_max): (f64, f64),
+        eps: f64,
+        cone: Option<&ViewCone>,
+    ) -> bool {
         let e_min = chunk.error_min as f64 * self.error_scale as f64;
-        e_min > eps * distances(chunk, eye).1
-    }
-
-    /// Whether the frame skips `chunk` (or page) whole: too coarse, or unseen by `cone`.
-    fn skipped(&self, chunk: &Chunk, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> bool {
-        self.too_coarse(chunk, eye, eps) || cone.is_some_and(|v| !v.sees_chunk(chunk))
+        e_min > eps * d_max || cone.is_some_and(|v| !v.sees_chunk(chunk))
     }
 
     /// Length of the prefix of chunk `c` that holds every node of it the exact test
     /// can draw.
     pub fn chunk_prefix(&self, c: usize, nodes: &[NodeRecord], eye: DVec3, eps: f64) -> usize {
+        self.prefix_within(c, nodes, distances(&self.chunks[c], eye).0, eps)
+    }
+
+    /// [`PrefixIndex::chunk_prefix`] with the eye `d_min` from the chunk's box.
+    fn prefix_within(&self, c: usize, nodes: &[NodeRecord], d_min: f64, eps: f64) -> usize {
         let chunk = &nodes[self.chunks[c].range()];
         let suffix = &self.delta_suffix[self.block_at[c]..];
-        let d_min = distances(&self.chunks[c], eye).0;
         // First i where e_parent[i] ≤ ε (d_min − Δ(i)); false before, true after.
         let beyond =
             |i: usize| chunk[i].parent_error(self.error_scale) <= eps * (d_min - suffix[i / BLOCK]);
@@ -195,14 +202,15 @@ impl PrefixIndex {
     ) -> Vec<Range<usize>> {
         let mut out: Vec<Range<usize>> = Vec::new();
         let pages = self.pages.iter().enumerate();
-        let seen = pages.filter(|(_, page)| !self.skipped(page, eye, eps, cone));
+        let seen = pages.filter(|(_, page)| !self.skipped(page, distances(page, eye), eps, cone));
         for c in seen.flat_map(|(p, _)| p * PAGE..((p + 1) * PAGE).min(self.chunks.len())) {
             let chunk = &self.chunks[c];
-            if self.skipped(chunk, eye, eps, cone) {
+            let d = distances(chunk, eye);
+            if self.skipped(chunk, d, eps, cone) {
                 continue;
             }
             let start = chunk.start as usize;
-            let n = self.chunk_prefix(c, nodes, eye, eps);
+            let n = self.prefix_within(c, nodes, d.0, eps);
             match out.last_mut() {
                 _ if n == 0 => {}
                 Some(last) if last.end == start => last.end = start + n,

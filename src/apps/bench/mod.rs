@@ -468,10 +468,10 @@ fn write_results(
         println!(
             "budget    {budget} ms, {path}: {}",
             best.map_or("no ε of the sweep fits".into(), |r| format!(
-                "FLIP {:.4} at ε {} px ({} ms)",
+                "FLIP {:.4} at ε {} px ({:.1} ms)",
                 r.m.flip,
                 r.eps_px,
-                report::frame_ms(r).map_or("–".into(), |t| format!("{t:.1}"))
+                report::frame_ms(r)
             ))
         );
     }

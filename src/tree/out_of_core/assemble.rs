@@ -61,7 +61,6 @@ fn hierarchy_of(split: &Split, jobs: usize) -> Hierarchy {
 
 fn top_tree(split: &Split, parts: &[Part], model: &Model, oriented: bool) -> Top {
     let j = parts.len();
-    let hierarchy = hierarchy_of(split, j);
     let roots = (
         parts.iter().map(|p| p.root.0).collect(),
         parts.iter().map(|p| p.root.1).collect(),
@@ -71,7 +70,7 @@ fn top_tree(split: &Split, parts: &[Part], model: &Model, oriented: bool) -> Top
             Vec::new()
         },
     );
-    let set = build_above(&hierarchy, roots, (model.error_scale, oriented));
+    let set = build_above(hierarchy_of(split, j), roots, (model.error_scale, oriented));
     // The internal nodes, sorted by parent error (the root, +∞, first).
     let mut order: Vec<usize> = (j..set.records.len()).collect();
     order.sort_by_key(|&id| (0xffff - set.records[id].parent_error, id));
