@@ -85,9 +85,6 @@ impl Pacer {
         self.last_motion = Some(now);
     }
 
-    /// ε_px stays within these bounds (the panel slider's range; the pacer's too).
-    pub const ERROR_PX_RANGE: (f64, f64) = (0.01, 256.0);
-
     /// How long the camera must be still to be at rest.
     fn rest(&self) -> Duration {
         (2 * self.frame).clamp(REST, MAX_REST)
