@@ -142,6 +142,18 @@ impl CounterReadback {
         }
     }
 
+    /// The newest frame's counters, once every frame in flight has arrived (waits for
+    /// the GPU).
+    pub fn wait(&mut self, gpu: &Gpu) -> anyhow::Result<Option<(EncodedFrame, GpuCounters)>> {
+        let in_flight = &self.in_flight;
+        readback::wait_until(&gpu.device, || {
+            in_flight
+                .iter()
+                .all(|(_, _, ready)| ready.0.load(Ordering::Acquire))
+        })?;
+        Ok(self.poll(gpu))
+    }
+
     /// The newest frame whose counters have arrived, if any (polls without waiting).
     pub fn poll(&mut self, gpu: &Gpu) -> Option<(EncodedFrame, GpuCounters)> {
         // An error here only means nothing new arrived.

@@ -1,6 +1,9 @@
 //! Getting a frame back from the GPU: textures and small buffers are copied into
 //! mappable buffers by the frame's own encoder, and read after the submit.
 
+use std::sync::{Arc, OnceLock};
+use std::time::{Duration, Instant};
+
 /// Bytes per row of a texture copy: rows are padded to multiples of 256 bytes.
 pub(super) fn padded_row(width: u32, bytes_per_pixel: u32) -> u32 {
     (width * bytes_per_pixel).div_ceil(256) * 256
@@ -47,11 +50,44 @@ pub(super) fn copy_texture(
 
 /// Maps a buffer (after the submit that fills it) and copies its contents out.
 pub(super) fn read(device: &wgpu::Device, buffer: &wgpu::Buffer) -> anyhow::Result<Vec<u8>> {
-    buffer.map_async(wgpu::MapMode::Read, .., |_| {});
-    device.poll(wgpu::PollType::wait_indefinitely())?;
+    let mapped = Arc::new(OnceLock::new());
+    let result = mapped.clone();
+    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = result.set(r.is_ok());
+    });
+    wait_until(device, || mapped.get().is_some())?;
+    anyhow::ensure!(
+        mapped.get() == Some(&true),
+        "mapping a readback buffer failed"
+    );
     let data = buffer.slice(..).get_mapped_range()?.to_vec();
     buffer.unmap();
     Ok(data)
+}
+
+/// How long [`wait_until`] waits for map callbacks once the GPU is idle.
+const MAP_WAIT: Duration = Duration::from_secs(30);
+
+/// Waits for the GPU until `arrived()` holds. A map callback runs in whichever thread's
+/// poll collected it (wgpu fires callbacks after releasing its locks): when another
+/// thread shares the device, this thread's wait may return a moment before the callback
+/// ran, so the wait repeats, for at most `MAP_WAIT`.
+pub(super) fn wait_until(
+    device: &wgpu::Device,
+    mut arrived: impl FnMut() -> bool,
+) -> anyhow::Result<()> {
+    let start = Instant::now();
+    loop {
+        device.poll(wgpu::PollType::wait_indefinitely())?;
+        if arrived() {
+            return Ok(());
+        }
+        anyhow::ensure!(
+            start.elapsed() < MAP_WAIT,
+            "a GPU buffer was not mapped within {MAP_WAIT:?}"
+        );
+        std::thread::yield_now();
+    }
 }
 
 /// The rows of a padded RGBA8 copy, without their padding.

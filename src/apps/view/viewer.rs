@@ -374,11 +374,12 @@ impl Viewer {
         self.draw(&mut encoder, size)?;
         self.renderer.gpu.queue.submit([encoder.finish()]);
         self.submitted();
-        self.renderer
-            .gpu
-            .device
-            .poll(wgpu::PollType::wait_indefinitely())?;
-        self.collect_counters();
+        if let Some(m) = &mut self.model
+            && let Some((frame, counters)) = m.counters.wait(&self.renderer.gpu)?
+        {
+            self.stats.gpu = counters;
+            self.stats.measured_tested = frame.tested;
+        }
         if moving {
             self.frame_took(start.elapsed().as_secs_f64() * 1e3);
         }
