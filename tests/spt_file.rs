@@ -9,6 +9,7 @@ use std::io::Write;
 use spt::io::atomic::{temporary_path, write_atomically};
 use spt::io::ply::read_ply;
 use spt::surfel::leaf_surfels;
+use spt::tree::select::PrefixIndex;
 use spt::tree::spt_file::{SptError, SptFile, write_spt, write_to};
 use spt::tree::{NodeRecord, SequentialList, build_sequential_list};
 
@@ -206,11 +207,12 @@ fn version_2_files_read_as_files_without_attributes() {
     let list = default_list();
     let mut bytes = Vec::new();
     write_to(&mut bytes, &list).unwrap();
-    // A model without LiDAR attributes pays nothing for them: header, three sections
-    // and the chunk table.
+    // A model without LiDAR attributes pays nothing for them: header, three sections,
+    // the chunk table and the δ suffix maxima (2 bytes per block of 64 nodes).
     let n = list.nodes.len();
     let size = 256 + n * (32 + 4 + 16);
-    assert_eq!(bytes.len(), size + list.chunks.len() * 48);
+    let blocks: usize = list.chunks.iter().map(|c| (c.count as usize).div_ceil(64)).sum();
+    assert_eq!(bytes.len(), size + list.chunks.len() * 48 + 2 * blocks);
     // Version 2: no attributes section, no chunk table.
     bytes.truncate(size);
     bytes[8..12].copy_from_slice(&2u32.to_le_bytes());
@@ -248,4 +250,43 @@ fn lidar_attributes_survive_the_file() {
     let file = SptFile::open(&path).unwrap();
     assert_eq!(file.attributes(), &list.attributes[..]);
     assert_eq!(file.to_list(), list);
+}
+
+#[test]
+fn version_4_files_build_the_index_version_5_files_store_it() {
+    let list = default_list();
+    let mut bytes = Vec::new();
+    write_to(&mut bytes, &list).unwrap();
+    let dir = common::temp_dir();
+    let path = dir.path().join("v5.spt");
+    std::fs::write(&path, &bytes).unwrap();
+    let built = PrefixIndex::new(&list.meta, &list.chunks, &list.nodes);
+    // Streaming opens read the stored index, the same as the one built from the nodes.
+    let (file, stored) = SptFile::open_for_streaming(&path).unwrap();
+    assert_eq!(file.version, 5);
+    assert_eq!(stored, built);
+    // Version 4: the same file without the δ suffix maxima; its index is built.
+    let end = 256 + list.nodes.len() * 52 + list.chunks.len() * 48;
+    let mut v4 = bytes[..end].to_vec();
+    v4[8..12].copy_from_slice(&4u32.to_le_bytes());
+    v4[160..168].copy_from_slice(&(end as u64).to_le_bytes());
+    v4[224..240].fill(0);
+    assert!(spt::tree::spt_file::reseal(&mut v4));
+    let old = dir.path().join("v4.spt");
+    std::fs::write(&old, &v4).unwrap();
+    let file = SptFile::open(&old).unwrap();
+    assert_eq!((file.version, file.delta_suffix()), (4, None));
+    assert_eq!(file.prefix_index().unwrap(), built);
+    // A stored maximum below a node's δ would cut prefixes short: the full check
+    // refuses it, naming the file.
+    let mut bad = bytes.clone();
+    let last = bad.len() - 2;
+    bad[last..].copy_from_slice(&0u16.to_le_bytes());
+    let first = 256 + list.nodes.len() * 52 + list.chunks.len() * 48;
+    bad[first..first + 2].copy_from_slice(&0u16.to_le_bytes());
+    assert!(spt::tree::spt_file::reseal(&mut bad));
+    let corrupt = dir.path().join("bad_suffix.spt");
+    std::fs::write(&corrupt, &bad).unwrap();
+    let err = SptFile::open(&corrupt).err().expect("refused").to_string();
+    assert!(err.contains("bad_suffix.spt") && err.contains("suffix"), "{err}");
 }

@@ -63,7 +63,7 @@ impl Scene {
             report.step(Step::Check, 0);
             let file = SptFile::open(path)?;
             report.step(Step::Index, 0);
-            let index = PrefixIndex::new(&file.meta, file.chunks(), file.nodes());
+            let index = file.prefix_index().map_err(|what| anyhow::anyhow!("{what}"))?;
             return Ok(Scene {
                 tree: TreeSource::File(file),
                 index,

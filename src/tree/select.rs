@@ -29,6 +29,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::chunks::Chunk;
+use super::record::decode;
 use super::{NodeRecord, TreeMeta};
 
 /// Nodes per block of the suffix maximum of δ.
@@ -107,48 +108,138 @@ fn distances(chunk: &Chunk, eye: DVec3) -> (f64, f64) {
 }
 
 /// What the prefix searches need besides the nodes: the chunks and their pages, and
-/// per chunk the largest δ (model units) from the start of each of its blocks of
-/// [`BLOCK`] nodes to the chunk's end. Built once per tree (one pass over the nodes).
+/// per chunk the largest δ from the start of each of its blocks of [`BLOCK`] nodes to
+/// the chunk's end ([`chunk_delta_suffix`]). Built from the nodes (one pass), or taken
+/// from an `.spt` file that stores it (version 5), so that opening reads no node.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PrefixIndex {
     chunks: Vec<Chunk>,
     pages: Vec<Chunk>,
     error_scale: f32,
-    /// The suffix maxima of all chunks' blocks; chunk c's start at `block_at[c]`.
-    delta_suffix: Vec<f64>,
+    /// The suffix maxima of all chunks' blocks, f16 bits of δ / error scale; chunk c's
+    /// start at `block_at[c]`.
+    delta_suffix: Vec<u16>,
     block_at: Vec<usize>,
+}
+
+/// The suffix maxima of δ over the blocks of [`BLOCK`] nodes of one chunk, as the
+/// records store δ (f16 bits, in units of the error scale): entry b is the largest δ
+/// from block b's start to the chunk's end. Non-negative halves order as their bits
+/// do, so the largest bits are the largest δ (a corrupt negative or NaN δ gives larger
+/// bits: a longer prefix, never a shorter one).
+pub fn chunk_delta_suffix(nodes: &[NodeRecord]) -> Vec<u16> {
+    let mut suffix: Vec<u16> = nodes
+        .chunks(BLOCK)
+        .map(|block| block.iter().map(|r| r.delta).max().unwrap_or(0))
+        .collect();
+    for b in (0..suffix.len().saturating_sub(1)).rev() {
+        suffix[b] = suffix[b].max(suffix[b + 1]);
+    }
+    suffix
+}
+
+/// [`delta_suffix`] made from the nodes fed in list order, a slab at a time (for a
+/// writer that streams the list).
+pub struct DeltaSuffixBuilder<'a> {
+    chunks: &'a [Chunk],
+    /// The chunk the next node belongs to, and the nodes of it fed so far.
+    chunk: usize,
+    fed: usize,
+    /// The current chunk's block maxima so far.
+    blocks: Vec<u16>,
+    out: Vec<u16>,
+}
+
+impl<'a> DeltaSuffixBuilder<'a> {
+    pub fn new(chunks: &'a [Chunk]) -> Self {
+        DeltaSuffixBuilder {
+            chunks,
+            chunk: 0,
+            fed: 0,
+            blocks: Vec::new(),
+            out: Vec::with_capacity(delta_suffix_len(chunks) as usize),
+        }
+    }
+
+    /// Takes the next nodes of the list.
+    pub fn feed(&mut self, nodes: &[NodeRecord]) {
+        for r in nodes {
+            if self.fed % BLOCK == 0 {
+                self.blocks.push(r.delta);
+            } else {
+                let last = self.blocks.last_mut().expect("a block was started");
+                *last = (*last).max(r.delta);
+            }
+            self.fed += 1;
+            if self.chunks.get(self.chunk).is_some_and(|c| self.fed == c.count as usize) {
+                for b in (0..self.blocks.len().saturating_sub(1)).rev() {
+                    self.blocks[b] = self.blocks[b].max(self.blocks[b + 1]);
+                }
+                self.out.append(&mut self.blocks);
+                (self.chunk, self.fed) = (self.chunk + 1, 0);
+            }
+        }
+    }
+
+    /// The suffix maxima of every chunk, once all the nodes were fed.
+    pub fn finish(self) -> Vec<u16> {
+        debug_assert_eq!(self.chunk, self.chunks.len(), "every chunk's nodes fed");
+        self.out
+    }
+}
+
+/// [`chunk_delta_suffix`] of every chunk, chunk after chunk.
+pub fn delta_suffix(chunks: &[Chunk], nodes: &[NodeRecord]) -> Vec<u16> {
+    let per_chunk: Vec<Vec<u16>> = chunks
+        .par_iter()
+        .map(|c| chunk_delta_suffix(&nodes[c.range()]))
+        .collect();
+    per_chunk.concat()
+}
+
+/// Blocks of [`BLOCK`] nodes in the chunks: the length of their δ suffix maxima.
+pub fn delta_suffix_len(chunks: &[Chunk]) -> u64 {
+    chunks.iter().map(|c| (c.count as u64).div_ceil(BLOCK as u64)).sum()
 }
 
 impl PrefixIndex {
     pub fn new(meta: &TreeMeta, chunks: &[Chunk], nodes: &[NodeRecord]) -> Self {
-        let scale = meta.error_scale;
-        let per_chunk: Vec<Vec<f64>> = chunks
-            .par_iter()
-            .map(|c| {
-                let chunk = &nodes[c.range()];
-                let mut suffix: Vec<f64> = chunk
-                    .chunks(BLOCK)
-                    .map(|block| block.iter().map(|r| r.delta(scale)).fold(0.0, f64::max))
-                    .collect();
-                for b in (0..suffix.len().saturating_sub(1)).rev() {
-                    suffix[b] = suffix[b].max(suffix[b + 1]);
-                }
-                suffix
-            })
-            .collect();
+        Self::with_suffix(meta, chunks, delta_suffix(chunks, nodes)).expect("one per block")
+    }
+
+    /// The index of `chunks` with their δ suffix maxima already made (as
+    /// [`chunk_delta_suffix`] makes them, chunk after chunk); an error when their length
+    /// is not one per block.
+    pub fn with_suffix(
+        meta: &TreeMeta,
+        chunks: &[Chunk],
+        delta_suffix: Vec<u16>,
+    ) -> Result<Self, String> {
+        let expected = delta_suffix_len(chunks);
+        if delta_suffix.len() as u64 != expected {
+            return Err(format!(
+                "{} δ suffix maxima for {expected} blocks of {BLOCK} nodes",
+                delta_suffix.len()
+            ));
+        }
         let mut block_at = Vec::with_capacity(chunks.len());
         let mut at = 0;
-        for s in &per_chunk {
+        for c in chunks {
             block_at.push(at);
-            at += s.len();
+            at += (c.count as usize).div_ceil(BLOCK);
         }
-        PrefixIndex {
+        Ok(PrefixIndex {
             chunks: chunks.to_vec(),
             pages: chunks.chunks(PAGE).map(page_of).collect(),
-            error_scale: scale,
-            delta_suffix: per_chunk.concat(),
+            error_scale: meta.error_scale,
+            delta_suffix,
             block_at,
-        }
+        })
+    }
+
+    /// The δ suffix maxima of every chunk, in chunk order (what an `.spt` file stores).
+    pub fn delta_suffix(&self) -> &[u16] {
+        &self.delta_suffix
     }
 
     pub fn chunks(&self) -> &[Chunk] {
@@ -180,8 +271,10 @@ impl PrefixIndex {
         let chunk = &nodes[self.chunks[c].range()];
         let suffix = &self.delta_suffix[self.block_at[c]..];
         // First i where e_parent[i] ≤ ε (d_min − Δ(i)); false before, true after.
-        let beyond =
-            |i: usize| chunk[i].parent_error(self.error_scale) <= eps * (d_min - suffix[i / BLOCK]);
+        let scale = self.error_scale;
+        let beyond = |i: usize| {
+            chunk[i].parent_error(scale) <= eps * (d_min - decode(suffix[i / BLOCK], scale))
+        };
         let (mut lo, mut hi) = (0, chunk.len());
         while lo < hi {
             let mid = lo + (hi - lo) / 2;

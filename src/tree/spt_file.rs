@@ -3,9 +3,10 @@
 //! ```text
 //! offset  size  field (little-endian)
 //!      0     8  magic "spt-tree"
-//!      8     4  format version (4; versions 3 and 2, read as well, had no chunk
-//!                 table (their list is one chunk), version 2 no attributes section;
-//!                 version 1 no shapes section)
+//!      8     4  format version (5; versions 4, 3 and 2, read as well: version 4
+//!                 had no δ suffix section, versions 3 and 2 no chunk table (their
+//!                 list is one chunk), version 2 no attributes section; version 1,
+//!                 refused, no shapes section)
 //!     12     4  header size (256)
 //!     16     4  flags: 1 = has colours, 2 = oriented normals, 4 = LiDAR attributes
 //!     20     4  depth (largest level)
@@ -29,14 +30,18 @@
 //!    204     8  offset of the chunk table (after the attributes)
 //!    212     4  chunk record size (40)
 //!    216     8  chunk count (≥ 1)
-//!    224    32  zero
+//!    224     8  offset of the δ suffix maxima (after the chunk table)
+//!    232     8  their count: one per block of 64 nodes of each chunk
+//!    240    16  zero
 //! ```
 //!
 //! Sections follow the header in this order: node records (what the culling pass
 //! reads), parents (the CPU's), splat shapes (what only the splat passes read), LiDAR
 //! attributes (what the attribute display modes read; a model without pays nothing),
 //! the chunk table ([`Chunk`]: each chunk's range of the list, box and largest radius;
-//! the chunks follow each other and cover the list).
+//! the chunks follow each other and cover the list), the δ suffix maxima of the prefix
+//! search (u16 each, [`chunk_delta_suffix`], chunk after chunk), so that a file opens to
+//! its first frame without reading its nodes.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -46,7 +51,7 @@ use thiserror::Error;
 use xxhash_rust::xxh3::Xxh3;
 
 use super::chunks::Chunk;
-use super::select::TreeView;
+use super::select::{PrefixIndex, TreeView, delta_suffix, delta_suffix_len};
 use super::validate;
 use super::{NodeRecord, SequentialList, TreeMeta};
 use crate::io::atomic::write_atomically;
@@ -54,7 +59,7 @@ use crate::io::{Bounds, PointAttributes};
 use crate::surfel::shape::SplatShape;
 
 pub const MAGIC: &[u8; 8] = b"spt-tree";
-pub const VERSION: u32 = 4;
+pub const VERSION: u32 = 5;
 /// The oldest version read: version 2 files are version 3 files without attributes.
 pub const OLDEST_READ: u32 = 2;
 pub const HEADER_BYTES: usize = 256;
@@ -109,12 +114,14 @@ pub fn is_spt(path: &Path) -> bool {
 
 fn header_bytes(list: &SequentialList, checksum: u64) -> Vec<u8> {
     debug_assert_eq!(list.attributes.is_empty(), !list.meta.has_attributes);
-    header_for(&list.meta, list.chunks.len() as u64, checksum)
+    header_for(&list.meta, &list.chunks, checksum)
 }
 
 /// The header of a file of the tree `m` describes (its node count and attributes flag
-/// give the sections' sizes) with `chunk_count` chunks.
-pub fn header_for(m: &TreeMeta, chunk_count: u64, checksum: u64) -> Vec<u8> {
+/// give the sections' sizes) cut into `chunks`.
+pub fn header_for(m: &TreeMeta, chunks: &[Chunk], checksum: u64) -> Vec<u8> {
+    let chunk_count = chunks.len() as u64;
+    let suffix_count = delta_suffix_len(chunks);
     let nodes = m.node_count as usize;
     let attribute_nodes = if m.has_attributes { nodes } else { 0 };
     let mut h = Vec::with_capacity(HEADER_BYTES);
@@ -140,7 +147,8 @@ pub fn header_for(m: &TreeMeta, chunk_count: u64, checksum: u64) -> Vec<u8> {
     let shapes_at = parents_at + 4 * nodes as u64;
     let attributes_at = shapes_at + (nodes * SHAPE_BYTES) as u64;
     let chunks_at = attributes_at + (attribute_nodes * ATTRIBUTE_BYTES) as u64;
-    let size = chunks_at + chunk_count * CHUNK_BYTES as u64;
+    let suffix_at = chunks_at + chunk_count * CHUNK_BYTES as u64;
+    let size = suffix_at + 2 * suffix_count;
     for v in [nodes_at, parents_at, size, checksum, shapes_at] {
         h.extend_from_slice(&v.to_le_bytes());
     }
@@ -153,6 +161,8 @@ pub fn header_for(m: &TreeMeta, chunk_count: u64, checksum: u64) -> Vec<u8> {
     h.extend_from_slice(&chunks_at.to_le_bytes());
     h.extend_from_slice(&(CHUNK_BYTES as u32).to_le_bytes());
     h.extend_from_slice(&chunk_count.to_le_bytes());
+    h.extend_from_slice(&suffix_at.to_le_bytes());
+    h.extend_from_slice(&suffix_count.to_le_bytes());
     h.resize(HEADER_BYTES, 0);
     h
 }
@@ -187,12 +197,14 @@ pub fn reseal(bytes: &mut [u8]) -> bool {
 
 /// Writes the list in `.spt` form to `w` (little-endian hosts write their memory as is).
 pub fn write_to(w: &mut dyn Write, list: &SequentialList) -> std::io::Result<()> {
-    let sections: [&[u8]; 5] = [
+    let suffix = delta_suffix(&list.chunks, &list.nodes);
+    let sections: [&[u8]; 6] = [
         bytemuck::cast_slice(&list.nodes),
         bytemuck::cast_slice(&list.parents),
         bytemuck::cast_slice(&list.shapes),
         bytemuck::cast_slice(&list.attributes),
         bytemuck::cast_slice(&list.chunks),
+        bytemuck::cast_slice(&suffix),
     ];
     let checksum = payload_checksum(&header_bytes(list, 0), &sections);
     w.write_all(&header_bytes(list, checksum))?;
@@ -217,6 +229,8 @@ struct Sections {
     /// Where the chunk table starts and its chunks (0 before version 4).
     chunks_at: u64,
     chunk_count: u64,
+    /// Where the δ suffix maxima start (the end of the file before version 5).
+    suffix_at: u64,
     size: u64,
 }
 
@@ -246,6 +260,12 @@ fn sections(b: &[u8], version: u32) -> Result<Sections, String> {
             .checked_mul(bytes as u64)
             .and_then(|n| n.checked_add(at))
     };
+    let chunks_end = after(chunks_at, chunk_count, CHUNK_BYTES);
+    // Before version 5: no δ suffix maxima (they end the file, empty).
+    let (suffix_at, suffix_count) = match version {
+        ..=4 => (chunks_end.unwrap_or(u64::MAX), 0),
+        _ => (u64_at(b, 224), u64_at(b, 232)),
+    };
     if nodes_at != HEADER_BYTES as u64
         || Some(parents_at) != after(nodes_at, node_count, RECORD_BYTES)
         || Some(shapes_at) != after(parents_at, node_count, 4)
@@ -255,7 +275,8 @@ fn sections(b: &[u8], version: u32) -> Result<Sections, String> {
         || Some(chunks_at) != attributes_end
         || chunk_bytes as usize != CHUNK_BYTES
         || (version >= 4 && !(1..=node_count).contains(&chunk_count))
-        || Some(size) != after(chunks_at, chunk_count, CHUNK_BYTES)
+        || Some(suffix_at) != chunks_end
+        || Some(size) != after(suffix_at, suffix_count, 2)
         || leaf_count > node_count
         || node_count == 0
     {
@@ -270,6 +291,7 @@ fn sections(b: &[u8], version: u32) -> Result<Sections, String> {
         attributes_at,
         chunks_at,
         chunk_count,
+        suffix_at,
         size,
     })
 }
@@ -310,6 +332,7 @@ pub struct SptFile {
     shapes_at: usize,
     attributes_at: usize,
     chunks_at: usize,
+    suffix_at: usize,
     /// The chunk table (read from the file; before version 4, the whole list as one chunk).
     chunks: Vec<Chunk>,
 }
@@ -338,15 +361,53 @@ impl SptFile {
         Ok(file)
     }
 
-    /// Checks the header's values and every node on its own ([`validate`]).
+    /// Checks the header's values and every node on its own ([`validate`]), and the
+    /// stored δ suffix maxima against the nodes.
     pub fn validate(&self) -> Result<(), SptError> {
         validate::check_meta(&self.meta)
             .and_then(|_| validate::check_nodes(&self.meta, self.nodes(), self.parents()))
             .and_then(|_| validate::check_chunks(self.nodes(), &self.chunks))
-            .map_err(|what| SptError::Invalid {
-                path: self.path.clone(),
-                what,
+            .and_then(|_| match self.delta_suffix() {
+                Some(stored) if stored != delta_suffix(&self.chunks, self.nodes()) => {
+                    Err("the stored δ suffix maxima differ from the nodes' δ".to_string())
+                }
+                _ => Ok(()),
             })
+            .map_err(|what| self.invalid(what))
+    }
+
+    fn invalid(&self, what: String) -> SptError {
+        SptError::Invalid {
+            path: self.path.clone(),
+            what,
+        }
+    }
+
+    /// Opens the file to stream it: checks the header, the sections' layout, the header's
+    /// values and the chunk table, and reads the prefix index the file stores, without
+    /// reading a node (a file before version 5 has its index built from its nodes). The
+    /// checksum and the nodes' own checks ([`SptFile::verify`], [`SptFile::validate`])
+    /// are left to the caller, to run beside the drawing.
+    pub fn open_for_streaming(path: &Path) -> Result<(SptFile, PrefixIndex), SptError> {
+        let file = Self::open_unverified(path)?;
+        validate::check_meta(&file.meta)
+            .and_then(|_| validate::check_chunk_table(&file.chunks, file.meta.node_count))
+            .map_err(|what| file.invalid(what))?;
+        let index = file.prefix_index().map_err(|what| file.invalid(what))?;
+        Ok((file, index))
+    }
+
+    /// The prefix index: the stored δ suffix maxima (version 5), or built from the nodes.
+    pub fn prefix_index(&self) -> Result<PrefixIndex, String> {
+        match self.delta_suffix() {
+            Some(stored) => PrefixIndex::with_suffix(&self.meta, &self.chunks, stored.to_vec()),
+            None => Ok(PrefixIndex::new(&self.meta, &self.chunks, self.nodes())),
+        }
+    }
+
+    /// The δ suffix maxima the file stores (from version 5).
+    pub fn delta_suffix(&self) -> Option<&[u16]> {
+        (self.version >= 5).then(|| bytemuck::cast_slice(&self.map[self.suffix_at..]))
     }
 
     /// Opens the file and checks its header and size, not its checksum.
@@ -409,7 +470,7 @@ impl SptFile {
             let nodes = bytemuck::cast_slice(&b[s.nodes_at as usize..s.parents_at as usize]);
             vec![Chunk::of(0, nodes)]
         } else {
-            b[s.chunks_at as usize..size as usize]
+            b[s.chunks_at as usize..s.suffix_at as usize]
                 .chunks_exact(CHUNK_BYTES)
                 .map(bytemuck::pod_read_unaligned)
                 .collect()
@@ -424,6 +485,7 @@ impl SptFile {
             shapes_at: s.shapes_at as usize,
             attributes_at: s.attributes_at as usize,
             chunks_at: s.chunks_at as usize,
+            suffix_at: s.suffix_at as usize,
             chunks,
             map,
         })

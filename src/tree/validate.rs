@@ -102,11 +102,11 @@ pub fn check_nodes(meta: &TreeMeta, nodes: &[NodeRecord], parents: &[u32]) -> Re
     }
 }
 
-/// The chunk table against the nodes (module doc).
-pub fn check_chunks(nodes: &[NodeRecord], chunks: &[Chunk]) -> Result<(), String> {
+/// The chunk table on its own: non-empty chunks that follow each other and cover the
+/// `node_count` nodes of the list (what opening a file to stream it checks).
+pub fn check_chunk_table(chunks: &[Chunk], node_count: u64) -> Result<(), String> {
     let mut at = 0u64;
     for (c, chunk) in chunks.iter().enumerate() {
-        let (lo, hi) = (chunk.centre_min, chunk.centre_max);
         if chunk.start != at || chunk.count == 0 {
             return Err(format!(
                 "chunk {c} starts at {} with {} nodes; expected a non-empty chunk at {at}",
@@ -114,12 +114,22 @@ pub fn check_chunks(nodes: &[NodeRecord], chunks: &[Chunk]) -> Result<(), String
             ));
         }
         at += chunk.count as u64;
-        if at > nodes.len() as u64 {
-            return Err(format!(
-                "chunk {c} ends at {at}, past the {} nodes",
-                nodes.len()
-            ));
+        if at > node_count {
+            return Err(format!("chunk {c} ends at {at}, past the {node_count} nodes"));
         }
+    }
+    if at != node_count {
+        return Err(format!("the chunks cover {at} of the {node_count} nodes"));
+    }
+    Ok(())
+}
+
+/// The chunk table against the nodes (module doc): [`check_chunk_table`], and every
+/// node within its chunk's box and largest radius.
+pub fn check_chunks(nodes: &[NodeRecord], chunks: &[Chunk]) -> Result<(), String> {
+    check_chunk_table(chunks, nodes.len() as u64)?;
+    for (c, chunk) in chunks.iter().enumerate() {
+        let (lo, hi) = (chunk.centre_min, chunk.centre_max);
         let inside = |r: &NodeRecord| {
             let p = r.position();
             (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]) && r.radius() <= chunk.radius_max
@@ -133,12 +143,6 @@ pub fn check_chunks(nodes: &[NodeRecord], chunks: &[Chunk]) -> Result<(), String
                 chunk.start as usize + i
             ));
         }
-    }
-    if at != nodes.len() as u64 {
-        return Err(format!(
-            "the chunks cover {at} of the {} nodes",
-            nodes.len()
-        ));
     }
     Ok(())
 }

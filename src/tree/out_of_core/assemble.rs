@@ -23,6 +23,7 @@ use crate::io::atomic::write_atomically_seekable;
 use crate::surfel::shape::SplatShape;
 use crate::tree::chunks::Chunk;
 use crate::tree::hierarchy::{Hierarchy, Internal};
+use crate::tree::select::DeltaSuffixBuilder;
 use crate::tree::spt_file::{CHECKSUM_OFFSET, header_for};
 use crate::tree::{NodeRecord, TreeMeta, attributes, build_above};
 
@@ -192,21 +193,15 @@ pub fn write_file(
         bases.push(at);
         at += p.nodes;
     }
-    let top_chunk = (t > 0).then(|| Chunk::of(0, &top.records));
-    let chunk_count = top_chunk.iter().count() as u64 + parts.iter().map(|p| p.chunks).sum::<u64>();
+    let chunks = chunk_table(parts, &bases, &top, model.has_attributes)?;
     write_atomically_seekable(path, |w| {
-        let header = header_for(&meta, chunk_count, 0);
+        let header = header_for(&meta, &chunks, 0);
         let mut out = Hashed {
             w,
             hash: Xxh3::new(),
         };
         out.put(&header)?;
-        write_sections(
-            &mut out,
-            (parts, &bases),
-            &top,
-            (top_chunk, model.has_attributes),
-        )?;
+        write_sections(&mut out, (parts, &bases), &top, (&chunks, model.has_attributes))?;
         let checksum = out.hash.digest();
         w.seek(SeekFrom::Start(CHECKSUM_OFFSET))?;
         w.write_all(&checksum.to_le_bytes())?;
@@ -215,29 +210,60 @@ pub fn write_file(
     Ok(meta)
 }
 
-/// The five sections, each from the top tree then every part.
+/// Offsets in a part file of `n` nodes of its parents, shapes, attributes and chunks.
+fn part_offsets(n: u64, has_attributes: bool) -> (u64, u64, u64, u64) {
+    let record = std::mem::size_of::<NodeRecord>() as u64;
+    let shape = std::mem::size_of::<SplatShape>() as u64;
+    let attribute = std::mem::size_of::<PointAttributes>() as u64;
+    let parents = n * record;
+    let shapes = parents + 4 * n;
+    let attributes = shapes + n * shape;
+    let chunks = attributes + if has_attributes { n * attribute } else { 0 };
+    (parents, shapes, attributes, chunks)
+}
+
+/// The whole file's chunk table: the top tree's chunk, then each part's chunks moved
+/// to its place in the list and below its root's level.
+fn chunk_table(
+    parts: &[Part],
+    bases: &[u64],
+    top: &Top,
+    has_attributes: bool,
+) -> std::io::Result<Vec<Chunk>> {
+    let mut chunks: Vec<Chunk> = Vec::new();
+    if !top.records.is_empty() {
+        chunks.push(Chunk::of(0, &top.records));
+    }
+    for (k, p) in parts.iter().enumerate() {
+        let mut f = File::open(&p.path)?;
+        f.seek(SeekFrom::Start(part_offsets(p.nodes, has_attributes).3))?;
+        let mut table = vec![<Chunk as bytemuck::Zeroable>::zeroed(); p.chunks as usize];
+        f.read_exact(bytemuck::cast_slice_mut(&mut table))?;
+        let shift = top.roots[k].0.level as u32;
+        chunks.extend(table.into_iter().map(|c| Chunk {
+            start: c.start + bases[k],
+            level: c.level + shift,
+            ..c
+        }));
+    }
+    Ok(chunks)
+}
+
+/// The six sections, each from the top tree then every part.
 fn write_sections(
     out: &mut Hashed,
     (parts, bases): (&[Part], &[u64]),
     top: &Top,
-    (top_chunk, has_attributes): (Option<Chunk>, bool),
+    (chunks, has_attributes): (&[Chunk], bool),
 ) -> std::io::Result<()> {
     let mut files: Vec<File> = parts
         .iter()
         .map(|p| File::open(&p.path))
         .collect::<Result<_, _>>()?;
-    let record = std::mem::size_of::<NodeRecord>() as u64;
-    let shape = std::mem::size_of::<SplatShape>() as u64;
-    let attribute = std::mem::size_of::<PointAttributes>() as u64;
-    // Offsets of a part's sections, from its node count.
-    let offsets = |n: u64| {
-        let parents = n * record;
-        let shapes = parents + 4 * n;
-        let attributes = shapes + n * shape;
-        let chunks = attributes + if has_attributes { n * attribute } else { 0 };
-        (parents, shapes, attributes, chunks)
-    };
+    let offsets = |n: u64| part_offsets(n, has_attributes);
+    let mut suffix = DeltaSuffixBuilder::new(chunks);
     out.put(bytemuck::cast_slice(&top.records))?;
+    suffix.feed(&top.records);
     for (k, (p, f)) in parts.iter().zip(&mut files).enumerate() {
         let (root, _) = top.roots[k];
         let shift = root.level;
@@ -248,6 +274,7 @@ fn write_sections(
             if first == 0 {
                 slab[0] = root;
             }
+            suffix.feed(slab);
         })?;
     }
     out.put(bytemuck::cast_slice(&top.parents))?;
@@ -269,22 +296,7 @@ fn write_sections(
             stream::<PointAttributes>(f, (offsets(p.nodes).2, p.nodes as usize), out, |_, _| {})?;
         }
     }
-    if let Some(c) = top_chunk {
-        out.put(bytemuck::bytes_of(&c))?;
-    }
-    for (k, (p, f)) in parts.iter().zip(&mut files).enumerate() {
-        let (base, shift) = (bases[k], top.roots[k].0.level as u32);
-        stream::<Chunk>(
-            f,
-            (offsets(p.nodes).3, p.chunks as usize),
-            out,
-            |_, slab| {
-                for c in slab.iter_mut() {
-                    c.start += base;
-                    c.level += shift;
-                }
-            },
-        )?;
-    }
+    out.put(bytemuck::cast_slice(chunks))?;
+    out.put(bytemuck::cast_slice(&suffix.finish()))?;
     Ok(())
 }
