@@ -211,7 +211,11 @@ fn version_2_files_read_as_files_without_attributes() {
     // the chunk table and the δ suffix maxima (2 bytes per block of 64 nodes).
     let n = list.nodes.len();
     let size = 256 + n * (32 + 4 + 16);
-    let blocks: usize = list.chunks.iter().map(|c| (c.count as usize).div_ceil(64)).sum();
+    let blocks: usize = list
+        .chunks
+        .iter()
+        .map(|c| (c.count as usize).div_ceil(64))
+        .sum();
     assert_eq!(bytes.len(), size + list.chunks.len() * 48 + 2 * blocks);
     // Version 2: no attributes section, no chunk table.
     bytes.truncate(size);
@@ -288,5 +292,8 @@ fn version_4_files_build_the_index_version_5_files_store_it() {
     let corrupt = dir.path().join("bad_suffix.spt");
     std::fs::write(&corrupt, &bad).unwrap();
     let err = SptFile::open(&corrupt).err().expect("refused").to_string();
-    assert!(err.contains("bad_suffix.spt") && err.contains("suffix"), "{err}");
+    assert!(
+        err.contains("bad_suffix.spt") && err.contains("suffix"),
+        "{err}"
+    );
 }

@@ -63,6 +63,18 @@ pub struct RenderArgs {
     /// GPU backend: vulkan, gl, metal, dx12 or all (default: $SPT_BACKEND, else any).
     #[arg(long)]
     pub backend: Option<String>,
+    /// Keep at most this many MiB of the list on the GPU: slices are uploaded as the view
+    /// needs them (coarse first) and the least recently needed evicted; a view whose
+    /// slices do not all fit is drawn coarser. Default: the whole list.
+    #[arg(long, value_name = "MIB", value_parser = clap::value_parser!(u64).range(1..=1 << 30))]
+    pub gpu_memory: Option<u64>,
+}
+
+impl RenderArgs {
+    /// The GPU memory budget in bytes, if one was given.
+    pub fn gpu_budget(&self) -> Option<u64> {
+        self.gpu_memory.map(|mib| mib << 20)
+    }
 }
 
 /// Parses WIDTHxHEIGHT (1–16384 each).

@@ -9,15 +9,38 @@ pub use crate::apps::frame_args::RenderArgs;
 use crate::apps::stats::Summary;
 use crate::apps::text::count;
 use crate::render::{Gpu, Renderer, Scene};
+use crate::tree::report::Silent;
+use crate::tree::select::error_per_distance;
 
 pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> {
-    let scene = Scene::open(model)?;
+    let budget = args.gpu_budget();
+    let scene = match budget {
+        Some(_) => Scene::open_for_streaming(model, &Silent)?,
+        None => Scene::open(model)?,
+    };
     let camera = args.camera(&scene)?;
     let gpu = Gpu::new(args.backend.as_deref())?;
     println!("adapter   {}", gpu.describe());
     let renderer = Renderer::new(gpu);
-    let uploaded = renderer.upload(&scene);
     let settings = args.settings();
+    let uploaded = match budget {
+        None => renderer.upload(&scene),
+        Some(bytes) => {
+            let (mut uploaded, mut residency) = renderer.begin_streaming(&scene, bytes)?;
+            let state = (&mut uploaded, &mut residency);
+            renderer.stream_for_view(&scene, state, &camera, &settings, args.size);
+            let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+            println!(
+                "gpu memory {:.1} MiB resident, peak {:.1} MiB, budget {:.1} MiB ({} of {} slices)",
+                mib(residency.resident_bytes()),
+                mib(residency.peak_bytes()),
+                mib(bytes),
+                uploaded.resident_slices(),
+                uploaded.planned_slices()
+            );
+            uploaded
+        }
+    };
     let (mut gpu_ms, mut wall_ms) = (Vec::new(), Vec::new());
     let mut last = None;
     for _ in 0..args.frames {
@@ -37,7 +60,16 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
         last = Some(frame);
     }
     let (image, stats) = last.expect("at least one frame");
+    // Under a budget the file was opened without its checks: they run now, before the
+    // picture is written.
+    scene.check_file()?;
     image.save_png(output)?;
+    if stats.coarsened {
+        let px = stats.eps / error_per_distance(1.0, camera.fov_y, args.size.1);
+        println!(
+            "lod       coarser than asked: ε = {px:.3} px (the rest of the list is not on the GPU)"
+        );
+    }
     println!(
         "splats    {} drawn of {} nodes; the GPU tested {} nodes in {} ranges of {} chunks",
         count(stats.selected as u64),

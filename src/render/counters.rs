@@ -39,7 +39,8 @@ pub(super) fn copy_counters(
     if let Some((_, resolve)) = &targets.queries {
         encoder.copy_buffer_to_buffer(resolve, 0, into, 0, 16);
     }
-    for (k, slice) in gpu_scene.slices.iter().enumerate() {
+    // The resident slices in order, as the frame's `slices` counts them.
+    for (k, slice) in gpu_scene.resident().enumerate() {
         // The indirect draw's instance count: the survivors.
         let at = Compaction::SURVIVORS_AT;
         encoder.copy_buffer_to_buffer(&slice.compaction, at, into, 16 + 4 * k as u64, 4);

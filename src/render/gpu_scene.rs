@@ -6,7 +6,12 @@ use std::ops::Range;
 
 /// One slice of the list on the GPU, with what compute culling needs.
 pub(super) struct Slice {
+    /// Its index in the scene's plan, and its first node (list index).
+    pub index: usize,
+    pub first: usize,
     pub count: u32,
+    /// Bytes of its buffers ([`super::upload::slice_bytes`]).
+    pub bytes: u64,
     /// Nodes, for vertex culling (`splats.rs`).
     pub direct: wgpu::BindGroup,
     /// Nodes, survivors (read_write) and the compaction record, for the cull pass.
@@ -35,59 +40,160 @@ pub(super) struct MeshBuffers {
     pub index_count: u32,
 }
 
-/// The list and mesh of a scene on the GPU. It may be uploaded a slice at a time, front
-/// (coarse) first: frames drawn meanwhile use what is there (see `plan.rs`).
+/// The list and mesh of a scene on the GPU. The list is planned in slices of
+/// `slice_nodes` consecutive nodes; any set of them may be resident: a prefix while a
+/// model uploads front (coarse) first, or, under a GPU memory budget, the slices the
+/// recent views needed ([`super::residency`]). Frames drawn meanwhile use what is there
+/// (see `plan.rs`).
 pub struct GpuScene {
-    pub(super) slices: Vec<Slice>,
+    /// Slot k holds slice k (nodes k·slice_nodes …) when it is resident.
+    pub(super) slices: Vec<Option<Slice>>,
     pub(super) mesh: Option<MeshBuffers>,
-    /// Slices the whole list takes.
-    pub(super) planned_slices: usize,
+    pub(super) slice_nodes: usize,
+    pub(super) total: usize,
+    resident_bytes: u64,
 }
 
-/// One slice uploaded, to be added with [`GpuScene::push`].
+/// One slice uploaded, to be added with [`GpuScene::insert`].
 pub struct SliceUpload(pub(super) Slice);
+
+impl SliceUpload {
+    /// The slice's index in its scene's plan.
+    pub fn index(&self) -> usize {
+        self.0.index
+    }
+
+    /// Bytes of its buffers on the GPU.
+    pub fn bytes(&self) -> u64 {
+        self.0.bytes
+    }
+}
 
 /// The mesh uploaded, to be added with [`GpuScene::set_mesh`].
 pub struct MeshUpload(pub(super) MeshBuffers);
 
 impl GpuScene {
+    pub(super) fn new(total: usize, slice_nodes: usize) -> GpuScene {
+        let slice_nodes = slice_nodes.max(1);
+        GpuScene {
+            slices: (0..total.div_ceil(slice_nodes)).map(|_| None).collect(),
+            mesh: None,
+            slice_nodes,
+            total,
+            resident_bytes: 0,
+        }
+    }
+
     /// Triangles of the mesh reference (0 without one).
     pub fn mesh_triangles(&self) -> u32 {
         self.mesh.as_ref().map_or(0, |m| m.index_count / 3)
     }
 
-    /// Nodes on the GPU so far: always a prefix of the list.
-    pub fn uploaded_nodes(&self) -> usize {
-        self.slices.iter().map(|s| s.count as usize).sum()
+    /// Nodes on the GPU.
+    pub fn resident_nodes(&self) -> usize {
+        self.resident().map(|s| s.count as usize).sum()
     }
 
-    /// Slices of the whole list (uploaded or not).
-    pub(super) fn planned_slices(&self) -> usize {
-        self.planned_slices
+    /// Bytes of the resident slices' buffers (nodes, shapes, attributes, survivors,
+    /// compaction record and test ranges; the mesh is not counted).
+    pub fn resident_bytes(&self) -> u64 {
+        self.resident_bytes
     }
 
-    pub fn push(&mut self, slice: SliceUpload) {
-        self.slices.push(slice.0);
+    /// Slices on the GPU.
+    pub fn resident_slices(&self) -> usize {
+        self.slices.iter().flatten().count()
+    }
+
+    /// Slices of the whole list (resident or not).
+    pub fn planned_slices(&self) -> usize {
+        self.slices.len()
+    }
+
+    /// The node range of slice `k` of the plan.
+    pub fn slice_range(&self, k: usize) -> Range<usize> {
+        k * self.slice_nodes..((k + 1) * self.slice_nodes).min(self.total)
+    }
+
+    /// The slices a node range lies in.
+    pub fn slices_of(&self, r: &Range<usize>) -> Range<usize> {
+        if r.is_empty() {
+            return 0..0;
+        }
+        r.start / self.slice_nodes..(r.end - 1) / self.slice_nodes + 1
+    }
+
+    pub fn is_resident(&self, k: usize) -> bool {
+        self.slices.get(k).is_some_and(Option::is_some)
+    }
+
+    /// Whether every node of `r` is on the GPU.
+    pub fn covers(&self, r: &Range<usize>) -> bool {
+        self.slices_of(r).all(|k| self.is_resident(k))
+    }
+
+    /// The parts of `ranges` that are on the GPU.
+    pub fn clip(&self, ranges: &[Range<usize>]) -> Vec<Range<usize>> {
+        let mut out: Vec<Range<usize>> = Vec::new();
+        for r in ranges {
+            for k in self.slices_of(r).filter(|&k| self.is_resident(k)) {
+                let s = self.slice_range(k);
+                let part = r.start.max(s.start)..r.end.min(s.end);
+                match out.last_mut() {
+                    Some(last) if last.end == part.start => last.end = part.end,
+                    _ => out.push(part),
+                }
+            }
+        }
+        out
+    }
+
+    /// The resident slices, in list order.
+    pub(super) fn resident(&self) -> impl Iterator<Item = &Slice> {
+        self.slices.iter().flatten()
+    }
+
+    /// Adds an uploaded slice (replacing the one resident in its place, if any).
+    pub fn insert(&mut self, upload: SliceUpload) {
+        let slice = upload.0;
+        let k = slice.index;
+        assert!(
+            k < self.slices.len(),
+            "slice {k} of a plan of {}",
+            self.slices.len()
+        );
+        self.resident_bytes += slice.bytes;
+        if let Some(old) = self.slices[k].replace(slice) {
+            self.resident_bytes -= old.bytes;
+        }
+    }
+
+    /// Drops slice `k` from the GPU; returns the bytes freed.
+    pub fn evict(&mut self, k: usize) -> u64 {
+        let freed = self
+            .slices
+            .get_mut(k)
+            .and_then(Option::take)
+            .map_or(0, |s| s.bytes);
+        self.resident_bytes -= freed;
+        freed
     }
 
     pub fn set_mesh(&mut self, mesh: MeshUpload) {
         self.mesh = Some(mesh.0);
     }
 
-    /// Each uploaded slice with its share of `ranges` (list indices, ascending; the
-    /// parts past the uploaded slices are left out).
+    /// Each resident slice with its share of `ranges` (list indices, ascending; the
+    /// parts in slices not resident are left out).
     pub(super) fn shares(&self, ranges: &[Range<usize>]) -> Vec<Share<'_>> {
-        let mut first = 0;
-        self.slices
-            .iter()
+        self.resident()
             .map(|slice| {
-                let end = first + slice.count as usize;
+                let (first, end) = (slice.first, slice.first + slice.count as usize);
                 let local: Vec<Range<u32>> = ranges
                     .iter()
                     .filter(|r| r.start < end && r.end > first)
                     .map(|r| (r.start.max(first) - first) as u32..(r.end.min(end) - first) as u32)
                     .collect();
-                first = end;
                 Share {
                     slice,
                     count: local.iter().map(|r| r.len() as u32).sum(),

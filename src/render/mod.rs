@@ -6,6 +6,7 @@
 //! ```text
 //! plan ─► cull ─► splats (visibility, attributes; or points) | mesh ─► shading
 //!          frame (uniform) · gbuffer · targets · gpu_scene (upload) · counters
+//!          residency (which slices stay under a GPU budget) · streamed
 //! ```
 //!
 //! [`Renderer`] composes them.
@@ -24,10 +25,12 @@ pub mod perceptual;
 mod plan;
 mod readback;
 pub mod renderer;
+pub mod residency;
 pub mod settings;
 mod shaders;
 mod shading;
 mod splats;
+mod streamed;
 mod targets;
 mod upload;
 

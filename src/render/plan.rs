@@ -1,14 +1,16 @@
 //! What the CPU decides for a frame before the GPU draws it (DESIGN.md §5): ε from the
 //! budget in pixels, the eye the level of detail is chosen for, the chunks the view
 //! cone can see and, by binary search, each one's prefix: the list ranges to hand over.
-//! While a model uploads, ε is raised until its ranges are on the GPU (a coarser cut,
-//! never a holed one).
+//! While a model uploads, or where a GPU memory budget keeps only part of it there, ε
+//! is raised until its ranges are on the GPU (a coarser cut, never a holed one), and
+//! the frame says which slices the asked ε wanted, for the streaming to fetch.
 
 use std::ops::Range;
 
 use glam::DVec3;
 
 use super::camera::Camera;
+use super::gpu_scene::GpuScene;
 use super::settings::Settings;
 use crate::tree::scene::Scene;
 use crate::tree::select::{ViewCone, error_per_distance, tested};
@@ -29,36 +31,49 @@ pub struct EncodedFrame {
     pub coarsened: bool,
     /// Slices of the list on the GPU when the frame was recorded.
     pub slices: usize,
+    /// The slices the ranges at the asked ε lie in, ascending (all resident unless
+    /// `coarsened`).
+    pub wanted_slices: Vec<usize>,
     /// The eye the level of detail was chosen for, relative to the model's origin.
     pub lod_eye: DVec3,
 }
 
 /// The least ε ≥ `eps` whose ranges (seen from `eye`, chunks culled by `cone`) lie
-/// within the first `uploaded` nodes, and those ranges. Any ε gives a complete cut of
-/// the tree, so a frame drawn while the list uploads is coarser, never holed. The
-/// ranges shrink as ε grows, so the least fitting ε is found by doubling, then
-/// bisection. (An eye within reach of a chunk not uploaded yet needs part of it at any
-/// ε: the ranges are then cut at what is there.)
+/// in the slices `gpu` holds, those ranges, and the ranges at `eps`. Any ε gives a
+/// complete cut of the tree, so a frame drawn while slices are missing is coarser, never
+/// holed. The ranges shrink as ε grows (each chunk's prefix shortens, chunks drop out),
+/// so whether they fit is monotone in ε, and the least fitting ε is found by doubling,
+/// then bisection. (An eye within reach of a chunk not on the GPU needs part of it at
+/// any ε: the ranges are then cut to what is there.)
 pub(super) fn fitting_eps(
     scene: &Scene,
     (eye, cone): (DVec3, &ViewCone),
     eps: f64,
-    uploaded: usize,
-) -> (f64, Vec<Range<usize>>) {
+    gpu: &GpuScene,
+) -> (f64, Vec<Range<usize>>, Vec<Range<usize>>) {
     let nodes = scene.nodes();
     let ranges = |e: f64| scene.index.ranges(nodes, eye, e, Some(cone));
-    let end = |r: &[Range<usize>]| r.last().map_or(0, |r| r.end);
+    let fits = |r: &[Range<usize>]| r.iter().all(|r| gpu.covers(r));
     let wanted = ranges(eps);
-    if end(&wanted) <= uploaded || uploaded == 0 {
-        return (eps, if uploaded == 0 { Vec::new() } else { wanted });
+    if fits(&wanted) || gpu.resident_nodes() == 0 {
+        let drawn = if gpu.resident_nodes() == 0 {
+            Vec::new()
+        } else {
+            wanted.clone()
+        };
+        return (eps, drawn, wanted);
     }
     // Invariant after the doubling: `at_hi` is ranges(hi) (which fits, unless 200
     // doublings did not suffice), and ranges(lo) does not fit.
     let mut lo = eps;
     let mut hi = eps.max(scene.meta().error_scale as f64 * 1e-9);
-    let mut at_hi = if hi == eps { wanted } else { ranges(hi) };
+    let mut at_hi = if hi == eps {
+        wanted.clone()
+    } else {
+        ranges(hi)
+    };
     for _ in 0..200 {
-        if end(&at_hi) <= uploaded {
+        if fits(&at_hi) {
             break;
         }
         lo = hi;
@@ -68,27 +83,23 @@ pub(super) fn fitting_eps(
     for _ in 0..40 {
         let mid = 0.5 * (lo + hi);
         let at_mid = ranges(mid);
-        if end(&at_mid) <= uploaded {
+        if fits(&at_mid) {
             (hi, at_hi) = (mid, at_mid);
         } else {
             lo = mid;
         }
     }
-    let cut = at_hi
-        .into_iter()
-        .filter_map(|r| (r.start < uploaded).then(|| r.start..r.end.min(uploaded)))
-        .collect();
-    (hi, cut)
+    (hi, gpu.clip(&at_hi), wanted)
 }
 
-/// Plans a frame of `scene` seen by `camera` over `size` pixels, with `uploaded` nodes
-/// on the GPU in `slices` slices. `compute`: whether compute culling will run.
+/// Plans a frame of `scene` seen by `camera` over `size` pixels, with what `gpu` holds
+/// of its list. `compute`: whether compute culling will run.
 pub(super) fn plan(
     scene: &Scene,
     camera: &Camera,
     settings: &Settings,
     (width, height): (u32, u32),
-    (uploaded, slices): (usize, usize),
+    gpu: &GpuScene,
     compute: bool,
 ) -> EncodedFrame {
     let eps = error_per_distance(settings.error_px, camera.fov_y, height);
@@ -97,14 +108,17 @@ pub(super) fn plan(
     let lod_eye = settings.lod_eye.unwrap_or(camera.eye) - DVec3::from(meta.origin);
     let aspect = width as f64 / height.max(1) as f64;
     let cone = camera.view_cone(meta, aspect, settings.radius_scale as f64);
-    let (lod_eps, ranges) = fitting_eps(scene, (lod_eye, &cone), wanted_eps, uploaded);
+    let (lod_eps, ranges, wanted) = fitting_eps(scene, (lod_eye, &cone), wanted_eps, gpu);
+    let mut wanted_slices: Vec<usize> = wanted.iter().flat_map(|r| gpu.slices_of(r)).collect();
+    wanted_slices.dedup();
     EncodedFrame {
         tested: tested(&ranges),
         ranges,
         compute,
         eps: lod_eps,
         coarsened: lod_eps != wanted_eps,
-        slices,
+        slices: gpu.resident().count(),
+        wanted_slices,
         lod_eye,
     }
 }

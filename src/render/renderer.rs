@@ -58,6 +58,10 @@ pub struct FrameStats {
     pub gpu_ms: Option<f64>,
     /// Splats the GPU drew, counted by the compute culling (None with vertex culling).
     pub gpu_drawn: Option<u64>,
+    /// ε of the selection, world error per unit of distance, and whether it was raised
+    /// above the asked one because the GPU did not hold the asked ranges.
+    pub eps: f64,
+    pub coarsened: bool,
 }
 
 pub struct Renderer {
@@ -115,8 +119,7 @@ impl Renderer {
             anyhow::bail!("mesh mode needs a model with faces, read from its PLY file");
         }
         let compute = settings.culling == Culling::Compute && settings.mode != Mode::Mesh;
-        let uploaded = (gpu_scene.uploaded_nodes(), gpu_scene.slices.len());
-        let frame = plan(scene, camera, settings, targets.size, uploaded, compute);
+        let frame = plan(scene, camera, settings, targets.size, gpu_scene, compute);
         let uniform = FrameUniform::new(scene.meta(), camera, settings, targets.size, frame.eps);
         let queue = &self.gpu.queue;
         queue.write_buffer(&targets.frame_buffer, 0, bytemuck::bytes_of(&uniform));
@@ -180,10 +183,11 @@ impl Renderer {
     pub fn upload_reporting(&self, scene: &Scene, report: &dyn Report) -> GpuScene {
         let nodes = scene.nodes();
         report.step(Step::Upload, nodes.len() as u64);
-        let mut gpu_scene = self.empty_gpu_scene(nodes.len());
-        for range in self.slice_plan(nodes.len()) {
+        let mut gpu_scene = self.empty_gpu_scene(scene, None);
+        for k in 0..gpu_scene.planned_slices() {
+            let range = gpu_scene.slice_range(k);
             report.advance(range.len() as u64);
-            gpu_scene.push(self.upload_slice(scene, range));
+            gpu_scene.insert(self.upload_slice(scene, k, range));
         }
         if let Some(mesh) = self.upload_mesh(scene) {
             gpu_scene.set_mesh(mesh);
@@ -191,34 +195,32 @@ impl Renderer {
         gpu_scene
     }
 
-    /// The node ranges of the slices of a list of `total` nodes, front first.
-    pub fn slice_plan(&self, total: usize) -> impl Iterator<Item = std::ops::Range<usize>> {
-        upload::slice_plan(&self.gpu, total)
+    /// A scene's list with nothing uploaded yet, planned in slices for a GPU memory
+    /// `budget` (bytes) or, without one, in the largest slices a binding holds.
+    pub fn empty_gpu_scene(&self, scene: &Scene, budget: Option<u64>) -> GpuScene {
+        let total = scene.nodes().len();
+        upload::empty_gpu_scene(&self.gpu, total, budget, scene.meta().has_attributes)
     }
 
-    /// A scene of `total` nodes with nothing uploaded yet.
-    pub fn empty_gpu_scene(&self, total: usize) -> GpuScene {
-        upload::empty_gpu_scene(&self.gpu, total)
-    }
-
-    /// Uploads one slice of a scene's list (a range given by [`Renderer::slice_plan`]),
-    /// to be pushed in order.
-    pub fn upload_slice(&self, scene: &Scene, range: std::ops::Range<usize>) -> SliceUpload {
+    /// Uploads slice `k` of a scene's list, the node `range` of the plan of
+    /// [`Renderer::empty_gpu_scene`] ([`GpuScene::slice_range`]).
+    pub fn upload_slice(
+        &self,
+        scene: &Scene,
+        k: usize,
+        range: std::ops::Range<usize>,
+    ) -> SliceUpload {
         let attributes = scene.attributes().get(range.clone()).unwrap_or(&[]);
-        let max_ranges = scene
-            .index
-            .chunks()
-            .iter()
-            .filter(|c| c.range().start < range.end && c.range().end > range.start)
-            .count();
+        let max_ranges = super::streamed::max_ranges(scene, &range);
         let slice = (
             &scene.nodes()[range.clone()],
-            &scene.shapes()[range],
+            &scene.shapes()[range.clone()],
             attributes,
         );
         upload::upload_slice(
             &self.gpu.device,
             (&self.splats, &self.cull),
+            (k, range.start),
             slice,
             max_ranges,
         )
@@ -310,6 +312,8 @@ impl Renderer {
                 selected,
                 gpu_ms: counters.gpu_ms,
                 gpu_drawn: counters.drawn,
+                eps: frame.eps,
+                coarsened: frame.coarsened,
             },
         ))
     }

@@ -1,7 +1,8 @@
 //! Putting a scene on the GPU: the list in slices of at most one storage binding (and
 //! one dispatch of the cull pass), each with its survivor list and compaction record,
-//! front (coarse) first, so that a model can be drawn while the rest arrives; and the
-//! mesh of the reference pass.
+//! front (coarse) first, so that a model can be drawn while the rest arrives, or under
+//! a GPU memory budget in smaller slices, uploaded as views need them; and the mesh of
+//! the reference pass.
 
 use wgpu::util::DeviceExt;
 
@@ -16,27 +17,64 @@ use crate::tree::record::{PointAttributes, SplatShape};
 /// Nodes per slice at most: one dispatch of 65,535 workgroups covers a slice.
 const MAX_SLICE_NODES: u64 = 65_535 * WORKGROUP_SIZE as u64;
 
-/// Nodes per slice: one storage binding, one dispatch.
-fn nodes_per_slice(gpu: &Gpu) -> usize {
+/// Nodes per slice at most: one storage binding, one dispatch.
+fn max_slice_nodes(gpu: &Gpu) -> usize {
     let record = std::mem::size_of::<NodeRecord>() as u64;
     (gpu.max_binding_bytes() / record).clamp(1, MAX_SLICE_NODES) as usize
 }
 
-/// The node ranges of the slices of a list of `total` nodes, front first.
-pub(super) fn slice_plan(gpu: &Gpu, total: usize) -> impl Iterator<Item = std::ops::Range<usize>> {
-    let per_slice = nodes_per_slice(gpu);
-    (0..total)
-        .step_by(per_slice)
-        .map(move |start| start..(start + per_slice).min(total))
+/// Slices of at least this many nodes under a budget (smaller ones cost more draw calls
+/// than they save memory).
+const MIN_BUDGET_SLICE_NODES: usize = 1 << 14;
+
+/// A budget holds at least this many slices, so that it can keep the coarse front of the
+/// list and still follow the view.
+const SLICES_PER_BUDGET: u64 = 64;
+
+/// GPU bytes per node of a slice: its record, shape, survivor index and, for a model
+/// with LiDAR attributes, those.
+fn node_bytes(has_attributes: bool) -> u64 {
+    (std::mem::size_of::<NodeRecord>()
+        + std::mem::size_of::<SplatShape>()
+        + std::mem::size_of::<u32>()
+        + if has_attributes {
+            std::mem::size_of::<PointAttributes>()
+        } else {
+            0
+        }) as u64
 }
 
-/// A scene of `total` nodes with nothing uploaded yet.
-pub(super) fn empty_gpu_scene(gpu: &Gpu, total: usize) -> GpuScene {
-    GpuScene {
-        slices: Vec::new(),
-        mesh: None,
-        planned_slices: slice_plan(gpu, total).count(),
-    }
+/// Bytes of the buffers [`upload_slice`] makes for `count` nodes with room for
+/// `max_ranges` test ranges.
+pub(super) fn slice_bytes(count: usize, has_attributes: bool, max_ranges: usize) -> u64 {
+    let none = if has_attributes {
+        0
+    } else {
+        std::mem::size_of::<PointAttributes>()
+    };
+    count as u64 * node_bytes(has_attributes)
+        + (none + std::mem::size_of::<Compaction>()) as u64
+        + (std::mem::size_of::<TestRange>() * max_ranges.max(1)) as u64
+}
+
+/// A scene of `total` nodes with nothing uploaded yet, planned in slices of the most
+/// nodes a binding holds, or under a GPU memory budget of `budget` bytes in slices of
+/// about 1/64 of what it holds.
+pub(super) fn empty_gpu_scene(
+    gpu: &Gpu,
+    total: usize,
+    budget: Option<u64>,
+    has_attributes: bool,
+) -> GpuScene {
+    let most = max_slice_nodes(gpu);
+    let slice_nodes = match budget {
+        None => most,
+        Some(bytes) => {
+            let fit = (bytes / node_bytes(has_attributes) / SLICES_PER_BUDGET) as usize;
+            fit.clamp(MIN_BUDGET_SLICE_NODES.min(most), most)
+        }
+    };
+    GpuScene::new(total, slice_nodes)
 }
 
 /// A bind group of `layout` with each (binding, buffer) of `buffers`.
@@ -59,13 +97,14 @@ fn bind(
     })
 }
 
-/// Uploads one slice of the list (a range of [`slice_plan`]): its node records, their
-/// shapes and LiDAR attributes (empty for a model without: one zero is bound in their
-/// place), bound for both culling strategies, with room for `max_ranges` test ranges,
-/// to be pushed in order.
+/// Uploads slice `index` of the list, whose first node is `first`: its node records,
+/// their shapes and LiDAR attributes (empty for a model without: one zero is bound in
+/// their place), bound for both culling strategies, with room for `max_ranges` test
+/// ranges.
 pub(super) fn upload_slice(
     device: &wgpu::Device,
     (splats, cull): (&SplatPasses, &CullPass),
+    (index, first): (usize, usize),
     (chunk, chunk_shapes, chunk_attributes): (&[NodeRecord], &[SplatShape], &[PointAttributes]),
     max_ranges: usize,
 ) -> SliceUpload {
@@ -111,7 +150,10 @@ pub(super) fn upload_slice(
         mapped_at_creation: false,
     });
     SliceUpload(Slice {
+        index,
+        first,
         count: chunk.len() as u32,
+        bytes: slice_bytes(chunk.len(), !chunk_attributes.is_empty(), max_ranges),
         direct: bind(
             device,
             &splats.nodes_layout,

@@ -63,7 +63,9 @@ impl Scene {
             report.step(Step::Check, 0);
             let file = SptFile::open(path)?;
             report.step(Step::Index, 0);
-            let index = file.prefix_index().map_err(|what| anyhow::anyhow!("{what}"))?;
+            let index = file
+                .prefix_index()
+                .map_err(|what| anyhow::anyhow!("{what}"))?;
             return Ok(Scene {
                 tree: TreeSource::File(file),
                 index,
@@ -73,6 +75,32 @@ impl Scene {
         let (list, mesh) = build_from_file(path, true, report)?;
         report.step(Step::Index, 0);
         Ok(Scene::from_list(list, mesh))
+    }
+
+    /// Opens a model to stream it to the GPU: an `.spt` file with its header and chunk
+    /// table checked and its stored prefix index read, not its nodes (the caller checks
+    /// them beside the drawing: [`Scene::check_file`]); a model file as [`Scene::open`].
+    pub fn open_for_streaming(path: &Path, report: &dyn Report) -> anyhow::Result<Scene> {
+        if !is_spt(path) {
+            return Scene::open_reporting(path, report);
+        }
+        report.step(Step::Index, 0);
+        let (file, index) = SptFile::open_for_streaming(path)?;
+        Ok(Scene {
+            tree: TreeSource::File(file),
+            index,
+            mesh: None,
+        })
+    }
+
+    /// The checks [`Scene::open_for_streaming`] left out: an `.spt` file's checksum and
+    /// every node's values (nothing to do for a model built in memory).
+    pub fn check_file(&self) -> anyhow::Result<()> {
+        if let TreeSource::File(file) = &self.tree {
+            file.verify()?;
+            file.validate()?;
+        }
+        Ok(())
     }
 
     /// The scene of geometry already read (its mesh kept when it has triangles).

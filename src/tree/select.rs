@@ -171,7 +171,11 @@ impl<'a> DeltaSuffixBuilder<'a> {
                 *last = (*last).max(r.delta);
             }
             self.fed += 1;
-            if self.chunks.get(self.chunk).is_some_and(|c| self.fed == c.count as usize) {
+            if self
+                .chunks
+                .get(self.chunk)
+                .is_some_and(|c| self.fed == c.count as usize)
+            {
                 for b in (0..self.blocks.len().saturating_sub(1)).rev() {
                     self.blocks[b] = self.blocks[b].max(self.blocks[b + 1]);
                 }
@@ -199,7 +203,10 @@ pub fn delta_suffix(chunks: &[Chunk], nodes: &[NodeRecord]) -> Vec<u16> {
 
 /// Blocks of [`BLOCK`] nodes in the chunks: the length of their δ suffix maxima.
 pub fn delta_suffix_len(chunks: &[Chunk]) -> u64 {
-    chunks.iter().map(|c| (c.count as u64).div_ceil(BLOCK as u64)).sum()
+    chunks
+        .iter()
+        .map(|c| (c.count as u64).div_ceil(BLOCK as u64))
+        .sum()
 }
 
 impl PrefixIndex {

@@ -115,7 +115,9 @@ pub fn check_chunk_table(chunks: &[Chunk], node_count: u64) -> Result<(), String
         }
         at += chunk.count as u64;
         if at > node_count {
-            return Err(format!("chunk {c} ends at {at}, past the {node_count} nodes"));
+            return Err(format!(
+                "chunk {c} ends at {at}, past the {node_count} nodes"
+            ));
         }
     }
     if at != node_count {

@@ -150,7 +150,8 @@ impl App {
     fn open(&mut self, path: &Path) {
         let Some(w) = &self.windowed else { return };
         let proxy = self.proxy.clone();
-        self.loading = Some(Loading::start(path, w.viewer.renderer.clone(), move || {
+        let within = (w.viewer.renderer.clone(), self.args.render.gpu_budget());
+        self.loading = Some(Loading::start_within(path, within, move || {
             let _ = proxy.send_event(Wake);
         }));
         self.message = None;
@@ -219,6 +220,15 @@ impl App {
                         path.file_name()
                             .map_or_else(String::new, |n| n.to_string_lossy().to_string())
                     ));
+                }
+                Ok(Loaded::Streamed(residency)) => {
+                    let proxy = self.proxy.clone();
+                    let wake = move || {
+                        let _ = proxy.send_event(Wake);
+                    };
+                    if let Err(e) = w.viewer.stream(residency, wake) {
+                        self.message = Some((format!("{e:#}"), true));
+                    }
                 }
                 Ok(Loaded::Slice(slice)) => w.viewer.add_slice(slice),
                 Ok(Loaded::Mesh(mesh)) => w.viewer.add_mesh(mesh),
@@ -371,8 +381,9 @@ impl App {
                 }
             );
         }
-        // The scripted frames start once the whole model is on the GPU.
-        if w.viewer.model.is_some() && self.loading.is_none() {
+        // The scripted frames start once the whole model is on the GPU (under a budget:
+        // checked, and what the view wants streamed in).
+        if w.viewer.model.is_some() && self.loading.is_none() && w.viewer.is_streaming_settled() {
             self.script.frames += 1;
             if self.script.frames > 1 {
                 self.script.frame_ms.push(seconds * 1e3);
@@ -436,6 +447,16 @@ impl App {
                 s.median,
                 w.viewer.stats.frame_error_px,
                 self.args.target_ms.unwrap_or_default()
+            );
+        }
+        if let Some(s) = w.viewer.model.as_ref().and_then(|m| m.streamer.as_ref()) {
+            let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+            let r = &s.residency;
+            println!(
+                "gpu memory {:.1} MiB resident, peak {:.1} MiB, budget {:.1} MiB",
+                mib(r.resident_bytes()),
+                mib(r.peak_bytes()),
+                mib(r.budget())
             );
         }
         println!("wrote     {}", path.display());

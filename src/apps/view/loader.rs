@@ -7,6 +7,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, mpsc};
 use std::time::Instant;
 
+use crate::render::residency::Residency;
 use crate::render::{GpuScene, MeshUpload, Renderer, Scene, SliceUpload};
 use crate::tree::report::{Report, Step};
 
@@ -62,11 +63,14 @@ impl Progress {
     }
 }
 
-/// What the loader hands over, in order: the scene with an empty GPU list, the list's
-/// slices front (coarse) first, the mesh if any, then `Done`. The viewer draws from the
-/// first message on.
+/// What the loader hands over, in order: the scene with the first slice of its list on
+/// the GPU, then either the list's other slices front (coarse) first, or under a GPU
+/// memory budget the residency to stream the list with (and, for an `.spt` file, its
+/// checks run meanwhile); the mesh if any, then `Done`. The viewer draws from the first
+/// message on.
 pub enum Loaded {
     Scene(Arc<Scene>, GpuScene),
+    Streamed(Residency),
     Slice(SliceUpload),
     Mesh(MeshUpload),
     Done,
@@ -81,24 +85,32 @@ pub struct Loading {
     finished: bool,
 }
 
-/// Opens the scene and uploads it, message by message; `wake` after each.
+/// Opens the scene and uploads it (all of it, or under `budget` bytes its first slice),
+/// message by message; `wake` after each.
 fn load(
     path: &Path,
-    renderer: &Renderer,
+    (renderer, budget): (&Renderer, Option<u64>),
     report: &Progress,
     send: &dyn Fn(Loaded) -> bool,
 ) -> anyhow::Result<()> {
+    if let Some(budget) = budget {
+        return load_streamed(path, (renderer, budget), report, send);
+    }
     let scene = Arc::new(Scene::open_reporting(path, report)?);
     let total = scene.nodes().len();
-    let mut gpu_scene = Some(renderer.empty_gpu_scene(total));
+    let planned = renderer.empty_gpu_scene(&scene, None);
+    let ranges: Vec<_> = (0..planned.planned_slices())
+        .map(|k| planned.slice_range(k))
+        .collect();
+    let mut gpu_scene = Some(planned);
     report.step(Step::Upload, total as u64);
-    for range in renderer.slice_plan(total) {
+    for (k, range) in ranges.into_iter().enumerate() {
         report.advance(range.len() as u64);
-        let slice = renderer.upload_slice(&scene, range);
+        let slice = renderer.upload_slice(&scene, k, range);
         // The first slice goes with the scene, so that the first frame has something.
         let message = match gpu_scene.take() {
             Some(mut g) => {
-                g.push(slice);
+                g.insert(slice);
                 Loaded::Scene(scene.clone(), g)
             }
             None => Loaded::Slice(slice),
@@ -120,11 +132,42 @@ fn load(
     Ok(())
 }
 
+/// [`load`] under a GPU memory budget: the scene with its first slice, the residency,
+/// the mesh, then the checks of an `.spt` file that its opening left out.
+fn load_streamed(
+    path: &Path,
+    (renderer, budget): (&Renderer, u64),
+    report: &Progress,
+    send: &dyn Fn(Loaded) -> bool,
+) -> anyhow::Result<()> {
+    let scene = Arc::new(Scene::open_for_streaming(path, report)?);
+    let (gpu_scene, residency) = renderer.begin_streaming(&scene, budget)?;
+    if !send(Loaded::Scene(scene.clone(), gpu_scene)) || !send(Loaded::Streamed(residency)) {
+        return Ok(());
+    }
+    if let Some(mesh) = renderer.upload_mesh(&scene) {
+        send(Loaded::Mesh(mesh));
+    }
+    report.step(Step::Check, 0);
+    scene.check_file()?;
+    send(Loaded::Done);
+    Ok(())
+}
+
 impl Loading {
     /// Starts opening `path` on its own thread; `wake` is called after each message.
     pub fn start(
         path: &Path,
         renderer: Arc<Renderer>,
+        wake: impl Fn() + Send + 'static,
+    ) -> Loading {
+        Loading::start_within(path, (renderer, None), wake)
+    }
+
+    /// [`Loading::start`] under a GPU memory budget of `budget` bytes, when given.
+    pub fn start_within(
+        path: &Path,
+        (renderer, budget): (Arc<Renderer>, Option<u64>),
         wake: impl Fn() + Send + 'static,
     ) -> Loading {
         let progress = Arc::new(Progress::default());
@@ -139,7 +182,9 @@ impl Loading {
                     delivered
                 };
                 let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    load(&owned_path, &renderer, &report, &|m| deliver(Ok(m)))
+                    load(&owned_path, (&renderer, budget), &report, &|m| {
+                        deliver(Ok(m))
+                    })
                 }))
                 .unwrap_or_else(|panic| {
                     let what = panic
@@ -209,7 +254,8 @@ impl Loading {
         for message in self.result.iter() {
             match message? {
                 Loaded::Scene(s, g) => scene = Some((s, g)),
-                Loaded::Slice(slice) => scene.as_mut().expect("scene first").1.push(slice),
+                Loaded::Slice(slice) => scene.as_mut().expect("scene first").1.insert(slice),
+                Loaded::Streamed(_) => {}
                 Loaded::Mesh(mesh) => scene.as_mut().expect("scene first").1.set_mesh(mesh),
                 Loaded::Done => break,
             }

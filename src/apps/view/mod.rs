@@ -17,6 +17,7 @@ pub mod loader;
 pub mod pacing;
 mod panel;
 mod present;
+pub mod streamer;
 pub mod viewer;
 
 use std::path::PathBuf;

@@ -243,6 +243,19 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
                     row("", "coarser until uploaded".into());
                 }
             }
+            if let Some(s) = &m.streamer {
+                let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+                let r = &s.residency;
+                row(
+                    "GPU memory",
+                    format!(
+                        "{:.0} / {:.0} MiB resident (peak {:.0})",
+                        mib(r.resident_bytes()),
+                        mib(r.budget()),
+                        mib(r.peak_bytes())
+                    ),
+                );
+            }
             let meta = m.scene.meta();
             row(
                 "model",

@@ -12,7 +12,9 @@ use super::controls::OrbitCamera;
 use super::input::{Button, Command, Input, Move};
 pub use super::pacing::ERROR_PX_RANGE;
 use super::pacing::Pacer;
+use super::streamer::Streamer;
 use crate::render::camera::bounding_sphere;
+use crate::render::residency::Residency;
 use crate::render::{
     Camera, CounterReadback, EncodedFrame, FrameTargets, GpuCounters, GpuScene, MeshUpload, Mode,
     Renderer, Scene, Settings, SliceUpload,
@@ -27,6 +29,8 @@ pub struct Model {
     /// Seconds from the request to open it to all of it on the GPU (None while uploading).
     pub load_seconds: Option<f64>,
     counters: CounterReadback,
+    /// Under a GPU memory budget: what streams the list's slices in and out.
+    pub streamer: Option<Streamer>,
     pub camera: OrbitCamera,
     home: OrbitCamera,
 }
@@ -123,6 +127,7 @@ impl Viewer {
             gpu_scene,
             load_seconds: None,
             counters,
+            streamer: None,
             camera: orbit,
             home: orbit,
         });
@@ -131,8 +136,31 @@ impl Viewer {
     /// The next slice of the model's list, uploaded.
     pub fn add_slice(&mut self, slice: SliceUpload) {
         if let Some(m) = &mut self.model {
-            m.gpu_scene.push(slice);
+            m.gpu_scene.insert(slice);
         }
+    }
+
+    /// Streams the model's list under the budget of `residency` from now on (its first
+    /// slice resident); `wake` after each upload.
+    pub fn stream(
+        &mut self,
+        residency: Residency,
+        wake: impl Fn() + Send + 'static,
+    ) -> anyhow::Result<()> {
+        if let Some(m) = &mut self.model {
+            let renderer = self.renderer.clone();
+            m.streamer = Some(Streamer::start(m.scene.clone(), renderer, residency, wake)?);
+        }
+        Ok(())
+    }
+
+    /// Whether what the view wants is on the GPU (always, without a budget), or as much
+    /// of it as the budget holds.
+    pub fn is_streaming_settled(&self) -> bool {
+        self.model
+            .as_ref()
+            .and_then(|m| m.streamer.as_ref())
+            .is_none_or(Streamer::is_settled)
     }
 
     pub fn add_mesh(&mut self, mesh: MeshUpload) {
@@ -308,6 +336,9 @@ impl Viewer {
         self.stats.frame_error_px = settings.error_px;
         match &mut self.model {
             Some(m) => {
+                if let Some(s) = &mut m.streamer {
+                    s.receive(&mut m.gpu_scene);
+                }
                 let camera = m.camera.camera();
                 let frame = self.renderer.encode(
                     encoder,
@@ -318,6 +349,11 @@ impl Viewer {
                     &settings,
                 )?;
                 m.counters.record(encoder, targets, &m.gpu_scene, &frame);
+                if let Some(s) = &mut m.streamer {
+                    // Slices evicted here stay alive until the recorded frame is done.
+                    let scene = (&*self.renderer, &*m.scene);
+                    s.after_frame(scene, &mut m.gpu_scene, &frame.wanted_slices);
+                }
                 self.stats.frame = Some(frame);
             }
             None => self

@@ -201,7 +201,12 @@ pub fn write_file(
             hash: Xxh3::new(),
         };
         out.put(&header)?;
-        write_sections(&mut out, (parts, &bases), &top, (&chunks, model.has_attributes))?;
+        write_sections(
+            &mut out,
+            (parts, &bases),
+            &top,
+            (&chunks, model.has_attributes),
+        )?;
         let checksum = out.hash.digest();
         w.seek(SeekFrom::Start(CHECKSUM_OFFSET))?;
         w.write_all(&checksum.to_le_bytes())?;
