@@ -164,7 +164,7 @@ impl<'a> DeltaSuffixBuilder<'a> {
     /// Takes the next nodes of the list.
     pub fn feed(&mut self, nodes: &[NodeRecord]) {
         for r in nodes {
-            if self.fed % BLOCK == 0 {
+            if self.fed.is_multiple_of(BLOCK) {
                 self.blocks.push(r.delta);
             } else {
                 let last = self.blocks.last_mut().expect("a block was started");
