@@ -89,11 +89,6 @@ impl GpuScene {
         self.mesh.as_ref().map_or(0, |m| m.index_count / 3)
     }
 
-    /// Nodes on the GPU.
-    pub fn resident_nodes(&self) -> usize {
-        self.resident().map(|s| s.count as usize).sum()
-    }
-
     /// Bytes of the resident slices' buffers (nodes, shapes, attributes, survivors,
     /// compaction record and test ranges; the mesh is not counted).
     pub fn resident_bytes(&self) -> u64 {

@@ -55,13 +55,11 @@ pub(super) fn fitting_eps(
     let ranges = |e: f64| scene.index.ranges(nodes, eye, e, Some(cone));
     let fits = |r: &[Range<usize>]| r.iter().all(|r| gpu.covers(r));
     let wanted = ranges(eps);
-    if fits(&wanted) || gpu.resident_nodes() == 0 {
-        let drawn = if gpu.resident_nodes() == 0 {
-            Vec::new()
-        } else {
-            wanted.clone()
-        };
-        return (eps, drawn, wanted);
+    if gpu.resident_slices() == 0 {
+        return (eps, Vec::new(), wanted);
+    }
+    if fits(&wanted) {
+        return (eps, wanted.clone(), wanted);
     }
     // Invariant after the doubling: `at_hi` is ranges(hi) (which fits, unless 200
     // doublings did not suffice), and ranges(lo) does not fit.

@@ -65,7 +65,7 @@ impl Renderer {
             }
             for k in decision.fetch {
                 let slice = self.upload_slice(scene, k, gpu.slice_range(k));
-                residency.arrived(k, self.slice_bytes(scene, gpu, k));
+                residency.arrived(k, slice.bytes());
                 gpu.insert(slice);
             }
         }

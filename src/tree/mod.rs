@@ -289,6 +289,34 @@ fn fill_internal(
     }
 }
 
+/// Grows the leaves' records, shapes and attributes (empty when the model has none) to
+/// the hierarchy's nodes, fills the internal ones ([`fill_internal`]) and links every
+/// node to its parent ([`link_parents`]); returns each node's level and parent id.
+fn complete_internal(
+    hierarchy: &Hierarchy,
+    (records, shapes, attributes): (
+        &mut Vec<NodeRecord>,
+        &mut Vec<SplatShape>,
+        &mut Vec<PointAttributes>,
+    ),
+    (scale, oriented): (f32, bool),
+    report: &dyn Report,
+) -> (Vec<u16>, Vec<u32>) {
+    let n = records.len();
+    let total = hierarchy.node_count();
+    records.resize(total, NodeRecord::new(Vec3::ZERO, 0.0, Vec3::Z, [0; 4]));
+    shapes.resize(total, SplatShape::circle(Vec3::Z));
+    if !attributes.is_empty() {
+        attributes.resize(total, PointAttributes::default());
+    }
+    let levels = hierarchy.levels();
+    let slices = (&mut records[..], &mut shapes[..], &mut attributes[..]);
+    fill_internal(hierarchy, &levels, slices, (scale, oriented), report);
+    let parent_ids = hierarchy.parents();
+    link_parents(records, &parent_ids, &levels, n, scale);
+    (levels, parent_ids)
+}
+
 /// The nodes above subtrees built apart (the top tree of an out-of-core build): given
 /// the subtrees' roots (records, shapes, attributes: empty when the model has none) as
 /// the leaves of `hierarchy`, the internal nodes' records as [`build_records`] makes
@@ -303,18 +331,8 @@ pub fn build_above(
     ),
     (scale, oriented): (f32, bool),
 ) -> NodeSet {
-    let n = records.len();
-    let total = hierarchy.node_count();
-    records.resize(total, NodeRecord::new(Vec3::ZERO, 0.0, Vec3::Z, [0; 4]));
-    shapes.resize(total, SplatShape::circle(Vec3::Z));
-    if !attributes.is_empty() {
-        attributes.resize(total, PointAttributes::default());
-    }
-    let levels = hierarchy.levels();
-    let slices = (&mut records[..], &mut shapes[..], &mut attributes[..]);
-    fill_internal(&hierarchy, &levels, slices, (scale, oriented), &Silent);
-    let parent_ids = hierarchy.parents();
-    link_parents(&mut records, &parent_ids, &levels, n, scale);
+    let nodes = (&mut records, &mut shapes, &mut attributes);
+    let (_, parent_ids) = complete_internal(&hierarchy, nodes, (scale, oriented), &Silent);
     NodeSet {
         hierarchy,
         records,
@@ -352,15 +370,9 @@ pub fn build_records_scaled(
         Vec::new()
     };
     drop(leaves.surfels);
-    records.resize(total, NodeRecord::new(Vec3::ZERO, 0.0, Vec3::Z, [0; 4]));
-    shapes.resize(total, SplatShape::circle(Vec3::Z));
-
-    let levels = hierarchy.levels();
+    let nodes = (&mut records, &mut shapes, &mut attributes);
+    let (levels, parent_ids) = complete_internal(&hierarchy, nodes, (scale, oriented), report);
     let depth = levels.iter().copied().max().unwrap_or(0);
-    let slices = (&mut records[..], &mut shapes[..], &mut attributes[..]);
-    fill_internal(&hierarchy, &levels, slices, (scale, oriented), report);
-    let parent_ids = hierarchy.parents();
-    link_parents(&mut records, &parent_ids, &levels, n, scale);
     let (centre_min, centre_max) = records
         .par_iter()
         .map(|r| (r.position(), r.position()))

@@ -53,6 +53,14 @@ pub struct Stats {
 }
 
 impl Stats {
+    /// Takes the counters of a frame that arrived, if one did.
+    fn took(&mut self, arrived: Option<(EncodedFrame, GpuCounters)>) {
+        if let Some((frame, counters)) = arrived {
+            self.gpu = counters;
+            self.measured_tested = frame.tested;
+        }
+    }
+
     fn frame_presented(&mut self, now: Instant) {
         self.recent.push_back(now);
         while self
@@ -392,11 +400,8 @@ impl Viewer {
     }
 
     fn collect_counters(&mut self) {
-        if let Some(m) = &mut self.model
-            && let Some((frame, counters)) = m.counters.poll(&self.renderer.gpu)
-        {
-            self.stats.gpu = counters;
-            self.stats.measured_tested = frame.tested;
+        if let Some(m) = &mut self.model {
+            self.stats.took(m.counters.poll(&self.renderer.gpu));
         }
     }
 
@@ -410,11 +415,9 @@ impl Viewer {
         self.draw(&mut encoder, size)?;
         self.renderer.gpu.queue.submit([encoder.finish()]);
         self.submitted();
-        if let Some(m) = &mut self.model
-            && let Some((frame, counters)) = m.counters.wait(&self.renderer.gpu)?
-        {
-            self.stats.gpu = counters;
-            self.stats.measured_tested = frame.tested;
+        if let Some(m) = &mut self.model {
+            let arrived = m.counters.wait(&self.renderer.gpu)?;
+            self.stats.took(arrived);
         }
         if moving {
             self.frame_took(start.elapsed().as_secs_f64() * 1e3);
