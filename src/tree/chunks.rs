@@ -7,8 +7,9 @@
 //! nodes above them (whose subtrees are larger) making the *top* part; then each part
 //! is cut across into bands of levels ([`by_level`]), each band at least a
 //! sixteenth of `max_nodes` (its lowest level excepted). Each band is a chunk: its
-//! nodes, its box and its least error. The list holds the chunks by their first level,
-//! then in the hierarchy's order, which is spatial: coarse chunks first.
+//! nodes, its box and its least error. The list holds the chunks coarse first: by the
+//! octave of their largest parent error, then by their first level, then in the
+//! hierarchy's order, which is spatial ([`coarse_first`]).
 //!
 //! **Why bands.** In a tree of 2–4 children, the nodes above any cut are a third as
 //! many as the cut: a chunk holding whole subtrees hands its nodes above the cut to the
@@ -201,12 +202,27 @@ pub fn cut(h: &Hierarchy, max_nodes: usize) -> Cut {
     Cut { chunks }
 }
 
+/// The order of chunks in the list, coarse first: by the binary octave of the chunk's
+/// largest parent error (f16 bits, non-negative: the exponent field), descending, then
+/// by its least level. A view at ε needs chunk c only if that largest parent error
+/// exceeds ε · (d_min(c) − Δ_c[0]) (module doc), so over chunks at similar distances
+/// what a view needs is a prefix of this order, within an octave: a viewer streaming
+/// slices of consecutive nodes fetches few for a coarse view.
+pub fn coarse_first(largest_parent_error: u16, level: u32) -> (u16, u32) {
+    (0x1f - (largest_parent_error >> 10), level)
+}
+
 /// Cuts each part of `cut` (the top part first, then the subtrees) into bands of
 /// levels of at least `min_band` nodes each, the lowest band of a part excepted, and
-/// orders the bands by their first level, then by part: the chunks of the list.
-/// `level` gives each node's level.
-pub fn by_level(cut: Cut, min_band: usize, level: impl Fn(u32) -> u16 + Sync) -> Cut {
-    let mut bands: Vec<(u16, usize, Vec<u32>)> = cut
+/// orders the bands [`coarse_first`], then by part: the chunks of the list. `level`
+/// and `parent_error` give each node's level and parent error (f16 bits).
+pub fn by_level(
+    cut: Cut,
+    min_band: usize,
+    level: impl Fn(u32) -> u16 + Sync,
+    parent_error: impl Fn(u32) -> u16 + Sync,
+) -> Cut {
+    let mut bands: Vec<(u16, u32, usize, Vec<u32>)> = cut
         .chunks
         .into_par_iter()
         .enumerate()
@@ -222,15 +238,18 @@ pub fn by_level(cut: Cut, min_band: usize, level: impl Fn(u32) -> u16 + Sync) ->
                 {
                     end += 1;
                 }
-                out.push((level(ids[start]), part, ids[start..end].to_vec()));
+                let band = &ids[start..end];
+                let e = band.iter().map(|&id| parent_error(id)).max().unwrap_or(0);
+                let (octave, level) = coarse_first(e, level(ids[start]) as u32);
+                out.push((octave, level, part, band.to_vec()));
                 start = end;
             }
             out
         })
         .collect();
-    bands.sort_by_key(|b| (b.0, b.1));
+    bands.sort_by_key(|b| (b.0, b.1, b.2));
     Cut {
-        chunks: bands.into_iter().map(|b| b.2).collect(),
+        chunks: bands.into_iter().map(|b| b.3).collect(),
     }
 }
 

@@ -442,7 +442,12 @@ pub fn sort_list_chunked(set: NodeSet, max_nodes: usize) -> SequentialList {
     } = set;
     let cut = chunks::cut(&hierarchy, max_nodes);
     drop(hierarchy);
-    let mut cut = chunks::by_level(cut, max_nodes / 16, |id| records[id as usize].level);
+    let mut cut = chunks::by_level(
+        cut,
+        max_nodes / 16,
+        |id| records[id as usize].level,
+        |id| records[id as usize].parent_error,
+    );
     cut.chunks.par_iter_mut().for_each(|ids| {
         ids.sort_unstable_by_key(|&id| (0xffff - records[id as usize].parent_error, id))
     });

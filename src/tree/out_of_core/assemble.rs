@@ -4,10 +4,10 @@
 //! hierarchy, its leaves the subtrees' roots ([`crate::tree::build_above`] makes the
 //! internal nodes' records, errors and shapes from the roots', and gives each root its
 //! parent error, δ and level). The file lists the top tree's internal nodes first (one
-//! chunk, sorted by parent error, the root first), then each job's list as its part
-//! file holds it, with its nodes' levels shifted by its root's, its parent indices and
-//! chunk starts by its place in the file, and its root's record replaced by the linked
-//! one. The sections are streamed from the part files, hashed as they are written; the
+//! chunk, sorted by parent error, the root first), then the jobs' chunks interleaved
+//! coarse first ([`super::order`]), each as its part file holds it, with its nodes'
+//! levels shifted by its root's, its parent indices and start moved to their places in
+//! the file, and each part's root record replaced by the linked one. The sections are streamed from the part files, hashed as they are written; the
 //! header, known before, gets the checksum last.
 
 use std::fs::File;
@@ -17,6 +17,7 @@ use glam::Vec3;
 use xxhash_rust::xxh3::Xxh3;
 
 use super::job::{Model, Part};
+use super::order::{Layout, Piece};
 use super::spill::Split;
 use crate::io::PointAttributes;
 use crate::io::atomic::write_atomically_seekable;
@@ -186,14 +187,8 @@ pub fn write_file(
         }
     };
     let meta = meta(model, parts, &top, oriented);
-    let t = top.records.len();
-    let mut bases = Vec::with_capacity(parts.len());
-    let mut at = t as u64;
-    for p in parts {
-        bases.push(at);
-        at += p.nodes;
-    }
-    let chunks = chunk_table(parts, &bases, &top, model.has_attributes)?;
+    let layout = layout(parts, &top, &part_tables(parts, model.has_attributes)?);
+    let chunks = chunk_table(&layout, &top);
     write_atomically_seekable(path, |w| {
         let header = header_for(&meta, &chunks, 0);
         let mut out = Hashed {
@@ -203,7 +198,7 @@ pub fn write_file(
         out.put(&header)?;
         write_sections(
             &mut out,
-            (parts, &bases),
+            (parts, &layout),
             &top,
             (&chunks, model.has_attributes),
         )?;
@@ -227,37 +222,55 @@ fn part_offsets(n: u64, has_attributes: bool) -> (u64, u64, u64, u64) {
     (parents, shapes, attributes, chunks)
 }
 
-/// The whole file's chunk table: the top tree's chunk, then each part's chunks moved
-/// to its place in the list and below its root's level.
-fn chunk_table(
-    parts: &[Part],
-    bases: &[u64],
-    top: &Top,
-    has_attributes: bool,
-) -> std::io::Result<Vec<Chunk>> {
-    let mut chunks: Vec<Chunk> = Vec::new();
+/// Each part's chunk table as its part file holds it.
+fn part_tables(parts: &[Part], has_attributes: bool) -> std::io::Result<Vec<Vec<Chunk>>> {
+    parts
+        .iter()
+        .map(|p| {
+            let mut f = File::open(&p.path)?;
+            f.seek(SeekFrom::Start(part_offsets(p.nodes, has_attributes).3))?;
+            let mut table = vec![<Chunk as bytemuck::Zeroable>::zeroed(); p.chunks as usize];
+            f.read_exact(bytemuck::cast_slice_mut(&mut table))?;
+            Ok(table)
+        })
+        .collect()
+}
+
+/// Where the parts' chunks go ([`Layout::plan`]): each part's root chunk keyed by the
+/// root's parent error in the top tree.
+fn layout(parts: &[Part], top: &Top, tables: &[Vec<Chunk>]) -> Layout {
+    let keys: Vec<Vec<u16>> = parts
+        .iter()
+        .zip(&top.roots)
+        .map(|(p, (root, _))| {
+            let mut keys = p.chunk_keys.clone();
+            keys[0] = root.parent_error;
+            keys
+        })
+        .collect();
+    let shifts: Vec<u32> = top.roots.iter().map(|r| r.0.level as u32).collect();
+    Layout::plan(top.records.len() as u64, tables, &keys, &shifts)
+}
+
+/// The whole file's chunk table: the top tree's chunk, then the parts' chunks at their
+/// places in the list and below their root's level.
+fn chunk_table(layout: &Layout, top: &Top) -> Vec<Chunk> {
+    let mut chunks: Vec<Chunk> = Vec::with_capacity(layout.pieces.len() + 1);
     if !top.records.is_empty() {
         chunks.push(Chunk::of(0, &top.records));
     }
-    for (k, p) in parts.iter().enumerate() {
-        let mut f = File::open(&p.path)?;
-        f.seek(SeekFrom::Start(part_offsets(p.nodes, has_attributes).3))?;
-        let mut table = vec![<Chunk as bytemuck::Zeroable>::zeroed(); p.chunks as usize];
-        f.read_exact(bytemuck::cast_slice_mut(&mut table))?;
-        let shift = top.roots[k].0.level as u32;
-        chunks.extend(table.into_iter().map(|c| Chunk {
-            start: c.start + bases[k],
-            level: c.level + shift,
-            ..c
-        }));
-    }
-    Ok(chunks)
+    chunks.extend(layout.pieces.iter().map(|p| Chunk {
+        start: p.to,
+        level: p.chunk.level + top.roots[p.part].0.level as u32,
+        ..p.chunk
+    }));
+    chunks
 }
 
-/// The six sections, each from the top tree then every part.
+/// The six sections, each from the top tree then every piece of the layout.
 fn write_sections(
     out: &mut Hashed,
-    (parts, bases): (&[Part], &[u64]),
+    (parts, layout): (&[Part], &Layout),
     top: &Top,
     (chunks, has_attributes): (&[Chunk], bool),
 ) -> std::io::Result<()> {
@@ -265,40 +278,55 @@ fn write_sections(
         .iter()
         .map(|p| File::open(&p.path))
         .collect::<Result<_, _>>()?;
-    let offsets = |n: u64| part_offsets(n, has_attributes);
+    let offsets: Vec<_> = parts
+        .iter()
+        .map(|p| part_offsets(p.nodes, has_attributes))
+        .collect();
+    let range = |p: &Piece, section: u64, size: usize| {
+        (
+            section + p.chunk.start * size as u64,
+            p.chunk.count as usize,
+        )
+    };
     let mut suffix = DeltaSuffixBuilder::new(chunks);
     out.put(bytemuck::cast_slice(&top.records))?;
     suffix.feed(&top.records);
-    for (k, (p, f)) in parts.iter().zip(&mut files).enumerate() {
-        let (root, _) = top.roots[k];
-        let shift = root.level;
-        stream::<NodeRecord>(f, (0, p.nodes as usize), out, |first, slab| {
+    for p in &layout.pieces {
+        let (root, _) = top.roots[p.part];
+        let size = std::mem::size_of::<NodeRecord>();
+        stream::<NodeRecord>(&mut files[p.part], range(p, 0, size), out, |first, slab| {
             for r in slab.iter_mut() {
-                r.level += shift;
+                r.level += root.level;
             }
-            if first == 0 {
+            if p.chunk.start == 0 && first == 0 {
                 slab[0] = root;
             }
             suffix.feed(slab);
         })?;
     }
     out.put(bytemuck::cast_slice(&top.parents))?;
-    for (k, (p, f)) in parts.iter().zip(&mut files).enumerate() {
-        let (base, up) = (bases[k] as u32, top.roots[k].1);
-        stream::<u32>(f, (offsets(p.nodes).0, p.nodes as usize), out, |_, slab| {
+    for p in &layout.pieces {
+        let up = top.roots[p.part].1;
+        let at = range(p, offsets[p.part].0, 4);
+        stream::<u32>(&mut files[p.part], at, out, |_, slab| {
             for q in slab.iter_mut() {
-                *q = if *q == u32::MAX { up } else { *q + base };
+                *q = match *q {
+                    u32::MAX => up,
+                    local => layout.position(p.part, local as u64) as u32,
+                };
             }
         })?;
     }
     out.put(bytemuck::cast_slice(&top.shapes))?;
-    for (p, f) in parts.iter().zip(&mut files) {
-        stream::<SplatShape>(f, (offsets(p.nodes).1, p.nodes as usize), out, |_, _| {})?;
+    for p in &layout.pieces {
+        let at = range(p, offsets[p.part].1, std::mem::size_of::<SplatShape>());
+        stream::<SplatShape>(&mut files[p.part], at, out, |_, _| {})?;
     }
     if has_attributes {
         out.put(bytemuck::cast_slice(&top.attributes))?;
-        for (p, f) in parts.iter().zip(&mut files) {
-            stream::<PointAttributes>(f, (offsets(p.nodes).2, p.nodes as usize), out, |_, _| {})?;
+        for p in &layout.pieces {
+            let at = range(p, offsets[p.part].2, std::mem::size_of::<PointAttributes>());
+            stream::<PointAttributes>(&mut files[p.part], at, out, |_, _| {})?;
         }
     }
     out.put(bytemuck::cast_slice(chunks))?;

@@ -48,6 +48,9 @@ pub struct Part {
     pub nodes: u64,
     pub leaves: u64,
     pub chunks: u64,
+    /// Each chunk's largest parent error (its first node's, f16 bits): where the file
+    /// places it ([`super::order`]).
+    pub chunk_keys: Vec<u16>,
     pub depth: u32,
     pub centre_min: Vec3,
     pub centre_max: Vec3,
@@ -113,6 +116,11 @@ pub fn build(model: &Model, (own, halo): (&Path, &Path), part: &Path) -> anyhow:
         nodes: list.nodes.len() as u64,
         leaves: leaf_count,
         chunks: list.chunks.len() as u64,
+        chunk_keys: list
+            .chunks
+            .iter()
+            .map(|c| list.nodes[c.start as usize].parent_error)
+            .collect(),
         depth: list.meta.depth,
         centre_min: Vec3::from(list.meta.centre_min),
         centre_max: Vec3::from(list.meta.centre_max),

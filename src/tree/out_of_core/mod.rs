@@ -27,6 +27,7 @@
 
 pub mod assemble;
 pub mod job;
+pub mod order;
 pub mod spill;
 
 use std::path::Path;
