@@ -119,10 +119,11 @@ fn drawn_share(img: &image::RgbImage) -> f64 {
     img.pixels().filter(|p| p.0 != [255, 255, 255]).count() as f64 / img.pixels().len() as f64
 }
 
-fn screenshot_matches_render(model: &Path, camera: &[&str]) {
-    let Some(display) = require_display() else {
-        return;
-    };
+/// Checks that the viewer's screenshot of `model` with `camera` (and any other option
+/// both commands take) is `spt render`'s picture; returns the viewer's output (stdout
+/// and stderr), or None when there is no display.
+fn screenshot_matches_render(model: &Path, camera: &[&str]) -> Option<String> {
+    let display = require_display()?;
     let dir = common::temp_dir();
     let (shot, reference) = (dir.path().join("view.png"), dir.path().join("render.png"));
     let mut args = vec![
@@ -136,9 +137,9 @@ fn screenshot_matches_render(model: &Path, camera: &[&str]) {
         shot.to_str().unwrap(),
     ];
     args.extend_from_slice(camera);
-    let (code, out, err) = view(&display, &args);
-    assert_eq!(code, Some(0), "spt view failed:\n{out}\n{err}");
-    assert!(err.contains("first frame"), "{err}");
+    let (code, view_out, log) = view(&display, &args);
+    assert_eq!(code, Some(0), "spt view failed:\n{view_out}\n{log}");
+    assert!(log.contains("first frame"), "{log}");
     let mut render_args = vec![
         "render",
         model.to_str().unwrap(),
@@ -160,6 +161,36 @@ fn screenshot_matches_render(model: &Path, camera: &[&str]) {
     );
     assert!(db >= 40.0, "{db} dB");
     assert!(share > 0.05, "blank screenshot: {share}");
+    Some(format!("{view_out}{log}"))
+}
+
+/// The MiB of `label` in the viewer's log line `gpu memory A MiB resident, peak B MiB,
+/// budget C MiB`.
+fn logged_mib(log: &str, label: &str) -> f64 {
+    let line = log
+        .lines()
+        .find(|l| l.starts_with("gpu memory"))
+        .unwrap_or_else(|| panic!("no gpu memory line in\n{log}"));
+    let at = line.find(label).unwrap_or_else(|| panic!("{line}")) + label.len();
+    let number = line[at..].split_whitespace().next().unwrap();
+    number.parse().unwrap_or_else(|e| panic!("{line}: {e}"))
+}
+
+#[test]
+fn a_streamed_screenshot_matches_spt_render_within_the_budget() {
+    // The default model's list takes 7.4 MiB; 3 MiB holds 3 of its 5 slices, so both
+    // commands draw coarser than asked, from the slices the view wants.
+    let camera = ["--orbit", "60,20,1.2", "--gpu-memory", "3"];
+    let Some(log) = screenshot_matches_render(&common::default_model(), &camera) else {
+        return;
+    };
+    let (peak, budget) = (logged_mib(&log, "peak "), logged_mib(&log, "budget "));
+    eprintln!("streamed viewer: peak {peak} MiB of a {budget} MiB budget");
+    assert_eq!(budget, 3.0);
+    assert!(
+        peak > 0.0 && peak <= budget,
+        "peak {peak} MiB, budget {budget} MiB"
+    );
 }
 
 #[test]
