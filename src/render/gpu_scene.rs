@@ -52,6 +52,9 @@ pub struct GpuScene {
     pub(super) slice_nodes: usize,
     pub(super) total: usize,
     resident_bytes: u64,
+    /// The ε the last frame raised its own to, where slices were missing: where the
+    /// next frame's search starts (`plan.rs`).
+    pub(super) last_fit: std::cell::Cell<Option<f64>>,
 }
 
 /// One slice uploaded, to be added with [`GpuScene::insert`].
@@ -81,6 +84,7 @@ impl GpuScene {
             slice_nodes,
             total,
             resident_bytes: 0,
+            last_fit: std::cell::Cell::new(None),
         }
     }
 

@@ -38,13 +38,19 @@ pub struct EncodedFrame {
     pub lod_eye: DVec3,
 }
 
-/// The least ε ≥ `eps` whose ranges (seen from `eye`, chunks culled by `cone`) lie
-/// in the slices `gpu` holds, those ranges, and the ranges at `eps`. Any ε gives a
-/// complete cut of the tree, so a frame drawn while slices are missing is coarser, never
-/// holed. The ranges shrink as ε grows (each chunk's prefix shortens, chunks drop out),
-/// so whether they fit is monotone in ε, and the least fitting ε is found by doubling,
-/// then bisection. (An eye within reach of a chunk not on the GPU needs part of it at
-/// any ε: the ranges are then cut to what is there.)
+/// How close the fitting ε is to the least that fits: within this factor.
+const FIT_PRECISION: f64 = 1.02;
+
+/// The least ε ≥ `eps` (to within [`FIT_PRECISION`]) whose ranges (seen from `eye`,
+/// chunks culled by `cone`) lie in the slices `gpu` holds, those ranges, and the ranges
+/// at `eps`. Any ε gives a complete cut of the tree, so a frame drawn while slices are
+/// missing is coarser, never holed. The ranges shrink as ε grows (each chunk's prefix
+/// shortens, chunks drop out), so whether they fit is monotone in ε: a bracket
+/// [lo, hi] with ranges(lo) not fitting and ranges(hi) fitting is widened from the
+/// last frame's fitting ε (`gpu.last_fit`) by steps that square, so that a steady view
+/// needs three evaluations, then halved in the logarithm. (An eye within reach of a
+/// chunk not on the GPU needs part of it at any ε: the ranges are then cut to what is
+/// there.)
 pub(super) fn fitting_eps(
     scene: &Scene,
     (eye, cone): (DVec3, &ViewCone),
@@ -59,27 +65,40 @@ pub(super) fn fitting_eps(
         return (eps, Vec::new(), wanted);
     }
     if fits(&wanted) {
+        gpu.last_fit.set(None);
         return (eps, wanted.clone(), wanted);
     }
-    // Invariant after the doubling: `at_hi` is ranges(hi) (which fits, unless 200
-    // doublings did not suffice), and ranges(lo) does not fit.
-    let mut lo = eps;
-    let mut hi = eps.max(scene.meta().error_scale as f64 * 1e-9);
-    let mut at_hi = if hi == eps {
-        wanted.clone()
-    } else {
-        ranges(hi)
-    };
-    for _ in 0..200 {
-        if fits(&at_hi) {
-            break;
+    let floor = scene.meta().error_scale as f64 * 1e-9;
+    let start = gpu.last_fit.get().filter(|&e| e > eps).unwrap_or(eps.max(floor));
+    let (mut lo, mut hi) = (eps, start);
+    let mut at_hi = ranges(hi);
+    // Widen the bracket from the start by steps that square (×1.02, ×1.04, ×1.08 …):
+    // down while the low end still fits, or up until the high end does.
+    let mut step = FIT_PRECISION;
+    if fits(&at_hi) {
+        while hi / step > eps {
+            let below = hi / step;
+            let at_below = ranges(below);
+            if !fits(&at_below) {
+                lo = below;
+                break;
+            }
+            (hi, at_hi) = (below, at_below);
+            step *= step;
         }
-        lo = hi;
-        hi *= 2.0;
-        at_hi = ranges(hi);
+    } else {
+        for _ in 0..200 {
+            lo = hi;
+            hi *= step.min(2.0);
+            step *= step;
+            at_hi = ranges(hi);
+            if fits(&at_hi) {
+                break;
+            }
+        }
     }
-    for _ in 0..40 {
-        let mid = 0.5 * (lo + hi);
+    while hi > lo * FIT_PRECISION {
+        let mid = (lo * hi).sqrt();
         let at_mid = ranges(mid);
         if fits(&at_mid) {
             (hi, at_hi) = (mid, at_mid);
@@ -87,6 +106,7 @@ pub(super) fn fitting_eps(
             lo = mid;
         }
     }
+    gpu.last_fit.set(Some(hi));
     (hi, gpu.clip(&at_hi), wanted)
 }
 
