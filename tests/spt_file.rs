@@ -5,6 +5,7 @@
 mod common;
 
 use std::io::Write;
+use std::path::{Path, PathBuf};
 
 use spt::io::atomic::{temporary_path, write_atomically};
 use spt::io::ply::read_ply;
@@ -208,7 +209,8 @@ fn version_2_files_read_as_files_without_attributes() {
     let mut bytes = Vec::new();
     write_to(&mut bytes, &list).unwrap();
     // A model without LiDAR attributes pays nothing for them: header, three sections,
-    // the chunk table and the δ suffix maxima (2 bytes per block of 64 nodes).
+    // the chunk table, the δ suffix maxima and the block heads (2 bytes each per block
+    // of 64 nodes).
     let n = list.nodes.len();
     let size = 256 + n * (32 + 4 + 16);
     let blocks: usize = list
@@ -216,7 +218,7 @@ fn version_2_files_read_as_files_without_attributes() {
         .iter()
         .map(|c| (c.count as usize).div_ceil(64))
         .sum();
-    assert_eq!(bytes.len(), size + list.chunks.len() * 48 + 2 * blocks);
+    assert_eq!(bytes.len(), size + list.chunks.len() * 48 + 4 * blocks);
     // Version 2: no attributes section, no chunk table.
     bytes.truncate(size);
     bytes[8..12].copy_from_slice(&2u32.to_le_bytes());
@@ -256,44 +258,59 @@ fn lidar_attributes_survive_the_file() {
     assert_eq!(file.to_list(), list);
 }
 
+/// `bytes` (a version 6 image) cut to `end` and marked `version` (its header's block
+/// fields zeroed before version 5), resealed and written to `name` in `dir`.
+fn older(bytes: &[u8], (version, end): (u32, usize), dir: &Path, name: &str) -> PathBuf {
+    let mut old = bytes[..end].to_vec();
+    old[8..12].copy_from_slice(&version.to_le_bytes());
+    old[160..168].copy_from_slice(&(end as u64).to_le_bytes());
+    if version < 5 {
+        old[224..240].fill(0);
+    }
+    assert!(spt::tree::spt_file::reseal(&mut old));
+    let path = dir.join(name);
+    std::fs::write(&path, &old).unwrap();
+    path
+}
+
 #[test]
-fn version_4_files_build_the_index_version_5_files_store_it() {
+fn older_files_build_the_index_version_6_files_store_it() {
     let list = default_list();
     let mut bytes = Vec::new();
     write_to(&mut bytes, &list).unwrap();
     let dir = common::temp_dir();
-    let path = dir.path().join("v5.spt");
+    let path = dir.path().join("v6.spt");
     std::fs::write(&path, &bytes).unwrap();
     let built = PrefixIndex::new(&list.meta, &list.chunks, &list.nodes);
     // Streaming opens read the stored index, the same as the one built from the nodes.
     let (file, stored) = SptFile::open_for_streaming(&path).unwrap();
-    assert_eq!(file.version, 5);
+    assert_eq!(file.version, 6);
     assert_eq!(stored, built);
-    // Version 4: the same file without the δ suffix maxima; its index is built.
-    let end = 256 + list.nodes.len() * 52 + list.chunks.len() * 48;
-    let mut v4 = bytes[..end].to_vec();
-    v4[8..12].copy_from_slice(&4u32.to_le_bytes());
-    v4[160..168].copy_from_slice(&(end as u64).to_le_bytes());
-    v4[224..240].fill(0);
-    assert!(spt::tree::spt_file::reseal(&mut v4));
-    let old = dir.path().join("v4.spt");
-    std::fs::write(&old, &v4).unwrap();
-    let file = SptFile::open(&old).unwrap();
+    // Version 5: the same file without the block heads; version 4 without the δ suffix
+    // maxima either. What they lack is built.
+    let blocks = built.block_heads().len();
+    let table_end = 256 + list.nodes.len() * 52 + list.chunks.len() * 48;
+    let v5 = older(&bytes, (5, table_end + 2 * blocks), dir.path(), "v5.spt");
+    let file = SptFile::open(&v5).unwrap();
+    assert_eq!((file.version, file.block_heads()), (5, None));
+    assert_eq!(file.delta_suffix(), Some(built.delta_suffix()));
+    assert_eq!(file.prefix_index().unwrap(), built);
+    let v4 = older(&bytes, (4, table_end), dir.path(), "v4.spt");
+    let file = SptFile::open(&v4).unwrap();
     assert_eq!((file.version, file.delta_suffix()), (4, None));
     assert_eq!(file.prefix_index().unwrap(), built);
-    // A stored maximum below a node's δ would cut prefixes short: the full check
-    // refuses it, naming the file.
-    let mut bad = bytes.clone();
-    let last = bad.len() - 2;
-    bad[last..].copy_from_slice(&0u16.to_le_bytes());
-    let first = 256 + list.nodes.len() * 52 + list.chunks.len() * 48;
-    bad[first..first + 2].copy_from_slice(&0u16.to_le_bytes());
-    assert!(spt::tree::spt_file::reseal(&mut bad));
-    let corrupt = dir.path().join("bad_suffix.spt");
-    std::fs::write(&corrupt, &bad).unwrap();
-    let err = SptFile::open(&corrupt).err().expect("refused").to_string();
-    assert!(
-        err.contains("bad_suffix.spt") && err.contains("suffix"),
-        "{err}"
-    );
+    // A stored maximum below a node's δ, or a head below a block's parent error, would
+    // cut prefixes short: the full check refuses them, naming the file.
+    for (at, name, what) in [
+        (table_end, "bad_suffix.spt", "suffix"),
+        (table_end + 2 * blocks, "bad_head.spt", "heads"),
+    ] {
+        let mut bad = bytes.clone();
+        bad[at..at + 2].copy_from_slice(&0u16.to_le_bytes());
+        assert!(spt::tree::spt_file::reseal(&mut bad));
+        let corrupt = dir.path().join(name);
+        std::fs::write(&corrupt, &bad).unwrap();
+        let err = SptFile::open(&corrupt).err().expect("refused").to_string();
+        assert!(err.contains(name) && err.contains(what), "{err}");
+    }
 }

@@ -1,8 +1,8 @@
 //! Sequential point trees on random point sets and real models: errors monotone toward
 //! the root, parent errors bit-identical, the list sorted, and for random views and
 //! ε_px from 0 to 100 every leaf has a drawn ancestor-or-self and no drawn node lies
-//! outside the CPU's ranges (each chunk's prefix), and the nodes the GPU tests are at most
-//! 1.5 per node drawn.
+//! outside the CPU's ranges (each chunk's prefix), the prefixes bounded from the index
+//! alone hold them, and the nodes the GPU tests are at most 1.5 per node drawn.
 
 mod common;
 
@@ -12,7 +12,7 @@ use spt::io::Geometry;
 use spt::io::ply::read_ply;
 use spt::surfel::leaf_surfels;
 use spt::tree::build_sequential_list;
-use spt::tree::select::{TreeView, check_views, random_views};
+use spt::tree::select::{BLOCK, TreeView, check_views, random_views, tested};
 
 fn cloud(points: &[[f64; 3]]) -> Geometry {
     let mut g = common::geometry_of(points);
@@ -41,6 +41,24 @@ proptest! {
         let stats = check_views(&view, &list.parents, &random_views(&list.meta, 40, 1.0, 100.0, seed));
         prop_assert_eq!(stats.holes, 0);
         prop_assert_eq!(stats.past_prefix, 0);
+        check_bounds(&list, &random_views(&list.meta, 40, 1.0, 100.0, seed));
+    }
+}
+
+/// The prefix bounds from the index alone (what a streamed file's frame searches with)
+/// hold the exact ranges, and exceed them by less than a block per chunk.
+fn check_bounds(list: &spt::tree::SequentialList, views: &[(glam::DVec3, f64)]) {
+    let view = TreeView::new(&list.meta, &list.nodes, &list.chunks);
+    for &(eye, eps) in views {
+        let exact = view.index.ranges(&list.nodes, eye, eps, None);
+        let bound = view.index.ranges_bound(eye, eps, None);
+        let mut inside = vec![false; list.nodes.len()];
+        for r in &bound {
+            inside[r.clone()].fill(true);
+        }
+        assert!(exact.iter().all(|r| inside[r.clone()].iter().all(|&b| b)));
+        let (e, b) = (tested(&exact), tested(&bound));
+        assert!(b < e + BLOCK * list.chunks.len().max(1), "{b} against {e}");
     }
 }
 
@@ -53,6 +71,7 @@ fn check_model(g: &Geometry, what: &str, views: usize) {
         &list.parents,
         &random_views(&list.meta, views, 1.0, 100.0, 7),
     );
+    check_bounds(&list, &random_views(&list.meta, views, 1.0, 100.0, 7));
     assert_eq!(stats.holes, 0, "{what}: {stats:?}");
     assert_eq!(stats.past_prefix, 0, "{what}: {stats:?}");
     assert!(stats.drawn_per_leaf_path >= 1.0, "{what}: {stats:?}");

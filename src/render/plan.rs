@@ -57,8 +57,16 @@ pub(super) fn fitting_eps(
     eps: f64,
     gpu: &GpuScene,
 ) -> (f64, Vec<Range<usize>>, Vec<Range<usize>>) {
-    let nodes = scene.nodes();
-    let ranges = |e: f64| scene.index.ranges(nodes, eye, e, Some(cone));
+    // The search reads no node (a streamed file's nodes are on disk): it fits each
+    // chunk's prefix rounded up to its block; the drawn ranges are made exact where
+    // their nodes are on the GPU, and so in memory.
+    let ranges = |e: f64| scene.index.ranges_bound(eye, e, Some(cone));
+    let exact = |e: f64| {
+        let refined = scene
+            .index
+            .ranges_refined(scene.nodes(), eye, e, Some(cone), |r| gpu.covers(&r));
+        gpu.clip(&refined)
+    };
     let fits = |r: &[Range<usize>]| r.iter().all(|r| gpu.covers(r));
     let wanted = ranges(eps);
     if gpu.resident_slices() == 0 {
@@ -66,24 +74,34 @@ pub(super) fn fitting_eps(
     }
     if fits(&wanted) {
         gpu.last_fit.set(None);
-        return (eps, wanted.clone(), wanted);
+        return (eps, exact(eps), wanted);
     }
     let floor = scene.meta().error_scale as f64 * 1e-9;
-    let start = gpu.last_fit.get().filter(|&e| e > eps).unwrap_or(eps.max(floor));
+    let start = gpu
+        .last_fit
+        .get()
+        .filter(|&e| e > eps)
+        .unwrap_or(eps.max(floor));
+    let hi = least_fitting(eps, start, |e| fits(&ranges(e)));
+    gpu.last_fit.set(Some(hi));
+    (hi, exact(hi), wanted)
+}
+
+/// The least ε (to within [`FIT_PRECISION`]) above `eps`, which does not fit, for
+/// which `fits`, searched from `start` ([`fitting_eps`]).
+fn least_fitting(eps: f64, start: f64, fits: impl Fn(f64) -> bool) -> f64 {
     let (mut lo, mut hi) = (eps, start);
-    let mut at_hi = ranges(hi);
     // Widen the bracket from the start by steps that square (×1.02, ×1.04, ×1.08 …):
     // down while the low end still fits, or up until the high end does.
     let mut step = FIT_PRECISION;
-    if fits(&at_hi) {
+    if fits(hi) {
         while hi / step > eps {
             let below = hi / step;
-            let at_below = ranges(below);
-            if !fits(&at_below) {
+            if !fits(below) {
                 lo = below;
                 break;
             }
-            (hi, at_hi) = (below, at_below);
+            hi = below;
             step *= step;
         }
     } else {
@@ -91,23 +109,20 @@ pub(super) fn fitting_eps(
             lo = hi;
             hi *= step.min(2.0);
             step *= step;
-            at_hi = ranges(hi);
-            if fits(&at_hi) {
+            if fits(hi) {
                 break;
             }
         }
     }
     while hi > lo * FIT_PRECISION {
         let mid = (lo * hi).sqrt();
-        let at_mid = ranges(mid);
-        if fits(&at_mid) {
-            (hi, at_hi) = (mid, at_mid);
+        if fits(mid) {
+            hi = mid;
         } else {
             lo = mid;
         }
     }
-    gpu.last_fit.set(Some(hi));
-    (hi, gpu.clip(&at_hi), wanted)
+    hi
 }
 
 /// Plans a frame of `scene` seen by `camera` over `size` pixels, with what `gpu` holds

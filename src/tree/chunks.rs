@@ -5,8 +5,9 @@
 //!
 //! A tree is cut at the maximal subtrees of at most `max_nodes` nodes ([`cut`]), the
 //! nodes above them (whose subtrees are larger) making the *top* part; then each part
-//! is cut across into bands of levels ([`by_level`]), each band at least a
-//! sixteenth of `max_nodes` (its lowest level excepted). Each band is a chunk: its
+//! is cut across into bands of levels ([`by_level`]), from a small first band (64
+//! nodes) growing eightfold up to a sixteenth of `max_nodes` (its lowest level
+//! excepted). Each band is a chunk: its
 //! nodes, its box and its least error. The list holds the chunks coarse first: by the
 //! octave of their largest parent error, then by their first level, then in the
 //! hierarchy's order, which is spatial ([`coarse_first`]).
@@ -212,8 +213,17 @@ pub fn coarse_first(largest_parent_error: u16, level: u32) -> (u16, u32) {
     (0x1f - (largest_parent_error >> 10), level)
 }
 
+/// Nodes in a part's first band at least (unless `min_band` is less), and how much
+/// larger each next band is at least, up to `min_band`. A far view needs only the head
+/// of each subtree, and a viewer streaming under a budget fetches whole runs of the
+/// list: small first bands, sorted to the front ([`coarse_first`]), keep what a far
+/// view needs together. Growing bands keep their number per part to a few.
+const FIRST_BAND: usize = 64;
+const BAND_GROWTH: usize = 8;
+
 /// Cuts each part of `cut` (the top part first, then the subtrees) into bands of
-/// levels of at least `min_band` nodes each, the lowest band of a part excepted, and
+/// whole levels, the first of at least [`FIRST_BAND`] nodes, each next
+/// [`BAND_GROWTH`] times more, up to `min_band` (the lowest band of a part excepted), and
 /// orders the bands [`coarse_first`], then by part: the chunks of the list. `level`
 /// and `parent_error` give each node's level and parent error (f16 bits).
 pub fn by_level(
@@ -229,15 +239,16 @@ pub fn by_level(
         .flat_map_iter(|(part, mut ids)| {
             ids.sort_unstable_by_key(|&id| (level(id), id));
             let mut out = Vec::new();
-            let mut start = 0;
+            let (mut start, mut least) = (0, min_band.min(FIRST_BAND));
             while start < ids.len() {
-                // Whole levels until the band holds min_band nodes.
+                // Whole levels until the band holds `least` nodes.
                 let mut end = start;
                 while end < ids.len()
-                    && (end - start < min_band || level(ids[end]) == level(ids[end - 1]))
+                    && (end - start < least || level(ids[end]) == level(ids[end - 1]))
                 {
                     end += 1;
                 }
+                least = min_band.min(least * BAND_GROWTH);
                 let band = &ids[start..end];
                 let e = band.iter().map(|&id| parent_error(id)).max().unwrap_or(0);
                 let (octave, level) = coarse_first(e, level(ids[start]) as u32);

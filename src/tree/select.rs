@@ -19,8 +19,12 @@
 //! largest δ from i to the chunk's end), and that predicate is monotone in i, so a
 //! binary search finds the chunk's prefix. Δ is kept per block of [`BLOCK`] nodes of a
 //! chunk (the largest δ from the block's start on): a prefix may include up to a block
-//! more than needed, never less. Chunks outside the view cone are skipped
-//! ([`ViewCone`]); the chunks module says why no hole opens across their boundaries.
+//! more than needed, never less. With each block's head (its first node's e_parent,
+//! the block's largest) the search first finds the block, from the index alone, then
+//! the node within it: a bound that reads no node ([`PrefixIndex::ranges_bound`]), for
+//! a file streamed from disk, and one block's nodes to make it exact. Chunks outside
+//! the view cone are skipped ([`ViewCone`]); the chunks module says why no hole opens
+//! across their boundaries.
 
 use std::ops::Range;
 
@@ -108,9 +112,10 @@ fn distances(chunk: &Chunk, eye: DVec3) -> (f64, f64) {
 }
 
 /// What the prefix searches need besides the nodes: the chunks and their pages, and
-/// per chunk the largest δ from the start of each of its blocks of [`BLOCK`] nodes to
-/// the chunk's end ([`chunk_delta_suffix`]). Built from the nodes (one pass), or taken
-/// from an `.spt` file that stores it (version 5), so that opening reads no node.
+/// per chunk and block of [`BLOCK`] nodes the largest δ from the block's start to the
+/// chunk's end ([`chunk_delta_suffix`]) and the block's head ([`block_heads`]). Built
+/// from the nodes (one pass), or taken from an `.spt` file that stores it (version 6),
+/// so that opening reads no node.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PrefixIndex {
     chunks: Vec<Chunk>,
@@ -119,7 +124,24 @@ pub struct PrefixIndex {
     /// The suffix maxima of all chunks' blocks, f16 bits of δ / error scale; chunk c's
     /// start at `block_at[c]`.
     delta_suffix: Vec<u16>,
+    /// Each block's head: its first node's e_parent (f16 bits), parallel to
+    /// `delta_suffix`.
+    heads: Vec<u16>,
     block_at: Vec<usize>,
+}
+
+/// The head of every block of [`BLOCK`] nodes of each chunk, chunk after chunk: the
+/// parent error (f16 bits) of its first node, the block's largest, since a chunk is
+/// sorted by parent error, descending.
+pub fn block_heads(chunks: &[Chunk], nodes: &[NodeRecord]) -> Vec<u16> {
+    let per_chunk: Vec<Vec<u16>> = chunks
+        .par_iter()
+        .map(|c| {
+            let chunk = &nodes[c.range()];
+            chunk.chunks(BLOCK).map(|b| b[0].parent_error).collect()
+        })
+        .collect();
+    per_chunk.concat()
 }
 
 /// The suffix maxima of δ over the blocks of [`BLOCK`] nodes of one chunk, as the
@@ -138,9 +160,9 @@ pub fn chunk_delta_suffix(nodes: &[NodeRecord]) -> Vec<u16> {
     suffix
 }
 
-/// [`delta_suffix`] made from the nodes fed in list order, a slab at a time (for a
-/// writer that streams the list).
-pub struct DeltaSuffixBuilder<'a> {
+/// [`delta_suffix`] and [`block_heads`] made from the nodes fed in list order, a slab
+/// at a time (for a writer that streams the list).
+pub struct BlockIndexBuilder<'a> {
     chunks: &'a [Chunk],
     /// The chunk the next node belongs to, and the nodes of it fed so far.
     chunk: usize,
@@ -148,16 +170,19 @@ pub struct DeltaSuffixBuilder<'a> {
     /// The current chunk's block maxima so far.
     blocks: Vec<u16>,
     out: Vec<u16>,
+    heads: Vec<u16>,
 }
 
-impl<'a> DeltaSuffixBuilder<'a> {
+impl<'a> BlockIndexBuilder<'a> {
     pub fn new(chunks: &'a [Chunk]) -> Self {
-        DeltaSuffixBuilder {
+        let blocks = delta_suffix_len(chunks) as usize;
+        BlockIndexBuilder {
             chunks,
             chunk: 0,
             fed: 0,
             blocks: Vec::new(),
-            out: Vec::with_capacity(delta_suffix_len(chunks) as usize),
+            out: Vec::with_capacity(blocks),
+            heads: Vec::with_capacity(blocks),
         }
     }
 
@@ -166,6 +191,7 @@ impl<'a> DeltaSuffixBuilder<'a> {
         for r in nodes {
             if self.fed.is_multiple_of(BLOCK) {
                 self.blocks.push(r.delta);
+                self.heads.push(r.parent_error);
             } else {
                 let last = self.blocks.last_mut().expect("a block was started");
                 *last = (*last).max(r.delta);
@@ -185,10 +211,11 @@ impl<'a> DeltaSuffixBuilder<'a> {
         }
     }
 
-    /// The suffix maxima of every chunk, once all the nodes were fed.
-    pub fn finish(self) -> Vec<u16> {
+    /// The δ suffix maxima and the block heads of every chunk, once all the nodes were
+    /// fed.
+    pub fn finish(self) -> (Vec<u16>, Vec<u16>) {
         debug_assert_eq!(self.chunk, self.chunks.len(), "every chunk's nodes fed");
-        self.out
+        (self.out, self.heads)
     }
 }
 
@@ -211,22 +238,24 @@ pub fn delta_suffix_len(chunks: &[Chunk]) -> u64 {
 
 impl PrefixIndex {
     pub fn new(meta: &TreeMeta, chunks: &[Chunk], nodes: &[NodeRecord]) -> Self {
-        Self::with_suffix(meta, chunks, delta_suffix(chunks, nodes)).expect("one per block")
+        let blocks = (delta_suffix(chunks, nodes), block_heads(chunks, nodes));
+        Self::with_blocks(meta, chunks, blocks).expect("one per block")
     }
 
-    /// The index of `chunks` with their δ suffix maxima already made (as
-    /// [`chunk_delta_suffix`] makes them, chunk after chunk); an error when their length
-    /// is not one per block.
-    pub fn with_suffix(
+    /// The index of `chunks` with their δ suffix maxima and block heads already made (as
+    /// [`delta_suffix`] and [`block_heads`] make them); an error when either is not one
+    /// per block.
+    pub fn with_blocks(
         meta: &TreeMeta,
         chunks: &[Chunk],
-        delta_suffix: Vec<u16>,
+        (delta_suffix, heads): (Vec<u16>, Vec<u16>),
     ) -> Result<Self, String> {
         let expected = delta_suffix_len(chunks);
-        if delta_suffix.len() as u64 != expected {
+        if delta_suffix.len() as u64 != expected || heads.len() as u64 != expected {
             return Err(format!(
-                "{} δ suffix maxima for {expected} blocks of {BLOCK} nodes",
-                delta_suffix.len()
+                "{} δ suffix maxima and {} block heads for {expected} blocks of {BLOCK} nodes",
+                delta_suffix.len(),
+                heads.len()
             ));
         }
         let mut block_at = Vec::with_capacity(chunks.len());
@@ -240,6 +269,7 @@ impl PrefixIndex {
             pages: chunks.chunks(PAGE).map(page_of).collect(),
             error_scale: meta.error_scale,
             delta_suffix,
+            heads,
             block_at,
         })
     }
@@ -247,6 +277,11 @@ impl PrefixIndex {
     /// The δ suffix maxima of every chunk, in chunk order (what an `.spt` file stores).
     pub fn delta_suffix(&self) -> &[u16] {
         &self.delta_suffix
+    }
+
+    /// The block heads of every chunk, in chunk order (what an `.spt` file stores).
+    pub fn block_heads(&self) -> &[u16] {
+        &self.heads
     }
 
     pub fn chunks(&self) -> &[Chunk] {
@@ -270,22 +305,55 @@ impl PrefixIndex {
     /// Length of the prefix of chunk `c` that holds every node of it the exact test
     /// can draw.
     pub fn chunk_prefix(&self, c: usize, nodes: &[NodeRecord], eye: DVec3, eps: f64) -> usize {
-        self.prefix_within(c, nodes, distances(&self.chunks[c], eye).0, eps)
+        let d_min = distances(&self.chunks[c], eye).0;
+        self.prefix_within(c, nodes, d_min, eps, self.prefix_bound(c, d_min, eps))
     }
 
-    /// [`PrefixIndex::chunk_prefix`] with the eye `d_min` from the chunk's box.
-    fn prefix_within(&self, c: usize, nodes: &[NodeRecord], d_min: f64, eps: f64) -> usize {
-        let chunk = &nodes[self.chunks[c].range()];
-        let suffix = &self.delta_suffix[self.block_at[c]..];
-        // First i where e_parent[i] ≤ ε (d_min − Δ(i)); false before, true after.
-        let scale = self.error_scale;
-        let beyond = |i: usize| {
-            chunk[i].parent_error(scale) <= eps * (d_min - decode(suffix[i / BLOCK], scale))
-        };
-        let (mut lo, mut hi) = (0, chunk.len());
+    /// Whether the nodes of chunk `c` from list offset `i` on (within the chunk) fail
+    /// the second test, given node i's e_parent bits `e`: e_parent ≤ ε (d_min − Δ(i)).
+    fn beyond(&self, c: usize, i: usize, e: u16, d_min: f64, eps: f64) -> bool {
+        let delta = self.delta_suffix[self.block_at[c] + i / BLOCK];
+        decode(e, self.error_scale) <= eps * (d_min - decode(delta, self.error_scale))
+    }
+
+    /// A prefix of chunk `c` (eye at `d_min` from its box) that holds the exact one,
+    /// from the index alone: up to the first block whose head is beyond, so at most a
+    /// block longer than [`PrefixIndex::chunk_prefix`]. (Every node of a block beyond
+    /// is: its e_parent is at most the head's, its Δ the block's.)
+    fn prefix_bound(&self, c: usize, d_min: f64, eps: f64) -> usize {
+        let heads = &self.heads[self.block_at[c]..];
+        let count = self.chunks[c].count as usize;
+        let (mut lo, mut hi) = (0, count.div_ceil(BLOCK));
         while lo < hi {
             let mid = lo + (hi - lo) / 2;
-            if beyond(mid) { hi = mid } else { lo = mid + 1 }
+            if self.beyond(c, mid * BLOCK, heads[mid], d_min, eps) {
+                hi = mid
+            } else {
+                lo = mid + 1
+            }
+        }
+        (lo * BLOCK).min(count)
+    }
+
+    /// The exact prefix of chunk `c`, given its `bound`: a search of the nodes of the
+    /// one block before it (the nodes before that block are not beyond).
+    fn prefix_within(
+        &self,
+        c: usize,
+        nodes: &[NodeRecord],
+        d_min: f64,
+        eps: f64,
+        bound: usize,
+    ) -> usize {
+        let chunk = &nodes[self.chunks[c].range()];
+        let (mut lo, mut hi) = ((bound.saturating_sub(1) / BLOCK) * BLOCK, bound);
+        while lo < hi {
+            let mid = lo + (hi - lo) / 2;
+            if self.beyond(c, mid, chunk[mid].parent_error, d_min, eps) {
+                hi = mid
+            } else {
+                lo = mid + 1
+            }
         }
         lo
     }
@@ -300,6 +368,42 @@ impl PrefixIndex {
         eps: f64,
         cone: Option<&ViewCone>,
     ) -> Vec<Range<usize>> {
+        self.ranges_refined(nodes, eye, eps, cone, |_| true)
+    }
+
+    /// [`PrefixIndex::ranges`] from the index alone (no node read): each chunk's prefix
+    /// rounded up to its block, a superset of the exact ranges.
+    pub fn ranges_bound(&self, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> Vec<Range<usize>> {
+        self.ranges_by(eye, eps, cone, |_, _, bound| bound)
+    }
+
+    /// [`PrefixIndex::ranges`], each chunk's prefix exact where `refine` says so of its
+    /// bound (a list range) and the bound elsewhere: nodes are read only there.
+    pub fn ranges_refined(
+        &self,
+        nodes: &[NodeRecord],
+        eye: DVec3,
+        eps: f64,
+        cone: Option<&ViewCone>,
+        refine: impl Fn(Range<usize>) -> bool,
+    ) -> Vec<Range<usize>> {
+        self.ranges_by(eye, eps, cone, |c, d_min, bound| {
+            let start = self.chunks[c].start as usize;
+            match refine(start..start + bound) {
+                true => self.prefix_within(c, nodes, d_min, eps, bound),
+                false => bound,
+            }
+        })
+    }
+
+    /// The ranges with each chunk's prefix given by `prefix(c, d_min, bound)`.
+    fn ranges_by(
+        &self,
+        eye: DVec3,
+        eps: f64,
+        cone: Option<&ViewCone>,
+        prefix: impl Fn(usize, f64, usize) -> usize,
+    ) -> Vec<Range<usize>> {
         let mut out: Vec<Range<usize>> = Vec::new();
         let pages = self.pages.iter().enumerate();
         let seen = pages.filter(|(_, page)| !self.skipped(page, distances(page, eye), eps, cone));
@@ -309,8 +413,9 @@ impl PrefixIndex {
             if self.skipped(chunk, d, eps, cone) {
                 continue;
             }
+            let bound = self.prefix_bound(c, d.0, eps);
+            let n = if bound == 0 { 0 } else { prefix(c, d.0, bound) };
             let start = chunk.start as usize;
-            let n = self.prefix_within(c, nodes, d.0, eps);
             match out.last_mut() {
                 _ if n == 0 => {}
                 Some(last) if last.end == start => last.end = start + n,

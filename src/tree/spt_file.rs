@@ -3,8 +3,9 @@
 //! ```text
 //! offset  size  field (little-endian)
 //!      0     8  magic "spt-tree"
-//!      8     4  format version (5; versions 4, 3 and 2, read as well: version 4
-//!                 had no δ suffix section, versions 3 and 2 no chunk table (their
+//!      8     4  format version (6; versions 5, 4, 3 and 2 read as well: version 5
+//!                 had no block heads, version 4 no δ suffix section either,
+//!                 versions 3 and 2 no chunk table (their
 //!                 list is one chunk), version 2 no attributes section; version 1,
 //!                 refused, no shapes section)
 //!     12     4  header size (256)
@@ -30,7 +31,8 @@
 //!    204     8  offset of the chunk table (after the attributes)
 //!    212     4  chunk record size (40)
 //!    216     8  chunk count (≥ 1)
-//!    224     8  offset of the δ suffix maxima (after the chunk table)
+//!    224     8  offset of the δ suffix maxima (after the chunk table), followed
+//!                 by as many block heads
 //!    232     8  their count: one per block of 64 nodes of each chunk
 //!    240    16  zero
 //! ```
@@ -40,8 +42,9 @@
 //! attributes (what the attribute display modes read; a model without pays nothing),
 //! the chunk table ([`Chunk`]: each chunk's range of the list, box and largest radius;
 //! the chunks follow each other and cover the list), the δ suffix maxima of the prefix
-//! search (u16 each, [`chunk_delta_suffix`], chunk after chunk), so that a file opens to
-//! its first frame without reading its nodes.
+//! search (u16 each, [`chunk_delta_suffix`], chunk after chunk) and the block heads
+//! (u16 each, [`block_heads`], as many), so that a file opens to its first frame, and
+//! finds what a view needs, without reading its nodes.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -51,7 +54,7 @@ use thiserror::Error;
 use xxhash_rust::xxh3::Xxh3;
 
 use super::chunks::Chunk;
-use super::select::{PrefixIndex, TreeView, delta_suffix, delta_suffix_len};
+use super::select::{PrefixIndex, TreeView, block_heads, delta_suffix, delta_suffix_len};
 use super::validate;
 use super::{NodeRecord, SequentialList, TreeMeta};
 use crate::io::atomic::write_atomically;
@@ -59,7 +62,7 @@ use crate::io::{Bounds, PointAttributes};
 use crate::surfel::shape::SplatShape;
 
 pub const MAGIC: &[u8; 8] = b"spt-tree";
-pub const VERSION: u32 = 5;
+pub const VERSION: u32 = 6;
 /// The oldest version read: version 2 files are version 3 files without attributes.
 pub const OLDEST_READ: u32 = 2;
 pub const HEADER_BYTES: usize = 256;
@@ -148,7 +151,7 @@ pub fn header_for(m: &TreeMeta, chunks: &[Chunk], checksum: u64) -> Vec<u8> {
     let attributes_at = shapes_at + (nodes * SHAPE_BYTES) as u64;
     let chunks_at = attributes_at + (attribute_nodes * ATTRIBUTE_BYTES) as u64;
     let suffix_at = chunks_at + chunk_count * CHUNK_BYTES as u64;
-    let size = suffix_at + 2 * suffix_count;
+    let size = suffix_at + 4 * suffix_count;
     for v in [nodes_at, parents_at, size, checksum, shapes_at] {
         h.extend_from_slice(&v.to_le_bytes());
     }
@@ -198,13 +201,15 @@ pub fn reseal(bytes: &mut [u8]) -> bool {
 /// Writes the list in `.spt` form to `w` (little-endian hosts write their memory as is).
 pub fn write_to(w: &mut dyn Write, list: &SequentialList) -> std::io::Result<()> {
     let suffix = delta_suffix(&list.chunks, &list.nodes);
-    let sections: [&[u8]; 6] = [
+    let heads = block_heads(&list.chunks, &list.nodes);
+    let sections: [&[u8]; 7] = [
         bytemuck::cast_slice(&list.nodes),
         bytemuck::cast_slice(&list.parents),
         bytemuck::cast_slice(&list.shapes),
         bytemuck::cast_slice(&list.attributes),
         bytemuck::cast_slice(&list.chunks),
         bytemuck::cast_slice(&suffix),
+        bytemuck::cast_slice(&heads),
     ];
     let checksum = payload_checksum(&header_bytes(list, 0), &sections);
     w.write_all(&header_bytes(list, checksum))?;
@@ -229,8 +234,10 @@ struct Sections {
     /// Where the chunk table starts and its chunks (0 before version 4).
     chunks_at: u64,
     chunk_count: u64,
-    /// Where the δ suffix maxima start (the end of the file before version 5).
+    /// Where the δ suffix maxima start (the end of the file before version 5), and
+    /// their count (the block heads follow from version 6).
     suffix_at: u64,
+    suffix_count: u64,
     size: u64,
 }
 
@@ -276,7 +283,7 @@ fn sections(b: &[u8], version: u32) -> Result<Sections, String> {
         || chunk_bytes as usize != CHUNK_BYTES
         || (version >= 4 && !(1..=node_count).contains(&chunk_count))
         || Some(suffix_at) != chunks_end
-        || Some(size) != after(suffix_at, suffix_count, 2)
+        || Some(size) != after(suffix_at, suffix_count, if version >= 6 { 4 } else { 2 })
         || leaf_count > node_count
         || node_count == 0
     {
@@ -292,6 +299,7 @@ fn sections(b: &[u8], version: u32) -> Result<Sections, String> {
         chunks_at,
         chunk_count,
         suffix_at,
+        suffix_count,
         size,
     })
 }
@@ -333,6 +341,7 @@ pub struct SptFile {
     attributes_at: usize,
     chunks_at: usize,
     suffix_at: usize,
+    suffix_count: usize,
     /// The chunk table (read from the file; before version 4, the whole list as one chunk).
     chunks: Vec<Chunk>,
 }
@@ -362,7 +371,7 @@ impl SptFile {
     }
 
     /// Checks the header's values and every node on its own ([`validate`]), and the
-    /// stored δ suffix maxima against the nodes.
+    /// stored δ suffix maxima and block heads against the nodes.
     pub fn validate(&self) -> Result<(), SptError> {
         validate::check_meta(&self.meta)
             .and_then(|_| validate::check_nodes(&self.meta, self.nodes(), self.parents()))
@@ -370,6 +379,12 @@ impl SptFile {
             .and_then(|_| match self.delta_suffix() {
                 Some(stored) if stored != delta_suffix(&self.chunks, self.nodes()) => {
                     Err("the stored δ suffix maxima differ from the nodes' δ".to_string())
+                }
+                _ => Ok(()),
+            })
+            .and_then(|_| match self.block_heads() {
+                Some(stored) if stored != block_heads(&self.chunks, self.nodes()) => {
+                    Err("the stored block heads differ from the nodes' parent errors".to_string())
                 }
                 _ => Ok(()),
             })
@@ -385,7 +400,8 @@ impl SptFile {
 
     /// Opens the file to stream it: checks the header, the sections' layout, the header's
     /// values and the chunk table, and reads the prefix index the file stores, without
-    /// reading a node (a file before version 5 has its index built from its nodes). The
+    /// reading a node (a file before version 6 has its index, or what it lacks of it,
+    /// built from its nodes). The
     /// checksum and the nodes' own checks ([`SptFile::verify`], [`SptFile::validate`])
     /// are left to the caller, to run beside the drawing.
     pub fn open_for_streaming(path: &Path) -> Result<(SptFile, PrefixIndex), SptError> {
@@ -397,17 +413,29 @@ impl SptFile {
         Ok((file, index))
     }
 
-    /// The prefix index: the stored δ suffix maxima (version 5), or built from the nodes.
+    /// The prefix index: what the file stores of it (the δ suffix maxima from version 5,
+    /// the block heads from version 6), the rest built from the nodes.
     pub fn prefix_index(&self) -> Result<PrefixIndex, String> {
-        match self.delta_suffix() {
-            Some(stored) => PrefixIndex::with_suffix(&self.meta, &self.chunks, stored.to_vec()),
-            None => Ok(PrefixIndex::new(&self.meta, &self.chunks, self.nodes())),
-        }
+        let (chunks, nodes) = (&self.chunks, || self.nodes());
+        let suffix = self
+            .delta_suffix()
+            .map_or_else(|| delta_suffix(chunks, nodes()), <[u16]>::to_vec);
+        let heads = self
+            .block_heads()
+            .map_or_else(|| block_heads(chunks, nodes()), <[u16]>::to_vec);
+        PrefixIndex::with_blocks(&self.meta, chunks, (suffix, heads))
     }
 
     /// The δ suffix maxima the file stores (from version 5).
     pub fn delta_suffix(&self) -> Option<&[u16]> {
-        (self.version >= 5).then(|| bytemuck::cast_slice(&self.map[self.suffix_at..]))
+        let (at, n) = (self.suffix_at, self.suffix_count);
+        (self.version >= 5).then(|| bytemuck::cast_slice(&self.map[at..at + 2 * n]))
+    }
+
+    /// The block heads the file stores (from version 6).
+    pub fn block_heads(&self) -> Option<&[u16]> {
+        let at = self.suffix_at + 2 * self.suffix_count;
+        (self.version >= 6).then(|| bytemuck::cast_slice(&self.map[at..at + 2 * self.suffix_count]))
     }
 
     /// Opens the file and checks its header and size, not its checksum.
@@ -486,6 +514,7 @@ impl SptFile {
             attributes_at: s.attributes_at as usize,
             chunks_at: s.chunks_at as usize,
             suffix_at: s.suffix_at as usize,
+            suffix_count: s.suffix_count as usize,
             chunks,
             map,
         })

@@ -24,7 +24,7 @@ use crate::io::atomic::write_atomically_seekable;
 use crate::surfel::shape::SplatShape;
 use crate::tree::chunks::Chunk;
 use crate::tree::hierarchy::{Hierarchy, Internal};
-use crate::tree::select::DeltaSuffixBuilder;
+use crate::tree::select::BlockIndexBuilder;
 use crate::tree::spt_file::{CHECKSUM_OFFSET, header_for};
 use crate::tree::{NodeRecord, TreeMeta, attributes, build_above};
 
@@ -288,9 +288,9 @@ fn write_sections(
             p.chunk.count as usize,
         )
     };
-    let mut suffix = DeltaSuffixBuilder::new(chunks);
+    let mut blocks = BlockIndexBuilder::new(chunks);
     out.put(bytemuck::cast_slice(&top.records))?;
-    suffix.feed(&top.records);
+    blocks.feed(&top.records);
     for p in &layout.pieces {
         let (root, _) = top.roots[p.part];
         let size = std::mem::size_of::<NodeRecord>();
@@ -301,7 +301,7 @@ fn write_sections(
             if p.chunk.start == 0 && first == 0 {
                 slab[0] = root;
             }
-            suffix.feed(slab);
+            blocks.feed(slab);
         })?;
     }
     out.put(bytemuck::cast_slice(&top.parents))?;
@@ -330,6 +330,8 @@ fn write_sections(
         }
     }
     out.put(bytemuck::cast_slice(chunks))?;
-    out.put(bytemuck::cast_slice(&suffix.finish()))?;
+    let (suffix, heads) = blocks.finish();
+    out.put(bytemuck::cast_slice(&suffix))?;
+    out.put(bytemuck::cast_slice(&heads))?;
     Ok(())
 }
