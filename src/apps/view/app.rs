@@ -234,8 +234,13 @@ impl App {
                 Ok(Loaded::Mesh(mesh)) => w.viewer.add_mesh(mesh),
                 Ok(Loaded::Done) => {
                     w.viewer.upload_finished(seconds);
+                    // Streamed, the loader only checks the file: the slices come by need.
+                    let done = match self.args.render.gpu_budget() {
+                        Some(_) => "checked",
+                        None => "on the GPU",
+                    };
                     eprintln!(
-                        "model     {} on the GPU in {seconds:.2} s ({})",
+                        "model     {} {done} in {seconds:.2} s ({})",
                         path.display(),
                         self.loading
                             .as_ref()
