@@ -14,11 +14,12 @@
 
 use glam::{DVec2, DVec3};
 
-use super::errors::Disk;
+use super::errors::{DIRECTION_TABLE, Disk};
 use crate::surfel::shape::{Fit, MIN_RATIO, Shape, rotate_gradient, tangent_frame};
 
-/// Rim points sampled per child.
+/// Rim points sampled per child, at the directions of the errors' table.
 pub const RIM_SAMPLES: usize = 16;
+const _: () = assert!(RIM_SAMPLES == super::errors::DIRECTIONS);
 
 /// A child as the parent's shape sees it: its disk and shape (a normal pointing away
 /// from the parent's, in an unoriented cloud, is flipped where it is sampled).
@@ -38,8 +39,7 @@ fn samples(child: &Child, parent_normal: DVec3) -> [(DVec3, DVec3); RIM_SAMPLES 
     };
     let minor = shape.minor_axis(disk.n);
     let mut out = [(disk.p, disk.n * sign); RIM_SAMPLES + 1];
-    for (k, sample) in out[1..].iter_mut().enumerate() {
-        let (s, c) = (std::f64::consts::TAU * k as f64 / RIM_SAMPLES as f64).sin_cos();
+    for (sample, &(c, s)) in out[1..].iter_mut().zip(&DIRECTION_TABLE) {
         let (x, y) = (c, s * shape.ratio);
         let q = disk.p + (shape.axis * x + minor * y) * disk.r;
         *sample = (q, shape.normal_at(disk.n, x, y) * sign);
@@ -53,8 +53,10 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
     let (t1, t2) = tangent_frame(parent.n);
     let frame = |d: DVec3| DVec2::new(d.dot(t1), d.dot(t2));
     let mut fit = Fit::default();
-    for child in children {
-        for (q, n) in samples(child, parent.n) {
+    let mut rims = [[(DVec3::ZERO, DVec3::ZERO); RIM_SAMPLES + 1]; 4];
+    for (child, rim) in children.iter().zip(&mut rims) {
+        *rim = samples(child, parent.n);
+        for &(q, n) in rim.iter() {
             fit.add(frame(q - parent.p), frame(n - parent.n));
         }
     }
@@ -74,10 +76,11 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
     let minor = shape.minor_axis(parent.n);
     let grow = 1.0 / (std::f64::consts::PI / RIM_SAMPLES as f64).cos();
     let mut major = 0.0f64;
-    for child in children {
-        for (q, _) in &samples(child, parent.n)[1..] {
+    for (child, rim) in children.iter().zip(&rims) {
+        for (q, _) in &rim[1..] {
             let d = child.disk.p + (*q - child.disk.p) * grow - parent.p;
-            major = major.max(d.dot(shape.axis).hypot(d.dot(minor) / ratio));
+            let (x, y) = (d.dot(shape.axis), d.dot(minor) / ratio);
+            major = major.max((x * x + y * y).sqrt());
         }
     }
     if !(major > 0.0 && major <= parent.r * grow) {
