@@ -23,6 +23,8 @@
 
 use glam::{DVec2, DVec3, Vec3};
 
+use rayon::prelude::*;
+
 use super::Surfel;
 use super::mesh::{RADIUS_MARGIN, triangle_terms};
 use super::shape::{Clip, Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
@@ -106,67 +108,94 @@ fn covering_radius(
     triangle_terms(a, b, c).1
 }
 
+/// Each vertex's corners, as compressed rows: vertex v's are `corners[start[v]..
+/// start[v + 1]]`, each 3 t + k for corner k of triangle t, in triangle order, so that a
+/// vertex gathers its terms in the order a pass over the triangles would add them.
+fn corners_by_vertex(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<usize>, Vec<u32>) {
+    let mut start = vec![0usize; vertex_count + 1];
+    for &v in triangles.iter().flatten() {
+        start[v as usize + 1] += 1;
+    }
+    for v in 0..vertex_count {
+        start[v + 1] += start[v];
+    }
+    let mut next = start.clone();
+    let mut corners = vec![0u32; start[vertex_count]];
+    for (c, &v) in triangles.iter().flatten().enumerate() {
+        corners[next[v as usize]] = c as u32;
+        next[v as usize] += 1;
+    }
+    (start, corners)
+}
+
 /// Replaces the radius of every vertex that a triangle holds by the major semi-axis of
 /// its one-ring ellipse and sets its shape (see the module doc); other vertices get a
 /// circle. `points` are the model's positions, `scale` its unit scale; normals are read
-/// from `surfels`.
+/// from `surfels`. Each vertex gathers over its own corners ([`corners_by_vertex`]), in
+/// parallel.
 pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels: &mut [Surfel]) {
     let s = scale as f64;
     let p = |i: u32| points[i as usize].as_dvec3() * s;
     let normals: Vec<Vec3> = surfels.iter().map(|q| q.normal).collect();
     let n = |i: u32| normals[i as usize].as_dvec3();
-    let mut fits = vec![Fit::default(); points.len()];
-    let mut chords = vec![DVec2::ZERO; points.len()];
-    for t in triangles {
-        for (k, &v) in t.iter().enumerate() {
-            let (d_out, dn_out) = ring_term(&p, &n, v, t[(k + 1) % 3]);
-            let (d_in, dn_in) = ring_term(&p, &n, v, t[(k + 2) % 3]);
-            fits[v as usize].add(d_out, dn_out);
-            fits[v as usize].add(d_in, dn_in);
-            chords[v as usize] += d_out - d_in;
-        }
-    }
-    let shapes: Vec<Option<Shape>> = fits
-        .iter()
-        .enumerate()
-        .map(|(v, f)| oriented(n(v as u32), f))
-        .collect();
-    let outward: Vec<DVec2> = chords
-        .iter()
-        .zip(&fits)
-        .map(|(c, f)| border_normal(*c, f))
-        .collect();
-    drop((fits, chords));
-    let mut major = vec![0.0f64; points.len()];
-    let mut reach = vec![0.0f64; points.len()];
-    for t in triangles {
-        for (k, &v) in t.iter().enumerate() {
-            if let Some(shape) = &shapes[v as usize] {
-                let r = covering_radius(&p, p(v), n(v), shape, t);
-                major[v as usize] = major[v as usize].max(r);
+    assert!(triangles.len() < (u32::MAX / 3) as usize, "corners fit u32");
+    let (start, corners) = corners_by_vertex(points.len(), triangles);
+    // Vertex v's corners as (triangle, its next vertex, its previous vertex).
+    let ring = |v: usize| {
+        corners[start[v]..start[v + 1]].iter().map(|&c| {
+            let (t, k) = (&triangles[c as usize / 3], c as usize % 3);
+            (t, t[(k + 1) % 3], t[(k + 2) % 3])
+        })
+    };
+    let per_vertex = (0..points.len()).into_par_iter().with_min_len(1 << 12);
+    let shapes: Vec<(Option<Shape>, DVec2)> = per_vertex
+        .clone()
+        .map(|v| {
+            let (mut fit, mut chord) = (Fit::default(), DVec2::ZERO);
+            for (_, next, previous) in ring(v) {
+                let (d_out, dn_out) = ring_term(&p, &n, v as u32, next);
+                let (d_in, dn_in) = ring_term(&p, &n, v as u32, previous);
+                fit.add(d_out, dn_out);
+                fit.add(d_in, dn_in);
+                chord += d_out - d_in;
             }
-            let out = outward[v as usize];
-            if out != DVec2::ZERO {
-                for w in [t[(k + 1) % 3], t[(k + 2) % 3]] {
-                    let along = out.dot(ring_term(&p, &n, v, w).0);
-                    reach[v as usize] = reach[v as usize].max(along);
+            (oriented(n(v as u32), &fit), border_normal(chord, &fit))
+        })
+        .collect();
+    let reaches: Vec<(f64, f64)> = per_vertex
+        .map(|v| {
+            let (shape, out) = &shapes[v];
+            let (mut major, mut reach) = (0.0f64, 0.0f64);
+            for (t, next, previous) in ring(v) {
+                if let Some(shape) = shape {
+                    major = major.max(covering_radius(&p, p(v as u32), n(v as u32), shape, t));
+                }
+                if *out != DVec2::ZERO {
+                    for w in [next, previous] {
+                        reach = reach.max(out.dot(ring_term(&p, &n, v as u32, w).0));
+                    }
                 }
             }
-        }
-    }
-    for (v, shape) in shapes.into_iter().enumerate() {
-        let surfel = &mut surfels[v];
-        match shape.filter(|_| major[v] > 0.0 && major[v].is_finite()) {
-            Some(mut shape) => {
-                let r = major[v] * (1.0 + RADIUS_MARGIN);
-                shape.gradient = shape.gradient.map(|g| g * r);
-                shape.clip = border_clip(n(v as u32), outward[v], reach[v], &shape, r);
-                surfel.radius = (r / s) as f32;
-                surfel.shape = shape.pack();
+            (major, reach)
+        })
+        .collect();
+    drop(corners);
+    surfels
+        .par_iter_mut()
+        .zip(shapes.into_par_iter().zip(reaches))
+        .enumerate()
+        .for_each(|(v, (surfel, ((shape, outward), (major, reach))))| {
+            match shape.filter(|_| major > 0.0 && major.is_finite()) {
+                Some(mut shape) => {
+                    let r = major * (1.0 + RADIUS_MARGIN);
+                    shape.gradient = shape.gradient.map(|g| g * r);
+                    shape.clip = border_clip(n(v as u32), outward, reach, &shape, r);
+                    surfel.radius = (r / s) as f32;
+                    surfel.shape = shape.pack();
+                }
+                None => surfel.shape = SplatShape::circle(surfel.normal),
             }
-            None => surfel.shape = SplatShape::circle(surfel.normal),
-        }
-    }
+        });
 }
 
 #[cfg(test)]
