@@ -18,14 +18,7 @@ cargo build --release --quiet --bin spt --example gen_model
 mkdir -p data/large
 [ -f data/large/lucy_knot.ply ] || ./target/release/examples/gen_model --preset lucy
 [ -f data/large/lucy_knot.spt ] || ./target/release/spt convert data/large/lucy_knot.ply data/large/lucy_knot.spt > /dev/null
-if [ -z "${DISPLAY:-}" ]; then
-  for n in $(seq 90 199); do [ -e "/tmp/.X$n-lock" ] || break; done
-  Xvfb ":$n" -screen 0 1280x1024x24 -nolisten tcp > /dev/null 2>&1 &
-  xvfb_pid=$!
-  trap 'kill $xvfb_pid' EXIT
-  for _ in $(seq 100); do [ -e "/tmp/.X11-unix/X$n" ] && break; sleep 0.05; done
-  export DISPLAY=":$n"
-fi
+source tools/display.sh
 log=$(mktemp)
 shot=$(mktemp --suffix .png)
 median() { sort -n | awk '{v[NR]=$1} END {print v[int((NR+1)/2)]}'; }
