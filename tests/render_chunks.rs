@@ -81,12 +81,7 @@ fn chunks_draw_what_one_list_draws() {
             sa.tested,
             sb.tested
         );
-        let differ = a
-            .rgba
-            .iter()
-            .zip(&b.rgba)
-            .filter(|(x, y)| x.abs_diff(**y) > 2)
-            .count();
+        let differ = common::differences(&a, &b).0;
         eprintln!(
             "azimuth {az}: {} vs {} tested; {differ} channel values differ by > 2",
             sa.tested, sb.tested

@@ -27,23 +27,6 @@ fn views(scene: &Scene) -> Vec<Camera> {
         .collect()
 }
 
-/// Channel values that differ by more than 2, and pixels covered by one image only.
-fn differences(a: &spt::render::Image, b: &spt::render::Image) -> (usize, usize) {
-    let values = a
-        .rgba
-        .iter()
-        .zip(&b.rgba)
-        .filter(|(x, y)| x.abs_diff(**y) > 2)
-        .count();
-    let coverage = a
-        .covered
-        .iter()
-        .zip(&b.covered)
-        .filter(|(x, y)| x != y)
-        .count();
-    (values, coverage)
-}
-
 fn stream_and_compare(renderer: &Renderer, scene: &Scene, budget: u64) -> usize {
     let (mut gpu, mut residency) = renderer.begin_streaming(scene, budget).unwrap();
     let whole = renderer.upload(scene);
@@ -65,7 +48,7 @@ fn stream_and_compare(renderer: &Renderer, scene: &Scene, budget: u64) -> usize 
         let (reference, ref_stats) = renderer
             .render(scene, &whole, camera, &same_eps, SIZE.0, SIZE.1)
             .unwrap();
-        let (values, coverage) = differences(&image, &reference);
+        let (values, coverage) = common::differences(&image, &reference);
         eprintln!(
             "budget {budget} B, view {k}: {}/{} slices, ε {px:.3} px{}, drawn {} (whole list at that ε: {}); \
              differing channel values {values}, coverage {coverage}",

@@ -231,3 +231,20 @@ pub fn assert_tree_invariants(list: &SequentialList, what: &str) {
         }
     }
 }
+
+/// Channel values that differ by more than 2, and pixels covered by one image only.
+pub fn differences(a: &spt::render::Image, b: &spt::render::Image) -> (usize, usize) {
+    let values = a
+        .rgba
+        .iter()
+        .zip(&b.rgba)
+        .filter(|(x, y)| x.abs_diff(**y) > 2)
+        .count();
+    let coverage = a
+        .covered
+        .iter()
+        .zip(&b.covered)
+        .filter(|(x, y)| x != y)
+        .count();
+    (values, coverage)
+}
