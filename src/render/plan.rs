@@ -59,22 +59,23 @@ pub(super) fn fitting_eps(
 ) -> (f64, Vec<Range<usize>>, Vec<Range<usize>>) {
     // The search reads no node (a streamed file's nodes are on disk): it fits each
     // chunk's prefix rounded up to its block; the drawn ranges are made exact where
-    // their nodes are on the GPU, and so in memory.
+    // their nodes are on the GPU, and so in memory, in the same pass as the bounds.
     let ranges = |e: f64| scene.index.ranges_bound(eye, e, Some(cone));
-    let exact = |e: f64| {
-        let refined = scene
+    let both = |e: f64| {
+        let nodes = scene.nodes();
+        let (bounds, refined) = scene
             .index
-            .ranges_refined(scene.nodes(), eye, e, Some(cone), |r| gpu.covers(&r));
-        gpu.clip(&refined)
+            .ranges_refined(nodes, eye, e, Some(cone), |r| gpu.covers(&r));
+        (bounds, gpu.clip(&refined))
     };
     let fits = |r: &[Range<usize>]| r.iter().all(|r| gpu.covers(r));
-    let wanted = ranges(eps);
+    let (wanted, at_eps) = both(eps);
     if gpu.resident_slices() == 0 {
         return (eps, Vec::new(), wanted);
     }
     if fits(&wanted) {
         gpu.last_fit.set(None);
-        return (eps, exact(eps), wanted);
+        return (eps, at_eps, wanted);
     }
     let floor = scene.meta().error_scale as f64 * 1e-9;
     let start = gpu
@@ -84,7 +85,7 @@ pub(super) fn fitting_eps(
         .unwrap_or(eps.max(floor));
     let hi = least_fitting(eps, start, |e| fits(&ranges(e)));
     gpu.last_fit.set(Some(hi));
-    (hi, exact(hi), wanted)
+    (hi, both(hi).1, wanted)
 }
 
 /// The least ε (to within [`FIT_PRECISION`]) above `eps`, which does not fit, for

@@ -368,17 +368,22 @@ impl PrefixIndex {
         eps: f64,
         cone: Option<&ViewCone>,
     ) -> Vec<Range<usize>> {
-        self.ranges_refined(nodes, eye, eps, cone, |_| true)
+        self.ranges_refined(nodes, eye, eps, cone, |_| true).1
     }
 
     /// [`PrefixIndex::ranges`] from the index alone (no node read): each chunk's prefix
     /// rounded up to its block, a superset of the exact ranges.
     pub fn ranges_bound(&self, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> Vec<Range<usize>> {
-        self.ranges_by(eye, eps, cone, |_, _, bound| bound)
+        let mut out = Vec::new();
+        self.for_each_prefix(eye, eps, cone, |_, start, _, bound| {
+            push_range(&mut out, start, bound)
+        });
+        out
     }
 
-    /// [`PrefixIndex::ranges`], each chunk's prefix exact where `refine` says so of its
-    /// bound (a list range) and the bound elsewhere: nodes are read only there.
+    /// In one pass, [`PrefixIndex::ranges_bound`] and the ranges with each chunk's
+    /// prefix exact where `refine` says so of its bound (a list range) and the bound
+    /// elsewhere: nodes are read only there.
     pub fn ranges_refined(
         &self,
         nodes: &[NodeRecord],
@@ -386,25 +391,28 @@ impl PrefixIndex {
         eps: f64,
         cone: Option<&ViewCone>,
         refine: impl Fn(Range<usize>) -> bool,
-    ) -> Vec<Range<usize>> {
-        self.ranges_by(eye, eps, cone, |c, d_min, bound| {
-            let start = self.chunks[c].start as usize;
-            match refine(start..start + bound) {
+    ) -> (Vec<Range<usize>>, Vec<Range<usize>>) {
+        let (mut bounds, mut refined) = (Vec::new(), Vec::new());
+        self.for_each_prefix(eye, eps, cone, |c, start, d_min, bound| {
+            push_range(&mut bounds, start, bound);
+            let n = match refine(start..start + bound) {
                 true => self.prefix_within(c, nodes, d_min, eps, bound),
                 false => bound,
-            }
-        })
+            };
+            push_range(&mut refined, start, n);
+        });
+        (bounds, refined)
     }
 
-    /// The ranges with each chunk's prefix given by `prefix(c, d_min, bound)`.
-    fn ranges_by(
+    /// Calls `visit(c, start, d_min, bound)` for each chunk c the view may need, in list
+    /// order: its first node, its distance from the eye and its prefix bound (> 0).
+    fn for_each_prefix(
         &self,
         eye: DVec3,
         eps: f64,
         cone: Option<&ViewCone>,
-        prefix: impl Fn(usize, f64, usize) -> usize,
-    ) -> Vec<Range<usize>> {
-        let mut out: Vec<Range<usize>> = Vec::new();
+        mut visit: impl FnMut(usize, usize, f64, usize),
+    ) {
         let pages = self.pages.iter().enumerate();
         let seen = pages.filter(|(_, page)| !self.skipped(page, distances(page, eye), eps, cone));
         for c in seen.flat_map(|(p, _)| p * PAGE..((p + 1) * PAGE).min(self.chunks.len())) {
@@ -414,15 +422,20 @@ impl PrefixIndex {
                 continue;
             }
             let bound = self.prefix_bound(c, d.0, eps);
-            let n = if bound == 0 { 0 } else { prefix(c, d.0, bound) };
-            let start = chunk.start as usize;
-            match out.last_mut() {
-                _ if n == 0 => {}
-                Some(last) if last.end == start => last.end = start + n,
-                _ => out.push(start..start + n),
+            if bound > 0 {
+                visit(c, chunk.start as usize, d.0, bound);
             }
         }
-        out
+    }
+}
+
+/// Appends the range of `n` nodes from `start` to `out` (ascending), joined to the last
+/// when adjacent; nothing when `n` is 0.
+fn push_range(out: &mut Vec<Range<usize>>, start: usize, n: usize) {
+    match out.last_mut() {
+        _ if n == 0 => {}
+        Some(last) if last.end == start => last.end = start + n,
+        _ => out.push(start..start + n),
     }
 }
 
