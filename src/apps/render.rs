@@ -29,12 +29,9 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
             let (mut uploaded, mut residency) = renderer.begin_streaming(&scene, bytes)?;
             let state = (&mut uploaded, &mut residency);
             renderer.stream_for_view(&scene, state, &camera, &settings, args.size);
-            let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
             println!(
-                "gpu memory {:.1} MiB resident, peak {:.1} MiB, budget {:.1} MiB ({} of {} slices)",
-                mib(residency.resident_bytes()),
-                mib(residency.peak_bytes()),
-                mib(bytes),
+                "gpu memory {} ({} of {} slices)",
+                residency.memory_line(),
                 uploaded.resident_slices(),
                 uploaded.planned_slices()
             );

@@ -16,6 +16,11 @@
 
 use std::collections::BTreeMap;
 
+/// `bytes` in MiB.
+pub fn mib(bytes: u64) -> f64 {
+    bytes as f64 / (1u64 << 20) as f64
+}
+
 /// What to do after a frame: evict these slices (before the fetches are asked), then
 /// fetch those, in order.
 #[derive(Debug, Default, Clone, PartialEq, Eq)]
@@ -66,6 +71,17 @@ impl Residency {
     /// The most bytes resident at any time so far.
     pub fn peak_bytes(&self) -> u64 {
         self.peak_bytes
+    }
+
+    /// "A MiB resident, peak B MiB, budget C MiB": what `spt render` and the viewer's
+    /// screenshot log.
+    pub fn memory_line(&self) -> String {
+        format!(
+            "{:.1} MiB resident, peak {:.1} MiB, budget {:.1} MiB",
+            mib(self.resident_bytes),
+            mib(self.peak_bytes),
+            mib(self.budget)
+        )
     }
 
     /// Slices requested and not arrived yet.

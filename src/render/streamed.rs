@@ -8,7 +8,7 @@ use super::camera::Camera;
 use super::gpu_scene::GpuScene;
 use super::plan::plan;
 use super::renderer::Renderer;
-use super::residency::Residency;
+use super::residency::{Residency, mib};
 use super::settings::Settings;
 use super::upload;
 use crate::tree::scene::Scene;
@@ -35,8 +35,8 @@ impl Renderer {
         anyhow::ensure!(
             first <= budget,
             "a GPU memory budget of {:.1} MiB is below the coarsest slice of the list ({:.1} MiB)",
-            budget as f64 / MIB,
-            first as f64 / MIB
+            mib(budget),
+            mib(first)
         );
         gpu.insert(self.upload_slice(scene, 0, gpu.slice_range(0)));
         residency.arrived(0, first);
@@ -71,8 +71,6 @@ impl Renderer {
         }
     }
 }
-
-const MIB: f64 = (1 << 20) as f64;
 
 /// The chunks that overlap a node range: the most test ranges a frame hands its slice.
 pub(super) fn max_ranges(scene: &Scene, range: &std::ops::Range<usize>) -> usize {

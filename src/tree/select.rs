@@ -154,10 +154,16 @@ pub fn chunk_delta_suffix(nodes: &[NodeRecord]) -> Vec<u16> {
         .chunks(BLOCK)
         .map(|block| block.iter().map(|r| r.delta).max().unwrap_or(0))
         .collect();
-    for b in (0..suffix.len().saturating_sub(1)).rev() {
-        suffix[b] = suffix[b].max(suffix[b + 1]);
-    }
+    to_suffix_maxima(&mut suffix);
     suffix
+}
+
+/// Turns a chunk's block maxima into suffix maxima: entry b becomes the largest of
+/// entries b and after.
+fn to_suffix_maxima(blocks: &mut [u16]) {
+    for b in (0..blocks.len().saturating_sub(1)).rev() {
+        blocks[b] = blocks[b].max(blocks[b + 1]);
+    }
 }
 
 /// [`delta_suffix`] and [`block_heads`] made from the nodes fed in list order, a slab
@@ -202,9 +208,7 @@ impl<'a> BlockIndexBuilder<'a> {
                 .get(self.chunk)
                 .is_some_and(|c| self.fed == c.count as usize)
             {
-                for b in (0..self.blocks.len().saturating_sub(1)).rev() {
-                    self.blocks[b] = self.blocks[b].max(self.blocks[b + 1]);
-                }
+                to_suffix_maxima(&mut self.blocks);
                 self.out.append(&mut self.blocks);
                 (self.chunk, self.fed) = (self.chunk + 1, 0);
             }

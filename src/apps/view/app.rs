@@ -455,14 +455,7 @@ impl App {
             );
         }
         if let Some(s) = w.viewer.model.as_ref().and_then(|m| m.streamer.as_ref()) {
-            let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
-            let r = &s.residency;
-            println!(
-                "gpu memory {:.1} MiB resident, peak {:.1} MiB, budget {:.1} MiB",
-                mib(r.resident_bytes()),
-                mib(r.peak_bytes()),
-                mib(r.budget())
-            );
+            println!("gpu memory {}", s.residency.memory_line());
         }
         println!("wrote     {}", path.display());
     }

@@ -7,6 +7,7 @@ use egui::{Color32, RichText};
 use super::input::Command;
 use super::viewer::{ERROR_PX_RANGE, Viewer};
 use crate::apps::text::count;
+use crate::render::residency::mib;
 use crate::render::{Culling, Mode};
 
 /// What the panel shows besides the viewer itself.
@@ -244,7 +245,6 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
                 }
             }
             if let Some(s) = &m.streamer {
-                let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
                 let r = &s.residency;
                 row(
                     "GPU memory",
