@@ -51,7 +51,9 @@ struct Frame {
     intensity_range: vec2<f32>,
     // 1 when the nodes carry LiDAR attributes (the attribute modes read them).
     has_attributes: u32,
-    pad: u32,
+    // 1 when the model's normals face out of its surface (meshes, clouds with given
+    // normals): a splat seen from behind is then the surface's back (see fs_attributes).
+    oriented_normals: u32,
 }
 
 const MODE_SHADED: u32 = 0u;

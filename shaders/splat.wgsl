@@ -354,6 +354,12 @@ fn kernel(rho2: f32) -> f32 {
 }
 
 const KERNEL_SHARPNESS: f32 = 2.5;
+// What a fragment seen from behind weighs against front ones, on a model whose normals
+// face outward. Where only such fragments reach a pixel the weight cancels out in pass 3;
+// where front ones blend with them they dominate. Measured, leaves only, 8 views (knot,
+// bunny, dragon FLIP): 1 (no weighting) 0.0737, 0.0362, 0.0323; 1/16 0.0703, 0.0348,
+// 0.0297; 1/64 0.0700, 0.0346, 0.0294; 1/256 0.0699, 0.0346, 0.0292.
+const BACK_WEIGHT: f32 = 1.0 / 64.0;
 const MIN_WEIGHT: f32 = 1.0 / 1024.0;
 // What a fragment of the prefilter's band weighs against one whose centre a patch
 // covers: it gives colour to a pixel that no patch covers at its centre (a silhouette
@@ -379,8 +385,14 @@ fn fs_attributes(in: SplatVarying) -> Attributes {
     }
     w *= select(BAND_WEIGHT, 1.0, h.centre_inside);
     let q = view_ray(in.clip.xy) * h.depth;
-    // Two-sided: a normal facing away from the eye is flipped before blending.
-    let n = select(h.normal, -h.normal, dot(in.normal, q) > 0.0);
+    // Two-sided: a normal facing away from the eye is flipped before blending. Where
+    // normals face out of the surface, such a fragment shows the surface's back, which
+    // is what the pixel shows where nothing else reaches it (inside a hole's rim); but
+    // where front fragments blend with it (a silhouette or a fold, within pass 1's
+    // push) it is the far side that the surface hides, and weighs BACK_WEIGHT of them.
+    let back = dot(h.normal, q) > 0.0;
+    let n = select(h.normal, -h.normal, back);
+    w *= select(1.0, BACK_WEIGHT, back && frame.oriented_normals != 0u);
     var out: Attributes;
     out.color = vec4<f32>(in.color.rgb * w, w);
     out.normal = vec4<f32>(n * w, h.depth * w);

@@ -260,3 +260,45 @@ fn given_normals_are_honoured_and_zero_ones_recomputed() {
         "the zero normal is recomputed from faces"
     );
 }
+
+/// A closed surface: the 8 faces of an octahedron around (5, −2, 1), each wound
+/// counter-clockwise seen from outside, or all reversed.
+fn octahedron(inward: bool) -> PolyMesh {
+    let c = [5.0, -2.0, 1.0];
+    let mut positions = Vec::new();
+    for axis in 0..3 {
+        for sign in [1.0, -1.0] {
+            let mut p = c;
+            p[axis] += sign * (1.0 + axis as f64);
+            positions.push(p);
+        }
+    }
+    let mut faces = FaceList::default();
+    for (x, y, z) in [(0, 2, 4), (2, 1, 4), (1, 3, 4), (3, 0, 4)] {
+        let (top, bottom) = ([x, y, z], [y, x, 5]);
+        for f in [top, bottom] {
+            faces.push(&if inward { [f[0], f[2], f[1]] } else { f });
+        }
+    }
+    PolyMesh {
+        positions,
+        faces,
+        ..PolyMesh::default()
+    }
+}
+
+#[test]
+fn normals_of_a_closed_mesh_face_outward_whichever_way_it_winds() {
+    for inward in [false, true] {
+        let (g, leaves) = load(&octahedron(inward), "octahedron.ply");
+        assert_eq!(leaves.stats.turned_outward, inward);
+        let centre = g.positions.iter().sum::<Vec3>() / g.positions.len() as f32;
+        for (p, s) in g.positions.iter().zip(&leaves.surfels) {
+            assert!(
+                (*p - centre).dot(s.normal) > 0.0,
+                "inward {inward}: the normal {} at {p} faces in",
+                s.normal
+            );
+        }
+    }
+}

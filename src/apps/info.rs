@@ -260,10 +260,10 @@ impl ModelInfo {
                 s.radius_min,
                 s.radius_median,
                 s.radius_max,
-                if s.oriented_normals {
-                    "oriented"
-                } else {
-                    "unoriented (two-sided)"
+                match (s.oriented_normals, s.stats.turned_outward) {
+                    (true, false) => "oriented",
+                    (true, true) => "oriented (all turned outward: the triangles wind inward)",
+                    _ => "unoriented (two-sided)",
                 }
             ),
         );

@@ -40,7 +40,7 @@ pub(super) struct FrameUniform {
     pub edl_radius_px: f32,
     pub intensity_range: [f32; 2],
     pub has_attributes: u32,
-    pub pad: u32,
+    pub oriented_normals: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<FrameUniform>() == 288);
@@ -146,7 +146,7 @@ impl FrameUniform {
             edl_radius_px: settings.edl_radius_px,
             intensity_range: meta.intensity_range.map(f32::from),
             has_attributes: meta.has_attributes as u32,
-            pad: 0,
+            oriented_normals: meta.oriented_normals as u32,
         }
     }
 }

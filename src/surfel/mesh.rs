@@ -28,6 +28,9 @@ pub const RADIUS_MARGIN: f64 = 1e-6;
 pub const DEGENERATE: f64 = 1e-6;
 /// A vertex's face normals cancel when |Σ cross| ≤ CANCELLED · Σ |cross|.
 pub const CANCELLED: f32 = 1e-5;
+/// Normals face inward when their flux through the surface is below −INWARD of its
+/// spread ([`orient_outward`]).
+pub const INWARD: f64 = 0.02;
 
 /// Cross product (b − a) × (c − a), covering radius and degeneracy of one triangle,
 /// in f64. With squared edge lengths l₀ l₁ l₂ and L² their maximum: acute iff
@@ -229,5 +232,34 @@ pub fn vertex_disks(
         surfels,
         stats,
     );
+    stats.turned_outward = orient_outward(points, surfels);
     super::ring::ring_shapes(points, scale, triangles, surfels);
+}
+
+/// Negates every normal when they face inward on the whole, and says whether it did.
+///
+/// For a closed surface S with outward normals, ∫_S (p − c)·n dA = 3·volume > 0 for
+/// any point c (the divergence theorem); the sum over vertices, with dA ≈ r² (the
+/// covering radius squared) and c the mean vertex, estimates it. Divided by
+/// ∫_S |p − c| dA it is 1 for a sphere, about 4a/L for a closed tube of radius a and
+/// length L, and near 0 for an open sheet, which has no inside: normals turn only
+/// below −[`INWARD`]. A mesh whose triangles wind inward (the generated knot: −0.26;
+/// bunny 0.62, dragon 0.32) so gets outward normals, and the renderer can tell a
+/// surface's back from its front (`shaders/splat.wgsl`, `BACK_WEIGHT`).
+pub fn orient_outward(points: &[Vec3], surfels: &mut [Surfel]) -> bool {
+    let n = points.len().max(1) as f64;
+    let c = points.par_iter().map(|p| p.as_dvec3()).sum::<DVec3>() / n;
+    let (flux, spread) = points
+        .par_iter()
+        .zip(surfels.par_iter())
+        .map(|(p, s)| {
+            let (r, d) = (s.radius as f64, p.as_dvec3() - c);
+            (r * r * d.dot(s.normal.as_dvec3()), r * r * d.length())
+        })
+        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+    if flux >= -INWARD * spread {
+        return false;
+    }
+    surfels.par_iter_mut().for_each(|s| s.normal = -s.normal);
+    true
 }

@@ -59,6 +59,9 @@ pub struct SurfelStats {
     /// Cloud surfels that close no gap (a boundary, a stray sample) whose radius was
     /// capped at a few neighbourhood spacings ([`covering::MAX_SPACINGS`]).
     pub capped_radii: u64,
+    /// A mesh's normals all negated to face outward (its triangles wound inward, or
+    /// its given normals pointing in): see [`mesh::orient_outward`].
+    pub turned_outward: bool,
 }
 
 /// The leaf surfels of a model.

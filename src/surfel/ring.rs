@@ -17,9 +17,11 @@
 //!   out-neighbour j and in-neighbour k, and the chord Σ d(out) − Σ d(in) over its
 //!   triangles cancels where every edge has its twin; on the border it is the offset
 //!   from the border's previous vertex to its next, with the triangles on its left
-//!   (seen from the normal). The clip line is ⟂ to the chord, outside every ring
-//!   vertex (so it never cuts a triangle of the ring): on a convex corner it passes
-//!   through the vertex.
+//!   seen from the normal (the chord is negated where the ring's triangles wind
+//!   clockwise seen from it, Σ d(out) × d(in) < 0, as after `orient_outward` turned
+//!   the normals). The clip line is ⟂ to the chord, outside every ring vertex (so it
+//!   never cuts a triangle of the ring): on a convex corner it passes through the
+//!   vertex.
 
 use glam::{DVec2, DVec3, Vec3};
 
@@ -151,14 +153,17 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
     let shapes: Vec<(Option<Shape>, DVec2)> = per_vertex
         .clone()
         .map(|v| {
-            let (mut fit, mut chord) = (Fit::default(), DVec2::ZERO);
+            let (mut fit, mut chord, mut winding) = (Fit::default(), DVec2::ZERO, 0.0);
             for (_, next, previous) in ring(v) {
                 let (d_out, dn_out) = ring_term(&p, &n, v as u32, next);
                 let (d_in, dn_in) = ring_term(&p, &n, v as u32, previous);
                 fit.add(d_out, dn_out);
                 fit.add(d_in, dn_in);
                 chord += d_out - d_in;
+                winding += d_out.perp_dot(d_in);
             }
+            // Triangles wound clockwise seen from the normal lie right of the chord.
+            let chord = if winding < 0.0 { -chord } else { chord };
             (oriented(n(v as u32), &fit), border_normal(chord, &fit))
         })
         .collect();
@@ -220,9 +225,19 @@ mod tests {
         (points, triangles)
     }
 
+    /// With the grid's winding, and with it reversed under the same +z normals (the
+    /// triangles wound clockwise seen from the normal, as after `orient_outward`
+    /// turned an inward-wound mesh's normals).
     #[test]
     fn border_splats_are_clipped_at_the_border_and_inner_ones_not() {
         let (points, triangles) = grid();
+        let reversed: Vec<[u32; 3]> = triangles.iter().map(|&[a, b, c]| [a, c, b]).collect();
+        for triangles in [triangles, reversed] {
+            border_clips_on_the_grid(&points, &triangles);
+        }
+    }
+
+    fn border_clips_on_the_grid(points: &[Vec3], triangles: &[[u32; 3]]) {
         let mut surfels: Vec<Surfel> = points
             .iter()
             .map(|&p| Surfel {
@@ -231,7 +246,7 @@ mod tests {
                 ..Surfel::zeroed()
             })
             .collect();
-        ring_shapes(&points, 1.0, &triangles, &mut surfels);
+        ring_shapes(points, 1.0, triangles, &mut surfels);
         for (i, s) in surfels.iter().enumerate() {
             let (x, y) = ((i % 4) as f64, (i / 4) as f64);
             let border = x == 0.0 || x == 3.0 || y == 0.0 || y == 3.0;
@@ -247,7 +262,7 @@ mod tests {
             let kept = |px, py| clip.normal.dot(at(px, py)) <= clip.offset + 1e-9;
             // Every point of the grid (so every triangle of the ring) is kept; a point
             // half a cell beyond the nearest border is cut away.
-            for q in &points {
+            for q in points {
                 assert!(kept(q.x as f64, q.y as f64), "vertex {i} cuts {q}");
             }
             let (ox, oy) = (
