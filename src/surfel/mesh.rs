@@ -199,30 +199,8 @@ pub fn vertex_disks(
         .iter()
         .filter(|&&v| surfels[v as usize].radius == 0.0)
         .count() as u64;
-    if !cancelled.is_empty() {
-        // Normal of the largest incident face (the sign of a fold is arbitrary).
-        let mut best: HashMap<u32, (f64, DVec3)> =
-            cancelled.iter().map(|&v| (v, (0.0, DVec3::Z))).collect();
-        for t in triangles {
-            let [a, b, c] = t.map(|i| at(points, s, i));
-            let (cross, _, degenerate) = triangle_terms(a, b, c);
-            if degenerate {
-                continue;
-            }
-            let area = cross.length();
-            for v in t {
-                if let Some(b) = best.get_mut(v)
-                    && area > b.0
-                {
-                    *b = (area, cross / area);
-                }
-            }
-        }
-        for (v, (_, nrm)) in best {
-            surfels[v as usize].normal = unit_vector(nrm).unwrap_or(Vec3::Z);
-        }
-        stats.cancelled_normals = cancelled.len() as u64;
-    }
+    largest_face_normals(points, s, triangles, &cancelled, surfels);
+    stats.cancelled_normals = cancelled.len() as u64;
     neighbour_disks(
         points,
         scale,
@@ -234,6 +212,40 @@ pub fn vertex_disks(
     );
     stats.turned_outward = orient_outward(points, surfels);
     super::ring::ring_shapes(points, scale, triangles, surfels);
+}
+
+/// Gives each vertex of `cancelled` (whose face normals cancel) the normal of its
+/// largest incident face: the sign of a fold is arbitrary.
+fn largest_face_normals(
+    points: &[Vec3],
+    s: f64,
+    triangles: &[[u32; 3]],
+    cancelled: &[u32],
+    surfels: &mut [Surfel],
+) {
+    if cancelled.is_empty() {
+        return;
+    }
+    let mut best: HashMap<u32, (f64, DVec3)> =
+        cancelled.iter().map(|&v| (v, (0.0, DVec3::Z))).collect();
+    for t in triangles {
+        let [a, b, c] = t.map(|i| at(points, s, i));
+        let (cross, _, degenerate) = triangle_terms(a, b, c);
+        if degenerate {
+            continue;
+        }
+        let area = cross.length();
+        for v in t {
+            if let Some(b) = best.get_mut(v)
+                && area > b.0
+            {
+                *b = (area, cross / area);
+            }
+        }
+    }
+    for (v, (_, nrm)) in best {
+        surfels[v as usize].normal = unit_vector(nrm).unwrap_or(Vec3::Z);
+    }
 }
 
 /// Negates every normal when they face inward on the whole, and says whether it did.
