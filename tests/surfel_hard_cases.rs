@@ -274,9 +274,9 @@ fn octahedron(inward: bool) -> PolyMesh {
         }
     }
     let mut faces = FaceList::default();
-    for (x, y, z) in [(0, 2, 4), (2, 1, 4), (1, 3, 4), (3, 0, 4)] {
-        let (top, bottom) = ([x, y, z], [y, x, 5]);
-        for f in [top, bottom] {
+    // Each edge (a, b) of the equator with the apex +z (vertex 4) and −z (vertex 5).
+    for (a, b) in [(0, 2), (2, 1), (1, 3), (3, 0)] {
+        for f in [[a, b, 4], [b, a, 5]] {
             faces.push(&if inward { [f[0], f[2], f[1]] } else { f });
         }
     }
