@@ -1,4 +1,5 @@
 #import common
+#import constants
 
 // Splats: pass 1 (visibility, depth only) and pass 2 (attributes, additive blending),
 // one instanced quad of 4 vertices per node of the list slice bound here: every node
@@ -11,22 +12,49 @@
 // Each node's LiDAR attributes (one u32 of zero for a model without them).
 @group(1) @binding(3) var<storage, read> attributes: array<u32>;
 
-// A splat's ellipse, normal field and clip line, as src/surfel/shape.rs packs it.
+// A splat's ellipse, normal field and clip, as src/surfel/shape.rs packs it.
 struct SplatShape {
     axis: u32,       // major axis u, octahedral snorm16 × 2
     ratio_a: u32,    // minor / major semi-axis, a: two f16
     b_c: u32,        // b, c: two f16
-    clip: u32,       // clip line: angle θ (2π/65536 steps), offset d (f16; +∞: none)
+    clip: u32,       // a line or a wedge, see clip_lines
 }
 
-// The clip line as (cos θ, sin θ, d): the plane points (x, y) (major radii) with
-// x cos θ + y sin θ > d are cut away. None: d = 2, beyond the ellipse.
-fn clip_line(bits: u32) -> vec3<f32> {
-    if (bits >> 16u) == 0x7C00u {
-        return vec3<f32>(1.0, 0.0, 2.0);
+// A splat's clip (src/surfel/clip.rs) as two lines (cos, sin, d): plane points p
+// (major radii) with dot(line.xy, p) > line.z lie beyond a line. Where `a.w` is 1 a
+// point beyond either line is cut away (a convex wedge, or one line given twice), where
+// it is 0 only one beyond both (a reflex wedge). No clip: d = 2, beyond the ellipse.
+struct ClipLines {
+    a: vec4<f32>,
+    b: vec3<f32>,
+}
+
+fn clip_lines(bits: u32) -> ClipLines {
+    if (bits >> 26u) == 0x3Fu {
+        // A wedge: the sides of the counter-clockwise sweep from `start` to `end`.
+        let step = 6.283185307179586 / 8192.0;
+        let s = f32((bits >> 13u) & 0x1fffu) * step;
+        let e = f32(bits & 0x1fffu) * step;
+        let start = vec2<f32>(cos(s), sin(s));
+        let end = vec2<f32>(cos(e), sin(e));
+        let convex = start.x * end.y - start.y * end.x >= 0.0;
+        return ClipLines(
+            vec4<f32>(start.y, -start.x, WEDGE_MARGIN, select(0.0, 1.0, convex)),
+            vec3<f32>(-end.y, end.x, WEDGE_MARGIN));
     }
-    let angle = f32(bits & 0xffffu) * (6.283185307179586 / 65536.0);
-    return vec3<f32>(cos(angle), sin(angle), unpack2x16float(bits).y);
+    var line = vec3<f32>(1.0, 0.0, 2.0);
+    if (bits >> 16u) != 0x7C00u {
+        let angle = f32(bits & 0xffffu) * (6.283185307179586 / 65536.0);
+        line = vec3<f32>(cos(angle), sin(angle), unpack2x16float(bits).y);
+    }
+    return ClipLines(vec4<f32>(line, 1.0), line);
+}
+
+// Whether the clip cuts plane point p away.
+fn clipped(c: ClipLines, p: vec2<f32>) -> bool {
+    let beyond_a = dot(c.a.xy, p) > c.a.z;
+    let beyond_b = dot(c.b.xy, p) > c.b.z;
+    return select(beyond_a && beyond_b, beyond_a || beyond_b, c.a.w > 0.5);
 }
 
 struct SplatVarying {
@@ -44,8 +72,9 @@ struct SplatVarying {
     // The same without the prefilter (the flat ellipse's own projection), and in w how
     // much its ρ changes at most over SUBSAMPLE_REACH pixels (see screen_rho)
     @location(7) @interpolate(flat) conic0: vec4<f32>,
-    // The clip line (cos θ, sin θ, d), see clip_line
-    @location(8) @interpolate(flat) clip_line: vec3<f32>,
+    // The clip's two lines, see clip_lines
+    @location(8) @interpolate(flat) clip_a: vec4<f32>,
+    @location(10) @interpolate(flat) clip_b: vec3<f32>,
     // How far pass 1 pushes the splat back (view units), before the footprint term
     @location(9) @interpolate(flat) push: f32,
 }
@@ -163,7 +192,9 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     out.conic = prefiltered_conic(covariance, frame.prefilter_px);
     let conic0 = prefiltered_conic(covariance, 1e-3);
     out.conic0 = vec4<f32>(conic0, rho_reach(conic0));
-    out.clip_line = clip_line(packed.clip);
+    let clip = clip_lines(packed.clip);
+    out.clip_a = clip.a;
+    out.clip_b = clip.b;
     // A fraction of the radius, plus the node's own error for an inner node: its patch
     // may lie that far off the surface its neighbours draw.
     out.push = frame.depth_push * r + node.error;
@@ -184,7 +215,7 @@ struct PatchHit {
 // whose normals are the field), in major radii. From the plane hit (x₀, y₀) the ray
 // moves by (s du, s dv, s dn): s dn + ½ Q(x₀ + s du, y₀ + s dv) = 0, whose root nearest
 // the plane is taken. No root: the ray passes beside the curved patch's silhouette. A
-// hit beyond the clip line misses too.
+// hit the clip cuts away misses too.
 fn patch_hit(in: SplatVarying, pixel: vec2<f32>) -> PatchHit {
     let miss = PatchHit(1e9, -in.center.z, vec2<f32>(0.0));
     let dir = view_ray(pixel);
@@ -213,7 +244,7 @@ fn patch_hit(in: SplatVarying, pixel: vec2<f32>) -> PatchHit {
     let root = qb + select(-1.0, 1.0, qb >= 0.0) * sqrt(disc);
     let s = select(-2.0 * qc / root, 0.0, abs(root) < 1e-30);
     let xy = xy0 + s * dxy;
-    if dot(in.clip_line.xy, xy) > in.clip_line.z {
+    if clipped(ClipLines(in.clip_a, in.clip_b), xy) {
         return miss;
     }
     return PatchHit(xy.x * xy.x + xy.y * xy.y / (ratio * ratio), t + s, xy);

@@ -96,16 +96,24 @@ fn zero_area_faces_are_skipped_and_counted() {
     assert!(r >= 2f64.sqrt() - 1e-6, "radius {r}");
 }
 
+/// Isolated vertices off the surface keep a disk from their neighbours; one on it,
+/// within a held vertex's splat, is left out of the tree.
 #[test]
 fn isolated_vertices_get_disks_from_their_neighbours() {
     let mut m = grid();
     m.positions.push([3.5, 3.5, 2.0]);
     m.positions.push([100.0, 100.0, 100.0]);
+    let on_surface = m.positions[4 * 9 + 4];
+    m.positions
+        .push([on_surface[0] + 0.1, on_surface[1], on_surface[2]]);
     let (g, leaves) = load(&m, "isolated.ply");
-    assert_eq!(leaves.stats.isolated_vertices, 2);
+    assert_eq!(leaves.stats.isolated_vertices, 3);
+    assert_eq!(leaves.redundant, vec![83]);
     common::assert_covers(&g, &leaves, "isolated");
-    let far = leaves.surfels.last().unwrap();
+    let far = leaves.surfels[82];
     assert!(far.radius > 0.0 && far.radius.is_finite());
+    let list = spt::tree::build_sequential_list(leaves);
+    assert_eq!(list.meta.leaf_count, 83);
 }
 
 #[test]

@@ -271,9 +271,10 @@ impl ModelInfo {
         line(
             "",
             format!(
-                "degenerate triangles {}, isolated vertices {}, cancelled normals {}, given normals {}, fallback radii {}, capped radii {}",
+                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}",
                 count(st.degenerate_triangles),
                 count(st.isolated_vertices),
+                count(st.redundant_vertices),
                 count(st.cancelled_normals),
                 count(st.given_normals),
                 count(st.fallback_radii),

@@ -11,6 +11,8 @@
 //! upgrades. The test below parses and validates every composed module with naga, so a
 //! broken shader fails `cargo test` without a GPU.
 
+use crate::tree::record::WEDGE_MARGIN;
+
 /// Threads per workgroup of the compute passes (`@workgroup_size(WORKGROUP_SIZE)`).
 pub const WORKGROUP_SIZE: u32 = 256;
 
@@ -29,7 +31,8 @@ const FILES: &[(&str, &str)] = &[
 pub fn constants_wgsl() -> String {
     format!(
         "// Generated from Rust (src/render/shaders.rs): constants shared with the CPU.\n\
-         const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\n"
+         const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\n\
+         const WEDGE_MARGIN: f32 = {WEDGE_MARGIN:?};\n"
     )
 }
 

@@ -133,7 +133,8 @@ enum Source {
 }
 
 /// Normals and radii of the vertices of a mesh, written into `surfels` (one per
-/// vertex). `scale` is the model's unit scale ([`super::unit_scale`]).
+/// vertex). `scale` is the model's unit scale ([`super::unit_scale`]). Returns the
+/// isolated vertices that are redundant ([`super::isolated`]), ascending.
 pub fn vertex_disks(
     points: &[Vec3],
     scale: f32,
@@ -141,7 +142,7 @@ pub fn vertex_disks(
     given: Option<&[Vec3]>,
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
-) {
+) -> Vec<u32> {
     let s = scale as f64;
     let runs = if triangles.len() < 1 << 16 { 1 } else { RUNS };
     let per_run = triangles.len().div_ceil(runs).max(1);
@@ -195,10 +196,12 @@ pub fn vertex_disks(
         .into_par_iter()
         .filter(|&v| sources[v as usize] == Source::NoFaces || surfels[v as usize].radius == 0.0)
         .collect();
-    stats.isolated_vertices = from_neighbours
+    let isolated: Vec<u32> = from_neighbours
         .iter()
-        .filter(|&&v| surfels[v as usize].radius == 0.0)
-        .count() as u64;
+        .copied()
+        .filter(|&v| surfels[v as usize].radius == 0.0)
+        .collect();
+    stats.isolated_vertices = isolated.len() as u64;
     largest_face_normals(points, s, triangles, &cancelled, surfels);
     stats.cancelled_normals = cancelled.len() as u64;
     neighbour_disks(
@@ -212,6 +215,9 @@ pub fn vertex_disks(
     );
     stats.turned_outward = orient_outward(points, surfels);
     super::ring::ring_shapes(points, scale, triangles, surfels);
+    let redundant = super::isolated::redundant(points, scale, &isolated, surfels);
+    stats.redundant_vertices = redundant.len() as u64;
+    redundant
 }
 
 /// Gives each vertex of `cancelled` (whose face normals cancel) the normal of its

@@ -7,8 +7,10 @@
 //! scaled by 10⁻⁷ or 10⁷ gets the same surfels up to that scale, no threshold depends
 //! on the model's units, and a stray sample far away changes neither.
 
+pub mod clip;
 pub mod cloud;
 pub mod covering;
+pub mod isolated;
 pub mod mesh;
 pub mod octahedral;
 pub mod pca;
@@ -49,6 +51,9 @@ pub struct SurfelStats {
     pub degenerate_triangles: u64,
     /// Vertices of a mesh that no triangle uses: normal and radius from neighbours.
     pub isolated_vertices: u64,
+    /// Isolated vertices within reach of a held vertex's splat ([`isolated`]): left
+    /// out of the tree, as the triangles already draw their place.
+    pub redundant_vertices: u64,
     /// Vertices whose area-weighted face normals cancel (e.g. two faces back to back):
     /// normal of their largest face.
     pub cancelled_normals: u64,
@@ -77,9 +82,24 @@ pub struct LeafSurfels {
     /// surfels must be drawn two-sided.
     pub oriented_normals: bool,
     pub stats: SurfelStats,
+    /// Surfels (ascending indices) that [`LeafSurfels::drop_redundant`] leaves out of
+    /// the tree: a mesh's redundant isolated vertices ([`isolated`]).
+    pub redundant: Vec<u32>,
 }
 
 impl LeafSurfels {
+    /// Removes the `redundant` surfels (the tree is built without them).
+    pub fn drop_redundant(&mut self) {
+        let mut next = self.redundant.iter().peekable();
+        let mut index = 0u32;
+        self.surfels.retain(|_| {
+            let drop = next.next_if_eq(&&index).is_some();
+            index += 1;
+            !drop
+        });
+        self.redundant.clear();
+    }
+
     /// The promise of this module: every surfel has a finite position, a finite
     /// radius > 0 and a unit normal. The first surfel that breaks it is named.
     pub fn check(&self) -> Result<(), String> {
@@ -176,6 +196,7 @@ fn leaf_surfels_among(g: &Geometry, own: usize) -> LeafSurfels {
                 .map_or_else(PointAttributes::default, |a| a[i]),
         })
         .collect();
+    let mut redundant = Vec::new();
     let oriented = if g.triangles.is_empty() {
         let all: Vec<u32> = (0..own as u32).collect();
         cloud::neighbour_disks(
@@ -198,7 +219,7 @@ fn leaf_surfels_among(g: &Geometry, own: usize) -> LeafSurfels {
             });
         given.is_some() && stats.given_normals == own as u64
     } else {
-        mesh::vertex_disks(
+        redundant = mesh::vertex_disks(
             &g.positions,
             scale,
             &g.triangles,
@@ -215,5 +236,6 @@ fn leaf_surfels_among(g: &Geometry, own: usize) -> LeafSurfels {
         has_attributes: g.attributes.is_some(),
         oriented_normals: oriented,
         stats,
+        redundant,
     }
 }

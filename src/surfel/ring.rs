@@ -73,19 +73,78 @@ fn border_normal(chord: DVec2, fit: &Fit) -> DVec2 {
     DVec2::new(chord.y, -chord.x).normalize_or_zero()
 }
 
-/// The clip line of a border vertex (`outward` in its tangent frame, `reach` the
-/// largest offset of a ring vertex along it) on an ellipse of major radius `r`.
-fn border_clip(normal: DVec3, outward: DVec2, reach: f64, shape: &Shape, r: f64) -> Option<Clip> {
+/// A tangent-frame direction of a vertex as plane coordinates of its ellipse (along u,
+/// v), unit; None if it vanishes.
+fn to_plane(normal: DVec3, d: DVec2, shape: &Shape) -> Option<DVec2> {
+    let (t1, t2) = tangent_frame(normal);
+    let o = t1 * d.x + t2 * d.y;
+    DVec2::new(o.dot(shape.axis), o.dot(shape.minor_axis(normal))).try_normalize()
+}
+
+/// The clip of a border vertex on an ellipse of major radius `r`: the wedge of its
+/// fan where it has one ([`border_fan`]), else the line ⟂ `outward` (in its tangent
+/// frame) at `reach`, the largest offset of a ring vertex along it.
+fn border_clip(
+    normal: DVec3,
+    (outward, reach): (DVec2, f64),
+    fan: Option<Fan>,
+    shape: &Shape,
+    r: f64,
+) -> Option<Clip> {
+    if let Some((start, end)) = fan {
+        let (start, end) = (
+            to_plane(normal, start, shape)?,
+            to_plane(normal, end, shape)?,
+        );
+        return Some(Clip::Wedge { start, end });
+    }
     if outward == DVec2::ZERO {
         return None;
     }
-    let (t1, t2) = tangent_frame(normal);
-    let o = t1 * outward.x + t2 * outward.y;
-    let uv = DVec2::new(o.dot(shape.axis), o.dot(shape.minor_axis(normal))).try_normalize()?;
-    Some(Clip {
-        normal: uv,
+    Some(Clip::Line {
+        normal: to_plane(normal, outward, shape)?,
         offset: reach.max(0.0) / r,
     })
+}
+
+/// A border vertex's fan: the directions of its first and last border edges, in its
+/// tangent frame, the triangles sweeping counter-clockwise from one to the other.
+type Fan = (DVec2, DVec2);
+
+/// Largest disagreement (radians) between a fan's summed triangle angles and the
+/// sweep between its border edges before its wedge is not trusted.
+const FAN_TOLERANCE: f64 = 0.05;
+
+/// The fan of border vertex `v` whose ring has exactly one border edge out (to a
+/// `next` that is no triangle's `previous`) and one in: the directions of the two
+/// border neighbours in its tangent frame, ordered so that the triangles sweep
+/// counter-clockwise seen from the normal from the first to the second. `angle` is the
+/// triangles' angles at v summed in that sense; where the sweep between the two
+/// directions differs from it (a ring folded over itself in the tangent plane), None.
+fn border_fan(
+    corners: impl Iterator<Item = (u32, u32)> + Clone,
+    direction: impl Fn(u32) -> DVec2,
+    angle: f64,
+    winding: f64,
+) -> Option<Fan> {
+    let border_out: Vec<u32> = corners
+        .clone()
+        .map(|(next, _)| next)
+        .filter(|&w| !corners.clone().any(|(_, previous)| previous == w))
+        .collect();
+    let border_in: Vec<u32> = corners
+        .clone()
+        .map(|(_, previous)| previous)
+        .filter(|&w| !corners.clone().any(|(next, _)| next == w))
+        .collect();
+    let ([w_out], [w_in]) = (border_out.as_slice(), border_in.as_slice()) else {
+        return None;
+    };
+    let (a, b) = (direction(*w_out), direction(*w_in));
+    let (start, end) = if winding < 0.0 { (b, a) } else { (a, b) };
+    let (start, end) = (start.try_normalize()?, end.try_normalize()?);
+    let sweep = Clip::sweep(start, end);
+    ((sweep - angle).abs() <= FAN_TOLERANCE).then_some((start, end))
 }
 
 /// Covering radius of triangle `t` around its vertex `v` (position `at`, normal
@@ -150,10 +209,11 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
         })
     };
     let per_vertex = (0..points.len()).into_par_iter().with_min_len(1 << 12);
-    let shapes: Vec<(Option<Shape>, DVec2)> = per_vertex
+    let shapes: Vec<(Option<Shape>, DVec2, Option<Fan>)> = per_vertex
         .clone()
         .map(|v| {
-            let (mut fit, mut chord, mut winding) = (Fit::default(), DVec2::ZERO, 0.0);
+            let (mut fit, mut chord, mut winding, mut angle) =
+                (Fit::default(), DVec2::ZERO, 0.0, 0.0);
             for (_, next, previous) in ring(v) {
                 let (d_out, dn_out) = ring_term(&p, &n, v as u32, next);
                 let (d_in, dn_in) = ring_term(&p, &n, v as u32, previous);
@@ -161,15 +221,28 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
                 fit.add(d_in, dn_in);
                 chord += d_out - d_in;
                 winding += d_out.perp_dot(d_in);
+                angle += d_out.angle_to(d_in);
             }
             // Triangles wound clockwise seen from the normal lie right of the chord.
-            let chord = if winding < 0.0 { -chord } else { chord };
-            (oriented(n(v as u32), &fit), border_normal(chord, &fit))
+            let (chord, angle) = if winding < 0.0 {
+                (-chord, -angle)
+            } else {
+                (chord, angle)
+            };
+            let outward = border_normal(chord, &fit);
+            let fan = (outward != DVec2::ZERO)
+                .then(|| {
+                    let corners = ring(v).map(|(_, next, previous)| (next, previous));
+                    let direction = |w| ring_term(&p, &n, v as u32, w).0;
+                    border_fan(corners, direction, angle, winding)
+                })
+                .flatten();
+            (oriented(n(v as u32), &fit), outward, fan)
         })
         .collect();
     let reaches: Vec<(f64, f64)> = per_vertex
         .map(|v| {
-            let (shape, out) = &shapes[v];
+            let (shape, out, _) = &shapes[v];
             let (mut major, mut reach) = (0.0f64, 0.0f64);
             for (t, next, previous) in ring(v) {
                 if let Some(shape) = shape {
@@ -189,12 +262,12 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
         .par_iter_mut()
         .zip(shapes.into_par_iter().zip(reaches))
         .enumerate()
-        .for_each(|(v, (surfel, ((shape, outward), (major, reach))))| {
+        .for_each(|(v, (surfel, ((shape, outward, fan), (major, reach))))| {
             match shape.filter(|_| major > 0.0 && major.is_finite()) {
                 Some(mut shape) => {
                     let r = major * (1.0 + RADIUS_MARGIN);
                     shape.gradient = shape.gradient.map(|g| g * r);
-                    shape.clip = border_clip(n(v as u32), outward, reach, &shape, r);
+                    shape.clip = border_clip(n(v as u32), (outward, reach), fan, &shape, r);
                     surfel.radius = (r / s) as f32;
                     surfel.shape = shape.pack();
                 }
@@ -253,13 +326,15 @@ mod tests {
             let shape = s.shape.unpack(DVec3::Z);
             assert_eq!(shape.clip.is_some(), border, "vertex {i}: {shape:?}");
             let Some(clip) = shape.clip else { continue };
+            // One border edge in and one out: the fan's own wedge.
+            assert!(matches!(clip, Clip::Wedge { .. }), "vertex {i}: {clip:?}");
             // Plane coordinates of a point, in major radii.
             let r = s.radius as f64;
             let at = |px: f64, py: f64| {
                 let d = DVec3::new(px - x, py - y, 0.0);
                 DVec2::new(d.dot(shape.axis), d.dot(shape.minor_axis(DVec3::Z))) / r
             };
-            let kept = |px, py| clip.normal.dot(at(px, py)) <= clip.offset + 1e-9;
+            let kept = |px, py| clip.keeps(at(px, py) * (1.0 - 1e-9));
             // Every point of the grid (so every triangle of the ring) is kept; a point
             // half a cell beyond the nearest border is cut away.
             for q in points {

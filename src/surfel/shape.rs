@@ -12,19 +12,18 @@
 //! G is the change of the normal over one radius R along u and v: the (negated) shape
 //! operator of the surface times R, dimensionless, symmetric as a shape operator is.
 //!
-//! A splat on the mesh's border may also carry a clip line (Zwicker et al. 2002's
-//! clipped splats): the points with cos θ x + sin θ y > d are not part of it, so that
-//! the splat ends at the border instead of spilling past it.
+//! A splat on the mesh's border may also carry a [`Clip`] (a line or its fan's wedge,
+//! `clip.rs`), so that it ends at the border instead of spilling past it.
 //!
 //! Stored as [`SplatShape`], 16 bytes: u octahedral in two snorm16 (≤ 3·10⁻⁵ rad off,
 //! re-orthogonalised to n when drawn), the ratio and a, b, c as f16 (relative error
-//! ≤ 2⁻¹¹; |G| is clamped to [`MAX_GRADIENT`]), θ in 2π/65536 steps and d as f16
-//! (+∞: no clip line).
+//! ≤ 2⁻¹¹; |G| is clamped to [`MAX_GRADIENT`]), the clip in one u32 (`clip.rs`).
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec2, DVec3, Vec3};
 use half::f16;
 
+pub use crate::surfel::clip::Clip;
 use crate::surfel::octahedral::{oct_decode, oct_encode};
 
 /// The thinnest ellipse: minor / major semi-axis.
@@ -43,65 +42,11 @@ pub struct SplatShape {
     pub ratio: u16,
     /// a, b, c of G, f16 bits.
     pub gradient: [u16; 3],
-    /// The clip line: θ in 2π/65536 steps (low 16 bits), d as f16 bits (high 16 bits,
-    /// +∞ when there is none).
+    /// The clip, packed by [`Clip::pack`].
     pub clip: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<SplatShape>() == 16);
-
-/// A splat's clip line: the plane points (x, y) (in major radii along u, v) with
-/// `normal · (x, y) > offset` are cut away.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Clip {
-    /// Unit, pointing out of the splat's kept side.
-    pub normal: DVec2,
-    /// Distance of the line from the centre, major radii (may be negative).
-    pub offset: f64,
-}
-
-impl Clip {
-    const NONE: u32 = (f16::INFINITY.to_bits() as u32) << 16;
-
-    fn pack(clip: Option<Clip>) -> u32 {
-        match clip {
-            Some(c) if c.offset < 1.0 && c.normal.is_finite() => {
-                let turns = c.normal.to_angle() / std::f64::consts::TAU;
-                let angle = (turns.rem_euclid(1.0) * 65536.0).round() as u32 & 0xffff;
-                angle | (f16_at_least(c.offset).to_bits() as u32) << 16
-            }
-            _ => Clip::NONE,
-        }
-    }
-
-    fn unpack(bits: u32) -> Option<Clip> {
-        let offset = f16::from_bits((bits >> 16) as u16).to_f64();
-        if !offset.is_finite() {
-            return None;
-        }
-        let angle = (bits & 0xffff) as f64 / 65536.0 * std::f64::consts::TAU;
-        Some(Clip {
-            normal: DVec2::from_angle(angle),
-            offset,
-        })
-    }
-}
-
-/// The least f16 ≥ x (x finite, |x| < 65504): a stored clip line never cuts what the
-/// exact one kept.
-fn f16_at_least(x: f64) -> f16 {
-    let h = f16::from_f64(x);
-    if h.to_f64() >= x {
-        h
-    } else if !h.is_sign_negative() {
-        f16::from_bits(h.to_bits() + 1)
-    } else if h.to_bits() == 0x8000 {
-        f16::from_bits(1)
-    } else {
-        // Negative: one step toward zero.
-        f16::from_bits(h.to_bits() - 1)
-    }
-}
 
 /// A splat's shape, unpacked.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -318,7 +263,7 @@ mod tests {
             axis: (t1 * 0.6 + t2 * 0.8).normalize(),
             ratio: 0.4,
             gradient: [0.5, -0.25, 1.5],
-            clip: Some(Clip {
+            clip: Some(Clip::Line {
                 normal: DVec2::from_angle(2.0),
                 offset: -0.3,
             }),
@@ -330,9 +275,7 @@ mod tests {
         for (a, b) in back.gradient.iter().zip(shape.gradient) {
             assert!((a - b).abs() <= b.abs() * 1e-3);
         }
-        let clip = back.clip.expect("a clip line");
-        assert!(clip.normal.angle_to(DVec2::from_angle(2.0)).abs() < 1e-4);
-        assert!(clip.offset >= -0.3 && clip.offset < -0.3 + 1e-3, "{clip:?}");
+        assert!(matches!(back.clip, Some(Clip::Line { .. })), "{back:?}");
         let none = Shape {
             clip: None,
             ..shape

@@ -489,6 +489,7 @@ pub fn sort_list_chunked(set: NodeSet, max_nodes: usize) -> SequentialList {
 
 /// All three stages, each told to `report` as a [`Step`] with what it made.
 pub fn build_list(mut leaves: LeafSurfels, report: &dyn Report) -> SequentialList {
+    leaves.drop_redundant();
     let n = leaves.surfels.len() as u64;
     report.step(Step::Hierarchy, n);
     let hierarchy = build_hierarchy(&mut leaves, report);

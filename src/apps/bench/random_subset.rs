@@ -4,7 +4,7 @@
 //! each with its own shape (ellipse, normal field and clip line over the scaled radius).
 
 use crate::render::Scene;
-use crate::surfel::shape::SplatShape;
+use crate::surfel::shape::{Clip, SplatShape};
 use crate::tree::chunks::Chunk;
 use crate::tree::record::NodeRecord;
 use crate::tree::{SequentialList, TreeMeta};
@@ -64,9 +64,10 @@ pub fn random_subset(
             r.level = 0;
             let mut shape = shape.unpack(r.normal().as_dvec3());
             shape.gradient = shape.gradient.map(|g| g * scale as f64);
-            // The border stays where it was: the same line, in the larger radius.
-            if let Some(clip) = &mut shape.clip {
-                clip.offset /= scale as f64;
+            // The border stays where it was: the same line, in the larger radius (a
+            // wedge's sides pass through the centre already).
+            if let Some(Clip::Line { offset, .. }) = &mut shape.clip {
+                *offset /= scale as f64;
             }
             (r, shape.pack())
         })
