@@ -3,28 +3,33 @@
 //! linear light. 8 orbit views (elevation 20°, azimuth every 45°, distance 2.2 bounding-
 //! sphere radii), 512×512, median over the views; printed with `--nocapture`.
 //!
-//! What this asserts is what holds today: the metric is zero for the reference itself,
-//! the numbers are in range, and the splats (elliptical, Phong-shaded, curved patches
-//! clipped at the mesh's border, coverage-sampled silhouettes) stay within
-//! [`MAX_RATIO`] of the aliased mesh's FLIP with SSIM ≥ [`MIN_SSIM`] (the baseline
-//! before them was 4.3–5.3× and 0.82–0.86).
-//! Issue 12's targets (2×, SSIM 0.96) are not reached; the README says why 2× of the
-//! aliased mesh is a bar that even another triangulation of the same samples misses.
+//! Asserted: the metric is zero for the reference itself, the numbers are in range, the
+//! splats (elliptical, Phong-shaded, curved patches clipped at the mesh's border,
+//! coverage-sampled silhouettes) stay within [`MAX_RATIO`] of the aliased mesh's FLIP
+//! with SSIM ≥ 0.96 (issue 12's bound; the baseline before them was 4.3–5.3× and
+//! 0.82–0.86), and the EWA prefilter lowers FLIP on the scans. On the knot the
+//! prefilter is judged against the surface the mesh samples (the same analytic knot
+//! sampled 16× more densely): against the knot's own triangles its patches, which follow
+//! the smooth surface, reach a fraction of a pixel past the polygon's silhouette, and
+//! the prefilter draws that faithfully (README, issue 12). Issue 12's 2× of the aliased
+//! mesh is not reached; the README says why it is a bar that even another triangulation
+//! of the same samples misses.
 
 mod common;
 
 use spt::apps::stats::quantile;
+use spt::io::ply::{Encoding, PlyLayout, write_ply};
+use spt::io::torus_knot::torus_knot;
 use spt::render::perceptual::{downsample, flip_mean, ssim_mean};
 use spt::render::{Camera, Image, Scene, Settings};
 
 const SIZE: u32 = 512;
-/// Largest splat FLIP over the aliased mesh's FLIP (measured 2.3–3.8×).
-const MAX_RATIO: f64 = 4.0;
-/// Smallest SSIM of the splats (measured 0.954–0.974).
-const MIN_SSIM: f64 = 0.95;
-/// Largest FLIP with the EWA prefilter over FLIP without it (measured 0.95–1.02: the
-/// prefilter's band gives partly covered silhouette pixels a colour, which helps where
-/// the patches end on the surface's silhouette and costs where they overshoot it).
+/// Largest splat FLIP over the aliased mesh's FLIP (measured 2.3–3.1×).
+const MAX_RATIO: f64 = 3.5;
+/// Smallest SSIM of the splats (measured 0.969–0.974).
+const MIN_SSIM: f64 = 0.96;
+/// Largest FLIP with the EWA prefilter over FLIP without it, against a model's own
+/// mesh (measured: knot 1.02, bunny 0.97, dragon 0.95).
 const MAX_PREFILTER_COST: f64 = 1.03;
 const SUPERSAMPLE: u32 = 4;
 
@@ -40,9 +45,12 @@ struct Figures {
     splat_ssim: f64,
 }
 
-fn measure(scene: &Scene, what: &str) -> Figures {
+/// The figures of `scene` against `reference`'s mesh (the scene's own, or a denser
+/// sampling of the same surface), on `scene`'s orbit views.
+fn measure(scene: &Scene, reference: &Scene, what: &str) -> Figures {
     let r = common::renderer();
     let gpu = r.upload(scene);
+    let reference_gpu = r.upload(reference);
     let fov = 45f64.to_radians();
     let render = |camera: &Camera, settings: &Settings, size: u32| -> Image {
         r.render(scene, &gpu, camera, settings, size, size)
@@ -57,7 +65,11 @@ fn measure(scene: &Scene, what: &str) -> Figures {
     let (mut m, mut s, mut n, mut q) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for k in 0..8 {
         let camera = Camera::orbit(scene.meta(), 45.0 * k as f64, 20.0, 2.2, fov);
-        let reference = downsample(&render(&camera, &mesh, SIZE * SUPERSAMPLE), SUPERSAMPLE);
+        let size = SIZE * SUPERSAMPLE;
+        let (fine, _) = r
+            .render(reference, &reference_gpu, &camera, &mesh, size, size)
+            .unwrap();
+        let reference = downsample(&fine, SUPERSAMPLE);
         assert_eq!(flip_mean(&reference, &reference), 0.0);
         let splats = render(&camera, &leaves, SIZE);
         m.push(flip_mean(&render(&camera, &mesh, SIZE), &reference));
@@ -109,13 +121,49 @@ fn assert_in_range(f: &Figures, what: &str) {
 #[test]
 fn flip_and_ssim_against_the_supersampled_mesh() {
     let scene = Scene::open(&common::default_model()).unwrap();
-    let f = measure(&scene, "torus knot");
+    let f = measure(&scene, &scene, "torus knot");
     assert_in_range(&f, "torus knot");
     let Some(dir) = common::shared_data() else {
         return;
     };
     for name in ["bunny.ply", "dragon40k.ply"] {
         let scene = Scene::open(&dir.join(name)).unwrap();
-        assert_in_range(&measure(&scene, name), name);
+        let f = measure(&scene, &scene, name);
+        assert_in_range(&f, name);
+        assert!(
+            f.splat_flip <= f.no_ewa_flip,
+            "{name}: FLIP {} with the prefilter, {} without",
+            f.splat_flip,
+            f.no_ewa_flip
+        );
     }
+}
+
+/// Against the surface the default model samples (`gen_model --segments 2000 --sides
+/// 400`, 16× denser), the splats are nearer to it than the model's own triangles
+/// (measured 0.0605 against 0.0916), and the prefilter lowers FLIP (0.0605 against
+/// 0.0636 without).
+#[test]
+fn the_knot_s_splats_are_nearer_its_surface_than_its_triangles() {
+    let dir = common::temp_dir();
+    let path = dir.path().join("knot_2000x400.ply");
+    let dense = torus_knot(2000, 400, true);
+    let layout = PlyLayout::standard(Encoding::BinaryLittleEndian, &dense);
+    write_ply(&path, &dense, &layout).unwrap();
+    let surface = Scene::open(&path).unwrap();
+    let scene = Scene::open(&common::default_model()).unwrap();
+    let f = measure(&scene, &surface, "torus knot against its surface");
+    assert!(
+        f.splat_flip < f.mesh_flip,
+        "splats {}, the model's triangles {}",
+        f.splat_flip,
+        f.mesh_flip
+    );
+    assert!(
+        f.splat_flip <= f.no_ewa_flip,
+        "FLIP {} with the prefilter, {} without",
+        f.splat_flip,
+        f.no_ewa_flip
+    );
+    assert!(f.splat_ssim >= MIN_SSIM, "SSIM {}", f.splat_ssim);
 }

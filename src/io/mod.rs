@@ -10,6 +10,7 @@ pub mod las;
 pub mod model;
 pub mod ply;
 pub mod rebase;
+pub mod torus_knot;
 pub mod triangulate;
 
 pub use bounds::Bounds;

@@ -13,15 +13,15 @@
 //!   For a round one-ring this is exactly the circle rule. Neighbours whose ellipses
 //!   differ cover a triangle only approximately; the render tests measure holes.
 //! * the normal field G is the least-squares fit of Δn ≈ G d, times R;
-//! * on the mesh's border the ellipse is clipped: in a triangle (i, j, k) vertex i has
-//!   out-neighbour j and in-neighbour k, and the chord Σ d(out) − Σ d(in) over its
-//!   triangles cancels where every edge has its twin; on the border it is the offset
-//!   from the border's previous vertex to its next, with the triangles on its left
-//!   seen from the normal (the chord is negated where the ring's triangles wind
-//!   clockwise seen from it, Σ d(out) × d(in) < 0, as after `orient_outward` turned
-//!   the normals). The clip line is ⟂ to the chord, outside every ring vertex (so it
-//!   never cuts a triangle of the ring): on a convex corner it passes through the
-//!   vertex.
+//! * on the mesh's border the ellipse is clipped. Where the ring has one border edge
+//!   out and one in, to the wedge of its fan ([`border_fan`], [`Clip::Wedge`]). Else
+//!   by a line: in a triangle (i, j, k) vertex i has out-neighbour j and in-neighbour
+//!   k, and the chord Σ d(out) − Σ d(in) over its triangles cancels where every edge
+//!   has its twin; on the border it is the offset from the border's previous vertex to
+//!   its next, with the triangles on its left seen from the normal (the chord is
+//!   negated where the ring's triangles wind clockwise seen from it, Σ d(out) × d(in)
+//!   < 0, as after `orient_outward` turned the normals). The clip line is ⟂ to the
+//!   chord, outside every ring vertex (so it never cuts a triangle of the ring).
 
 use glam::{DVec2, DVec3, Vec3};
 
