@@ -118,13 +118,13 @@ const FAN_TOLERANCE: f64 = 0.05;
 /// The fan of border vertex `v` whose ring has exactly one border edge out (to a
 /// `next` that is no triangle's `previous`) and one in: the directions of the two
 /// border neighbours in its tangent frame, ordered so that the triangles sweep
-/// counter-clockwise seen from the normal from the first to the second. `angle` is the
-/// triangles' angles at v summed in that sense; where the sweep between the two
-/// directions differs from it (a ring folded over itself in the tangent plane), None.
+/// counter-clockwise seen from the normal from the first to the second (`winding`:
+/// the sign of that sense). Where the sweep between the two directions differs from
+/// the triangles' angles at v, summed in that sense (a ring folded over itself in the
+/// tangent plane), None.
 fn border_fan(
     corners: impl Iterator<Item = (u32, u32)> + Clone,
     direction: impl Fn(u32) -> DVec2,
-    angle: f64,
     winding: f64,
 ) -> Option<Fan> {
     let border_out: Vec<u32> = corners
@@ -140,8 +140,15 @@ fn border_fan(
     let ([w_out], [w_in]) = (border_out.as_slice(), border_in.as_slice()) else {
         return None;
     };
+    let angle: f64 = corners
+        .map(|(next, previous)| direction(next).angle_to(direction(previous)))
+        .sum();
     let (a, b) = (direction(*w_out), direction(*w_in));
-    let (start, end) = if winding < 0.0 { (b, a) } else { (a, b) };
+    let (start, end, angle) = if winding < 0.0 {
+        (b, a, -angle)
+    } else {
+        (a, b, angle)
+    };
     let (start, end) = (start.try_normalize()?, end.try_normalize()?);
     let sweep = Clip::sweep(start, end);
     ((sweep - angle).abs() <= FAN_TOLERANCE).then_some((start, end))
@@ -212,8 +219,7 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
     let shapes: Vec<(Option<Shape>, DVec2, Option<Fan>)> = per_vertex
         .clone()
         .map(|v| {
-            let (mut fit, mut chord, mut winding, mut angle) =
-                (Fit::default(), DVec2::ZERO, 0.0, 0.0);
+            let (mut fit, mut chord, mut winding) = (Fit::default(), DVec2::ZERO, 0.0);
             for (_, next, previous) in ring(v) {
                 let (d_out, dn_out) = ring_term(&p, &n, v as u32, next);
                 let (d_in, dn_in) = ring_term(&p, &n, v as u32, previous);
@@ -221,20 +227,15 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
                 fit.add(d_in, dn_in);
                 chord += d_out - d_in;
                 winding += d_out.perp_dot(d_in);
-                angle += d_out.angle_to(d_in);
             }
             // Triangles wound clockwise seen from the normal lie right of the chord.
-            let (chord, angle) = if winding < 0.0 {
-                (-chord, -angle)
-            } else {
-                (chord, angle)
-            };
+            let chord = if winding < 0.0 { -chord } else { chord };
             let outward = border_normal(chord, &fit);
             let fan = (outward != DVec2::ZERO)
                 .then(|| {
                     let corners = ring(v).map(|(_, next, previous)| (next, previous));
                     let direction = |w| ring_term(&p, &n, v as u32, w).0;
-                    border_fan(corners, direction, angle, winding)
+                    border_fan(corners, direction, winding)
                 })
                 .flatten();
             (oriented(n(v as u32), &fit), outward, fan)
