@@ -3,7 +3,7 @@
 //!
 //! * [`Clip::Line`]: the points with normal · (x, y) > offset are cut away;
 //! * [`Clip::Wedge`]: the vertex's fan of triangles, the sweep counter-clockwise (seen
-//!   from n) from the direction `start` to the direction `end`, each side moved out by
+//!   from n) from the direction at angle `start` to that at `end`, each side moved out by
 //!   [`WEDGE_MARGIN`]. A point is cut when it lies beyond the start side (its normal
 //!   `start` turned clockwise) or beyond the end side (`end` turned counter-clockwise):
 //!   beyond either on a convex fan (a sweep under 180°, the intersection of the two
@@ -34,11 +34,16 @@ pub enum Clip {
         offset: f64,
     },
     Wedge {
-        /// Unit directions of the fan's first and last border edges.
-        start: DVec2,
-        end: DVec2,
+        /// Angles (radians, from u toward v) of the fan's first and last border edges:
+        /// angles rather than unit vectors keep a shape as small as a line's.
+        start: f64,
+        end: f64,
     },
 }
+
+// `ring_shapes` holds a shape per vertex of the mesh (14 M on the Lucy-size model): a
+// wedge no larger than a line keeps that memory where it was.
+const _: () = assert!(std::mem::size_of::<Option<Clip>>() == 32);
 
 const NONE: u32 = (f16::INFINITY.to_bits() as u32) << 16;
 const WEDGE_TAG: u32 = 0b111111 << 26;
@@ -55,6 +60,7 @@ impl Clip {
         match *self {
             Clip::Line { normal, offset } => normal.dot(p) <= offset,
             Clip::Wedge { start, end } => {
+                let (start, end) = (DVec2::from_angle(start), DVec2::from_angle(end));
                 let margin = WEDGE_MARGIN as f64;
                 let beyond_start = DVec2::new(start.y, -start.x).dot(p) > margin;
                 let beyond_end = DVec2::new(-end.y, end.x).dot(p) > margin;
@@ -80,6 +86,7 @@ impl Clip {
             }
             Some(Clip::Wedge { start, end }) if start.is_finite() && end.is_finite() => {
                 let mask = WEDGE_STEPS as u32 - 1;
+                let turns = |a: f64| (a / TAU).rem_euclid(1.0);
                 let start = (turns(start) * WEDGE_STEPS).floor() as u32 & mask;
                 let end = (turns(end) * WEDGE_STEPS).ceil() as u32 & mask;
                 WEDGE_TAG | start << 13 | end
@@ -90,7 +97,7 @@ impl Clip {
 
     pub fn unpack(bits: u32) -> Option<Clip> {
         if bits & WEDGE_TAG == WEDGE_TAG {
-            let at = |k: u32| DVec2::from_angle((k & 0x1fff) as f64 / WEDGE_STEPS * TAU);
+            let at = |k: u32| (k & 0x1fff) as f64 / WEDGE_STEPS * TAU;
             return Some(Clip::Wedge {
                 start: at(bits >> 13),
                 end: at(bits),
@@ -150,10 +157,7 @@ mod tests {
     #[test]
     fn wedges_keep_their_fan() {
         for (a, b) in [(0.3, 1.9), (0.3, 4.9), (5.5, 0.4), (2.0, 1.0)] {
-            let exact = Clip::Wedge {
-                start: DVec2::from_angle(a),
-                end: DVec2::from_angle(b),
-            };
+            let exact = Clip::Wedge { start: a, end: b };
             let stored = round_trip(exact);
             let sweep = Clip::sweep(DVec2::from_angle(a), DVec2::from_angle(b));
             for k in 0..720 {

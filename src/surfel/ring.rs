@@ -96,7 +96,10 @@ fn border_clip(
             to_plane(normal, start, shape)?,
             to_plane(normal, end, shape)?,
         );
-        return Some(Clip::Wedge { start, end });
+        return Some(Clip::Wedge {
+            start: start.to_angle(),
+            end: end.to_angle(),
+        });
     }
     if outward == DVec2::ZERO {
         return None;
@@ -118,14 +121,12 @@ const FAN_TOLERANCE: f64 = 0.05;
 /// The fan of border vertex `v` whose ring has exactly one border edge out (to a
 /// `next` that is no triangle's `previous`) and one in: the directions of the two
 /// border neighbours in its tangent frame, ordered so that the triangles sweep
-/// counter-clockwise seen from the normal from the first to the second (`winding`:
-/// the sign of that sense). Where the sweep between the two directions differs from
-/// the triangles' angles at v, summed in that sense (a ring folded over itself in the
-/// tangent plane), None.
+/// counter-clockwise seen from the normal from the first to the second. Where the
+/// sweep between the two directions differs from the triangles' angles at v, summed in
+/// that sense (a ring folded over itself in the tangent plane), None.
 fn border_fan(
     corners: impl Iterator<Item = (u32, u32)> + Clone,
     direction: impl Fn(u32) -> DVec2,
-    winding: f64,
 ) -> Option<Fan> {
     let border_out: Vec<u32> = corners
         .clone()
@@ -140,9 +141,12 @@ fn border_fan(
     let ([w_out], [w_in]) = (border_out.as_slice(), border_in.as_slice()) else {
         return None;
     };
-    let angle: f64 = corners
-        .map(|(next, previous)| direction(next).angle_to(direction(previous)))
-        .sum();
+    let (mut angle, mut winding) = (0.0, 0.0);
+    for (next, previous) in corners {
+        let (d_out, d_in) = (direction(next), direction(previous));
+        angle += d_out.angle_to(d_in);
+        winding += d_out.perp_dot(d_in);
+    }
     let (a, b) = (direction(*w_out), direction(*w_in));
     let (start, end, angle) = if winding < 0.0 {
         (b, a, -angle)
@@ -216,7 +220,7 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
         })
     };
     let per_vertex = (0..points.len()).into_par_iter().with_min_len(1 << 12);
-    let shapes: Vec<(Option<Shape>, DVec2, Option<Fan>)> = per_vertex
+    let shapes: Vec<(Option<Shape>, DVec2)> = per_vertex
         .clone()
         .map(|v| {
             let (mut fit, mut chord, mut winding) = (Fit::default(), DVec2::ZERO, 0.0);
@@ -230,20 +234,12 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
             }
             // Triangles wound clockwise seen from the normal lie right of the chord.
             let chord = if winding < 0.0 { -chord } else { chord };
-            let outward = border_normal(chord, &fit);
-            let fan = (outward != DVec2::ZERO)
-                .then(|| {
-                    let corners = ring(v).map(|(_, next, previous)| (next, previous));
-                    let direction = |w| ring_term(&p, &n, v as u32, w).0;
-                    border_fan(corners, direction, winding)
-                })
-                .flatten();
-            (oriented(n(v as u32), &fit), outward, fan)
+            (oriented(n(v as u32), &fit), border_normal(chord, &fit))
         })
         .collect();
     let reaches: Vec<(f64, f64)> = per_vertex
         .map(|v| {
-            let (shape, out, _) = &shapes[v];
+            let (shape, out) = &shapes[v];
             let (mut major, mut reach) = (0.0f64, 0.0f64);
             for (t, next, previous) in ring(v) {
                 if let Some(shape) = shape {
@@ -258,16 +254,22 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
             (major, reach)
         })
         .collect();
-    drop(corners);
     surfels
         .par_iter_mut()
         .zip(shapes.into_par_iter().zip(reaches))
         .enumerate()
-        .for_each(|(v, (surfel, ((shape, outward, fan), (major, reach))))| {
+        .for_each(|(v, (surfel, ((shape, outward), (major, reach))))| {
             match shape.filter(|_| major > 0.0 && major.is_finite()) {
                 Some(mut shape) => {
                     let r = major * (1.0 + RADIUS_MARGIN);
                     shape.gradient = shape.gradient.map(|g| g * r);
+                    // Only border vertices have a fan (found here, not stored for all).
+                    let fan = (outward != DVec2::ZERO)
+                        .then(|| {
+                            let corners = ring(v).map(|(_, next, previous)| (next, previous));
+                            border_fan(corners, |w| ring_term(&p, &n, v as u32, w).0)
+                        })
+                        .flatten();
                     shape.clip = border_clip(n(v as u32), (outward, reach), fan, &shape, r);
                     surfel.radius = (r / s) as f32;
                     surfel.shape = shape.pack();
