@@ -6,8 +6,8 @@
 //!   from n) from the direction at angle `start` to that at `end`, each side moved out by
 //!   [`WEDGE_MARGIN`]. A point is cut when it lies beyond the start side (its normal
 //!   `start` turned clockwise) or beyond the end side (`end` turned counter-clockwise):
-//!   beyond either on a convex fan (a sweep under 180°, the intersection of the two
-//!   half-planes), beyond both on a reflex one (their union).
+//!   beyond either on a convex fan (a sweep under 180°, which keeps the intersection
+//!   of the two half-planes), beyond both on a reflex one (which keeps their union).
 //!
 //! Stored in one u32 (`SplatShape::clip`): a line as θ of its normal in 2π/65536 steps
 //! (low 16 bits) and its offset as f16 bits (high 16 bits, +∞: no clip); a wedge as
@@ -86,9 +86,9 @@ impl Clip {
             }
             Some(Clip::Wedge { start, end }) if start.is_finite() && end.is_finite() => {
                 let mask = WEDGE_STEPS as u32 - 1;
-                let turns = |a: f64| (a / TAU).rem_euclid(1.0);
-                let start = (turns(start) * WEDGE_STEPS).floor() as u32 & mask;
-                let end = (turns(end) * WEDGE_STEPS).ceil() as u32 & mask;
+                let steps = |angle: f64| (angle / TAU).rem_euclid(1.0) * WEDGE_STEPS;
+                let start = steps(start).floor() as u32 & mask;
+                let end = steps(end).ceil() as u32 & mask;
                 WEDGE_TAG | start << 13 | end
             }
             _ => NONE,
