@@ -204,7 +204,8 @@ fn corners_by_vertex(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<usize>
 /// its one-ring ellipse and sets its shape (see the module doc); other vertices get a
 /// circle. `points` are the model's positions, `scale` its unit scale; normals are read
 /// from `surfels`. Each vertex gathers over its own corners ([`corners_by_vertex`]), in
-/// parallel.
+/// parallel, and everything it needs is its own: one pass, with no per-vertex
+/// temporaries (on the Lucy-size model they were 1.7 GB of fresh pages to fault in).
 pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels: &mut [Surfel]) {
     let s = scale as f64;
     let p = |i: u32| points[i as usize].as_dvec3() * s;
@@ -219,64 +220,68 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
             (t, t[(k + 1) % 3], t[(k + 2) % 3])
         })
     };
-    let per_vertex = (0..points.len()).into_par_iter().with_min_len(1 << 12);
-    let shapes: Vec<(Option<Shape>, DVec2)> = per_vertex
-        .clone()
-        .map(|v| {
-            let (mut fit, mut chord, mut winding) = (Fit::default(), DVec2::ZERO, 0.0);
-            for (_, next, previous) in ring(v) {
-                let (d_out, dn_out) = ring_term(&p, &n, v as u32, next);
-                let (d_in, dn_in) = ring_term(&p, &n, v as u32, previous);
-                fit.add(d_out, dn_out);
-                fit.add(d_in, dn_in);
-                chord += d_out - d_in;
-                winding += d_out.perp_dot(d_in);
-            }
-            // Triangles wound clockwise seen from the normal lie right of the chord.
-            let chord = if winding < 0.0 { -chord } else { chord };
-            (oriented(n(v as u32), &fit), border_normal(chord, &fit))
-        })
-        .collect();
-    let reaches: Vec<(f64, f64)> = per_vertex
-        .map(|v| {
-            let (shape, out) = &shapes[v];
-            let (mut major, mut reach) = (0.0f64, 0.0f64);
-            for (t, next, previous) in ring(v) {
-                if let Some(shape) = shape {
-                    major = major.max(covering_radius(&p, p(v as u32), n(v as u32), shape, t));
-                }
-                if *out != DVec2::ZERO {
-                    for w in [next, previous] {
-                        reach = reach.max(out.dot(ring_term(&p, &n, v as u32, w).0));
-                    }
-                }
-            }
-            (major, reach)
-        })
-        .collect();
     surfels
         .par_iter_mut()
-        .zip(shapes.into_par_iter().zip(reaches))
         .enumerate()
-        .for_each(|(v, (surfel, ((shape, outward), (major, reach))))| {
-            match shape.filter(|_| major > 0.0 && major.is_finite()) {
-                Some(mut shape) => {
-                    let r = major * (1.0 + RADIUS_MARGIN);
-                    shape.gradient = shape.gradient.map(|g| g * r);
-                    // Only border vertices have a fan (found here, not stored for all).
-                    let fan = (outward != DVec2::ZERO)
-                        .then(|| {
-                            let corners = ring(v).map(|(_, next, previous)| (next, previous));
-                            border_fan(corners, |w| ring_term(&p, &n, v as u32, w).0)
-                        })
-                        .flatten();
-                    shape.clip = border_clip(n(v as u32), (outward, reach), fan, &shape, r);
+        .with_min_len(1 << 12)
+        .for_each(
+            |(v, surfel)| match vertex_shape(&p, &n, v as u32, || ring(v)) {
+                Some((r, shape)) => {
                     surfel.radius = (r / s) as f32;
                     surfel.shape = shape.pack();
                 }
                 None => surfel.shape = SplatShape::circle(surfel.normal),
+            },
+        );
+}
+
+/// Vertex v's one-ring ellipse (see the module doc): its major semi-axis (unit-scaled)
+/// and its shape, gradient scaled by it and clip set; None where the ring spans no
+/// area. `ring` lists v's corners as (triangle, next vertex, previous vertex).
+fn vertex_shape<'a, I>(
+    p: &impl Fn(u32) -> DVec3,
+    n: &impl Fn(u32) -> DVec3,
+    v: u32,
+    ring: impl Fn() -> I,
+) -> Option<(f64, Shape)>
+where
+    I: Iterator<Item = (&'a [u32; 3], u32, u32)> + Clone,
+{
+    let (mut fit, mut chord, mut winding) = (Fit::default(), DVec2::ZERO, 0.0);
+    for (_, next, previous) in ring() {
+        let (d_out, dn_out) = ring_term(p, n, v, next);
+        let (d_in, dn_in) = ring_term(p, n, v, previous);
+        fit.add(d_out, dn_out);
+        fit.add(d_in, dn_in);
+        chord += d_out - d_in;
+        winding += d_out.perp_dot(d_in);
+    }
+    // Triangles wound clockwise seen from the normal lie right of the chord.
+    let chord = if winding < 0.0 { -chord } else { chord };
+    let outward = border_normal(chord, &fit);
+    let mut shape = oriented(n(v), &fit)?;
+    let (mut major, mut reach) = (0.0f64, 0.0f64);
+    for (t, next, previous) in ring() {
+        major = major.max(covering_radius(p, p(v), n(v), &shape, t));
+        if outward != DVec2::ZERO {
+            for w in [next, previous] {
+                reach = reach.max(outward.dot(ring_term(p, n, v, w).0));
             }
-        });
+        }
+    }
+    if !(major > 0.0 && major.is_finite()) {
+        return None;
+    }
+    let r = major * (1.0 + RADIUS_MARGIN);
+    shape.gradient = shape.gradient.map(|g| g * r);
+    let fan = (outward != DVec2::ZERO)
+        .then(|| {
+            let corners = ring().map(|(_, next, previous)| (next, previous));
+            border_fan(corners, |w| ring_term(p, n, v, w).0)
+        })
+        .flatten();
+    shape.clip = border_clip(n(v), (outward, reach), fan, &shape, r);
+    Some((r, shape))
 }
 
 #[cfg(test)]
