@@ -75,14 +75,17 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
     };
     let minor = shape.minor_axis(parent.n);
     let grow = 1.0 / (std::f64::consts::PI / RIM_SAMPLES as f64).cos();
-    let mut major = 0.0f64;
+    // The largest ρ², then one root (√ is monotone and correctly rounded: the same
+    // value as the largest root).
+    let mut major2 = 0.0f64;
     for (child, rim) in children.iter().zip(&rims) {
         for (q, _) in &rim[1..] {
             let d = child.disk.p + (*q - child.disk.p) * grow - parent.p;
             let (x, y) = (d.dot(shape.axis), d.dot(minor) / ratio);
-            major = major.max((x * x + y * y).sqrt());
+            major2 = major2.max(x * x + y * y);
         }
     }
+    let mut major = major2.sqrt();
     if !(major > 0.0 && major <= parent.r * grow) {
         shape.ratio = 1.0;
         major = parent.r;
