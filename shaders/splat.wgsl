@@ -24,10 +24,11 @@ struct SplatShape {
 // unit directions (start, end) of its sides, a line as (cos θ, sin θ, d, LINE_TAG). No
 // clip: a line beyond the ellipse (d = 2).
 fn clip_vector(bits: u32) -> vec4<f32> {
-    if (bits >> 26u) == 0x3Fu {
-        let step = 6.283185307179586 / 8192.0;
-        let s = f32((bits >> 13u) & 0x1fffu) * step;
-        let e = f32(bits & 0x1fffu) * step;
+    if (bits & WEDGE_TAG) == WEDGE_TAG {
+        let steps = 1u << WEDGE_ANGLE_BITS;
+        let step = 6.283185307179586 / f32(steps);
+        let s = f32((bits >> WEDGE_ANGLE_BITS) & (steps - 1u)) * step;
+        let e = f32(bits & (steps - 1u)) * step;
         return vec4<f32>(cos(s), sin(s), cos(e), sin(e));
     }
     if (bits >> 16u) == 0x7C00u {

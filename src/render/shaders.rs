@@ -11,7 +11,7 @@
 //! upgrades. The test below parses and validates every composed module with naga, so a
 //! broken shader fails `cargo test` without a GPU.
 
-use crate::tree::record::WEDGE_MARGIN;
+use crate::tree::record::{WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
 
 /// Threads per workgroup of the compute passes (`@workgroup_size(WORKGROUP_SIZE)`).
 pub const WORKGROUP_SIZE: u32 = 256;
@@ -32,7 +32,9 @@ pub fn constants_wgsl() -> String {
     format!(
         "// Generated from Rust (src/render/shaders.rs): constants shared with the CPU.\n\
          const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\n\
-         const WEDGE_MARGIN: f32 = {WEDGE_MARGIN:?};\n"
+         const WEDGE_MARGIN: f32 = {WEDGE_MARGIN:?};\n\
+         const WEDGE_ANGLE_BITS: u32 = {WEDGE_ANGLE_BITS}u;\n\
+         const WEDGE_TAG: u32 = {WEDGE_TAG}u;\n"
     )
 }
 

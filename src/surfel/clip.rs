@@ -46,8 +46,13 @@ pub enum Clip {
 const _: () = assert!(std::mem::size_of::<Option<Clip>>() == 32);
 
 const NONE: u32 = (f16::INFINITY.to_bits() as u32) << 16;
-const WEDGE_TAG: u32 = 0b111111 << 26;
-const WEDGE_STEPS: f64 = 8192.0;
+/// Bits of each of a wedge's two angles (the shader reads this and [`WEDGE_TAG`]).
+pub const WEDGE_ANGLE_BITS: u32 = 13;
+/// The top bits that mark a wedge: f16 bits 0b111111 (−∞ or a NaN), never a line's
+/// stored offset.
+pub const WEDGE_TAG: u32 = !0 << (2 * WEDGE_ANGLE_BITS);
+const WEDGE_STEPS: f64 = (1u32 << WEDGE_ANGLE_BITS) as f64;
+const _: () = assert!(WEDGE_TAG == 0b111111 << 26);
 
 /// The angle of `d` in turns, in [0, 1).
 fn turns(d: DVec2) -> f64 {
@@ -89,7 +94,7 @@ impl Clip {
                 let steps = |angle: f64| (angle / TAU).rem_euclid(1.0) * WEDGE_STEPS;
                 let start = steps(start).floor() as u32 & mask;
                 let end = steps(end).ceil() as u32 & mask;
-                WEDGE_TAG | start << 13 | end
+                WEDGE_TAG | start << WEDGE_ANGLE_BITS | end
             }
             _ => NONE,
         }
@@ -97,9 +102,10 @@ impl Clip {
 
     pub fn unpack(bits: u32) -> Option<Clip> {
         if bits & WEDGE_TAG == WEDGE_TAG {
-            let at = |k: u32| (k & 0x1fff) as f64 / WEDGE_STEPS * TAU;
+            let mask = WEDGE_STEPS as u32 - 1;
+            let at = |k: u32| (k & mask) as f64 / WEDGE_STEPS * TAU;
             return Some(Clip::Wedge {
-                start: at(bits >> 13),
+                start: at(bits >> WEDGE_ANGLE_BITS),
                 end: at(bits),
             });
         }
