@@ -20,6 +20,7 @@
 
 use glam::{DVec3, Vec3};
 
+use super::hierarchy::MAX_CHILDREN;
 use crate::surfel::pca::plane_normal;
 
 /// Tangent directions sampled for e_t: every 360°/16, which includes ±u, ±v and the
@@ -99,9 +100,9 @@ pub fn tangential_error(parent: &Disk, children: &[Disk]) -> f64 {
         (d.dot(u), d.dot(v), c.n.dot(u), c.n.dot(v), c.r)
     };
     // The hierarchy gives 2–4 children: on the stack. Any other count: on the heap.
-    let mut small = [(0.0, 0.0, 0.0, 0.0, 0.0); 4];
+    let mut small = [(0.0, 0.0, 0.0, 0.0, 0.0); MAX_CHILDREN];
     let large: Vec<_>;
-    let proj: &[(f64, f64, f64, f64, f64)] = if children.len() <= 4 {
+    let proj: &[(f64, f64, f64, f64, f64)] = if children.len() <= MAX_CHILDREN {
         for (slot, c) in small.iter_mut().zip(children) {
             *slot = project(c);
         }

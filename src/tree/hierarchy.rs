@@ -22,10 +22,13 @@ pub const UNBALANCED: usize = 16;
 /// Ranges smaller than this are built on one thread.
 const PARALLEL_RANGE: usize = 1 << 15;
 
+/// The most children an internal node has: two binary levels make one node.
+pub const MAX_CHILDREN: usize = 4;
+
 /// An internal node: its children's ids (leaf or internal).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Internal {
-    pub children: [u32; 4],
+    pub children: [u32; MAX_CHILDREN],
     pub child_count: u8,
 }
 

@@ -33,7 +33,7 @@ use crate::surfel::Surfel;
 use crate::surfel::shape::{Shape, SplatShape};
 use chunks::Chunk;
 use errors::{Disk, node_error, parent_disk};
-use hierarchy::Hierarchy;
+use hierarchy::{Hierarchy, MAX_CHILDREN};
 use parent_shape::{Child, parent_shape};
 pub use record::NodeRecord;
 use record::encode_up;
@@ -152,8 +152,8 @@ fn internal_record(
     oriented: bool,
 ) -> (NodeRecord, SplatShape) {
     let k = node.child_count as usize;
-    let mut disks = [Disk::new(Vec3::ZERO, Vec3::Z, 0.0); 4];
-    let mut colors = [[0u8; 4]; 4];
+    let mut disks = [Disk::new(Vec3::ZERO, Vec3::Z, 0.0); MAX_CHILDREN];
+    let mut colors = [[0u8; 4]; MAX_CHILDREN];
     let mut children_max = 0;
     for (j, &c) in node.children().iter().enumerate() {
         let r = &records[c as usize];
@@ -166,7 +166,7 @@ fn internal_record(
     let mut children = [Child {
         disk,
         shape: Shape::circle(disk.n),
-    }; 4];
+    }; MAX_CHILDREN];
     for ((child, &c), d) in children.iter_mut().zip(node.children()).zip(disks) {
         *child = Child {
             disk: *d,
@@ -195,7 +195,7 @@ fn internal_attributes(
     shapes: &[SplatShape],
     attributes: &[PointAttributes],
 ) -> PointAttributes {
-    let mut children = [(PointAttributes::default(), 0.0); 4];
+    let mut children = [(PointAttributes::default(), 0.0); MAX_CHILDREN];
     for (slot, &c) in children.iter_mut().zip(node.children()) {
         let r = records[c as usize].radius() as f64;
         let ratio = f16::from_bits(shapes[c as usize].ratio).to_f64();

@@ -15,6 +15,7 @@
 use glam::{DVec2, DVec3};
 
 use super::errors::{DIRECTION_TABLE, Disk};
+use super::hierarchy::MAX_CHILDREN;
 use crate::surfel::shape::{Fit, MIN_RATIO, Shape, rotate_gradient, tangent_frame};
 
 /// Rim points sampled per child, at the directions of the errors' table.
@@ -48,12 +49,18 @@ fn samples(child: &Child, parent_normal: DVec3) -> [(DVec3, DVec3); RIM_SAMPLES 
 }
 
 /// The parent's shape and major semi-axis, given its disk `parent` (centre, normal and
-/// the radius that reaches every child).
+/// the radius that reaches every child) and its children (at most
+/// [`MAX_CHILDREN`], as the hierarchy makes them).
 pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
+    assert!(
+        children.len() <= MAX_CHILDREN,
+        "{} children",
+        children.len()
+    );
     let (t1, t2) = tangent_frame(parent.n);
     let frame = |d: DVec3| DVec2::new(d.dot(t1), d.dot(t2));
     let mut fit = Fit::default();
-    let mut rims = [[(DVec3::ZERO, DVec3::ZERO); RIM_SAMPLES + 1]; 4];
+    let mut rims = [[(DVec3::ZERO, DVec3::ZERO); RIM_SAMPLES + 1]; MAX_CHILDREN];
     for (child, rim) in children.iter().zip(&mut rims) {
         *rim = samples(child, parent.n);
         for &(q, n) in rim.iter() {
