@@ -78,21 +78,25 @@ pub fn neighbour_disks(
         Ok(tree) => which
             .par_iter()
             .with_min_len(1024)
-            .map(|&i| {
-                let p = points[i as usize] * scale;
-                let found = tree
-                    .query(&p.to_array())
-                    .nearest_n::<SquaredEuclidean<f32>>(k)
-                    .execute();
-                let near: ArrayVec<Vec3, K> = found.iter().map(|f| point(f.item)).collect();
-                let given_n = given.map_or(Vec3::ZERO, |g| g[i as usize]);
-                let normal = if given_n != Vec3::ZERO {
-                    given_n
-                } else {
-                    plane_normal(near.iter().copied())
-                };
-                (normal, covering(p, normal, &near, rule))
-            })
+            .map_init(
+                || tree.create_scratch::<SquaredEuclidean<f32>>(),
+                |scratch, &i| {
+                    let p = points[i as usize] * scale;
+                    let found = tree
+                        .query(&p.to_array())
+                        .nearest_n::<SquaredEuclidean<f32>>(k)
+                        .with_scratch(scratch)
+                        .execute();
+                    let near: ArrayVec<Vec3, K> = found.iter().map(|f| point(f.item)).collect();
+                    let given_n = given.map_or(Vec3::ZERO, |g| g[i as usize]);
+                    let normal = if given_n != Vec3::ZERO {
+                        given_n
+                    } else {
+                        plane_normal(near.iter().copied())
+                    };
+                    (normal, covering(p, normal, &near, rule))
+                },
+            )
             .collect(),
         // A tree that cannot be built leaves every disk to the fallbacks.
         Err(_) => vec![(Vec3::Z, covering(Vec3::ZERO, Vec3::Z, &[], rule)); which.len()],

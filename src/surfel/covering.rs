@@ -26,8 +26,8 @@
 //!   neighbour lies more than [`MAX_SPACINGS`] times the neighbourhood's median spacing
 //!   away (a stray sample) closes no gap; it gets a circle of the distance to its
 //!   [`RADIUS_RANK`]-th distinct neighbour, capped at [`MAX_SPACINGS`] spacings, and is
-//!   counted. The spacing is the median, over the neighbourhood, of each member's
-//!   distance to its nearest other member.
+//!   counted. The spacing is the median, over the neighbourhood's [`SPACING_MEMBERS`]
+//!   nearest, of each member's distance to its nearest other member.
 
 use arrayvec::ArrayVec;
 use glam::{DVec2, Vec2, Vec3};
@@ -40,6 +40,9 @@ pub const MAX_NEIGHBOURS: usize = 64;
 pub const MAX_GAP: f32 = 2.0 * std::f32::consts::FRAC_PI_3;
 /// Major semi-axis over the surrounding distance.
 pub const SURROUND_GROWTH: f32 = std::f32::consts::SQRT_2;
+/// Members of a neighbourhood, nearest first, whose spacing the cap takes
+/// ([`median_spacing`], quadratic in their number).
+pub const SPACING_MEMBERS: usize = 16;
 /// Which distinct neighbour sets the radius of a point no neighbourhood surrounds.
 pub const RADIUS_RANK: usize = 6;
 /// Largest radius of a point that closes no gap, in neighbourhood spacings.
@@ -256,22 +259,23 @@ fn widest_gap(sorted: &[f32]) -> f32 {
     sorted.windows(2).map(|w| w[1] - w[0]).fold(wrap, f32::max)
 }
 
-/// The median, over `points` (the first [`MAX_NEIGHBOURS`]), of each one's distance to
+/// The median, over `points` (the first [`SPACING_MEMBERS`]), of each one's distance to
 /// its nearest other distinct member: the sampling's spacing there, which a stray
-/// sample beside it does not change.
+/// sample beside it does not change. Each pair is measured once.
 fn median_spacing(points: &[Vec3]) -> f32 {
-    let points = &points[..points.len().min(MAX_NEIGHBOURS)];
-    let mut nearest: ArrayVec<f32, MAX_NEIGHBOURS> = points
-        .iter()
-        .map(|a| {
-            points
-                .iter()
-                .map(|b| a.distance_squared(*b))
-                .filter(|d| *d > 0.0)
-                .fold(f32::INFINITY, f32::min)
-        })
-        .filter(|d| d.is_finite())
-        .collect();
+    let points = &points[..points.len().min(SPACING_MEMBERS)];
+    let mut nearest = [f32::INFINITY; SPACING_MEMBERS];
+    for (i, a) in points.iter().enumerate() {
+        for (j, b) in points.iter().enumerate().skip(i + 1) {
+            let d = a.distance_squared(*b);
+            if d > 0.0 {
+                nearest[i] = nearest[i].min(d);
+                nearest[j] = nearest[j].min(d);
+            }
+        }
+    }
+    let mut nearest: ArrayVec<f32, SPACING_MEMBERS> =
+        nearest.into_iter().filter(|d| d.is_finite()).collect();
     if nearest.is_empty() {
         return 0.0;
     }
