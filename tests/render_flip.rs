@@ -45,12 +45,16 @@ struct Figures {
     splat_ssim: f64,
 }
 
-/// The figures of `scene` against `reference`'s mesh (the scene's own, or a denser
-/// sampling of the same surface), on `scene`'s orbit views.
-fn measure(scene: &Scene, reference: &Scene, what: &str) -> Figures {
+/// The figures of `scene` against `surface`'s mesh (a denser sampling of the same
+/// surface; None: the scene's own mesh), on `scene`'s orbit views.
+fn measure(scene: &Scene, surface: Option<&Scene>, what: &str) -> Figures {
     let r = common::renderer();
     let gpu = r.upload(scene);
-    let reference_gpu = r.upload(reference);
+    let surface_gpu = surface.map(|s| r.upload(s));
+    let (reference, reference_gpu) = match (surface, &surface_gpu) {
+        (Some(s), Some(g)) => (s, g),
+        _ => (scene, &gpu),
+    };
     let fov = 45f64.to_radians();
     let render = |camera: &Camera, settings: &Settings, size: u32| -> Image {
         r.render(scene, &gpu, camera, settings, size, size)
@@ -67,7 +71,7 @@ fn measure(scene: &Scene, reference: &Scene, what: &str) -> Figures {
         let camera = Camera::orbit(scene.meta(), 45.0 * k as f64, 20.0, 2.2, fov);
         let size = SIZE * SUPERSAMPLE;
         let (fine, _) = r
-            .render(reference, &reference_gpu, &camera, &mesh, size, size)
+            .render(reference, reference_gpu, &camera, &mesh, size, size)
             .unwrap();
         let reference = downsample(&fine, SUPERSAMPLE);
         assert_eq!(flip_mean(&reference, &reference), 0.0);
@@ -121,14 +125,14 @@ fn assert_in_range(f: &Figures, what: &str) {
 #[test]
 fn flip_and_ssim_against_the_supersampled_mesh() {
     let scene = Scene::open(&common::default_model()).unwrap();
-    let f = measure(&scene, &scene, "torus knot");
+    let f = measure(&scene, None, "torus knot");
     assert_in_range(&f, "torus knot");
     let Some(dir) = common::shared_data() else {
         return;
     };
     for name in ["bunny.ply", "dragon40k.ply"] {
         let scene = Scene::open(&dir.join(name)).unwrap();
-        let f = measure(&scene, &scene, name);
+        let f = measure(&scene, None, name);
         assert_in_range(&f, name);
         assert!(
             f.splat_flip <= f.no_ewa_flip,
@@ -152,7 +156,7 @@ fn the_knot_s_splats_are_nearer_its_surface_than_its_triangles() {
     write_ply(&path, &dense, &layout).unwrap();
     let surface = Scene::open(&path).unwrap();
     let scene = Scene::open(&common::default_model()).unwrap();
-    let f = measure(&scene, &surface, "torus knot against its surface");
+    let f = measure(&scene, Some(&surface), "torus knot against its surface");
     assert!(
         f.splat_flip < f.mesh_flip,
         "splats {}, the model's triangles {}",
