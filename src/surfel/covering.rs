@@ -100,10 +100,11 @@ impl Metric {
         }
     }
 
-    /// The offset's in-plane coordinates, minor one stretched, and its metric length.
+    /// The offset's in-plane coordinates, minor one stretched, and its squared metric
+    /// length.
     fn map(&self, o: Vec3) -> (Vec2, f32) {
         let xy = Vec2::new(o.dot(self.u), o.dot(self.v) / self.ratio);
-        (xy, (xy.length_squared() + o.dot(self.n).powi(2)).sqrt())
+        (xy, xy.length_squared() + o.dot(self.n).powi(2))
     }
 }
 
@@ -166,10 +167,10 @@ fn axes(offsets: &[Vec3], circle: Metric) -> Metric {
 fn ring_axes(offsets: &[Vec3], m: Metric) -> Option<Metric> {
     let mut ring = [None::<(f32, Vec3)>; SECTORS];
     for &o in offsets {
-        let (xy, d) = m.map(o);
+        let (xy, d2) = m.map(o);
         let slot = &mut ring[sector(xy)];
-        if slot.is_none_or(|(best, _)| d < best) {
-            *slot = Some((d, o));
+        if slot.is_none_or(|(best, _)| d2 < best) {
+            *slot = Some((d2, o));
         }
     }
     let (t1, t2) = (m.u, m.n.cross(m.u));
@@ -194,20 +195,30 @@ fn ring_axes(offsets: &[Vec3], m: Metric) -> Option<Metric> {
 /// The least metric distance of `offsets` within which, taken nearest first, they
 /// leave no angular gap wider than [`MAX_GAP`]; `None` when even all of them do.
 fn surrounding_distance(offsets: &[Vec3], m: &Metric) -> Option<f32> {
-    let mut mapped: ArrayVec<(f32, f32), MAX_NEIGHBOURS> = offsets
+    let mut mapped: ArrayVec<(f32, Vec2), MAX_NEIGHBOURS> = offsets
         .iter()
         .map(|&o| {
-            let (xy, d) = m.map(o);
-            (d, angle(xy))
+            let (xy, d2) = m.map(o);
+            (d2, xy)
         })
         .collect();
     mapped.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
     let mut angles: ArrayVec<f32, MAX_NEIGHBOURS> = ArrayVec::new();
-    for (d, angle) in mapped {
+    // The widest gap (its start, counter-clockwise, and width) once three angles are in:
+    // an angle outside it leaves it whole, so only one inside it can close the ring.
+    let mut widest: Option<(f32, f32)> = None;
+    for (d2, xy) in mapped {
+        let angle = angle(xy);
         let at = angles.partition_point(|a| *a < angle);
         angles.insert(at, angle);
-        if angles.len() >= 3 && widest_gap(&angles) <= MAX_GAP {
-            return Some(d);
+        let inside = widest
+            .is_none_or(|(start, width)| (angle - start).rem_euclid(std::f32::consts::TAU) < width);
+        if angles.len() >= 3 && inside {
+            let gap = widest_gap(&angles);
+            if gap.1 <= MAX_GAP {
+                return Some(d2.sqrt());
+            }
+            widest = Some(gap);
         }
     }
     None
@@ -253,29 +264,40 @@ fn angle(xy: Vec2) -> f32 {
 }
 
 /// The widest gap between consecutive sorted angles (radians in (−π, π]), around the
-/// circle.
-fn widest_gap(sorted: &[f32]) -> f32 {
-    let wrap = sorted[0] + std::f32::consts::TAU - sorted[sorted.len() - 1];
-    sorted.windows(2).map(|w| w[1] - w[0]).fold(wrap, f32::max)
+/// circle: the angle it starts at (counter-clockwise) and its width.
+fn widest_gap(sorted: &[f32]) -> (f32, f32) {
+    let last = sorted[sorted.len() - 1];
+    let wrap = (last, sorted[0] + std::f32::consts::TAU - last);
+    sorted
+        .windows(2)
+        .map(|w| (w[0], w[1] - w[0]))
+        .fold(wrap, |a, b| if b.1 > a.1 { b } else { a })
 }
 
 /// The median, over `points` (the first [`SPACING_MEMBERS`]), of each one's distance to
 /// its nearest other distinct member: the sampling's spacing there, which a stray
-/// sample beside it does not change. Each pair is measured once.
+/// sample beside it does not change.
 fn median_spacing(points: &[Vec3]) -> f32 {
     let points = &points[..points.len().min(SPACING_MEMBERS)];
-    let mut nearest = [f32::INFINITY; SPACING_MEMBERS];
-    for (i, a) in points.iter().enumerate() {
-        for (j, b) in points.iter().enumerate().skip(i + 1) {
-            let d = a.distance_squared(*b);
-            if d > 0.0 {
-                nearest[i] = nearest[i].min(d);
-                nearest[j] = nearest[j].min(d);
-            }
+    // Coordinates in columns, padded with far points, so that each member's distances
+    // to all others are one vectorised pass over fixed-size arrays.
+    let mut columns = [[f32::INFINITY; SPACING_MEMBERS]; 3];
+    for (j, q) in points.iter().enumerate() {
+        for (axis, column) in columns.iter_mut().enumerate() {
+            column[j] = q[axis];
         }
     }
-    let mut nearest: ArrayVec<f32, SPACING_MEMBERS> =
-        nearest.into_iter().filter(|d| d.is_finite()).collect();
+    let [xs, ys, zs] = &columns;
+    let nearest = points.iter().map(|a| {
+        let mut least = f32::INFINITY;
+        for ((x, y), z) in xs.iter().zip(ys).zip(zs) {
+            let d = (x - a.x).powi(2) + (y - a.y).powi(2) + (z - a.z).powi(2);
+            // The member itself (and a coinciding one) is at 0; a padding slot at ∞.
+            least = if d > 0.0 { least.min(d) } else { least };
+        }
+        least
+    });
+    let mut nearest: ArrayVec<f32, SPACING_MEMBERS> = nearest.filter(|d| d.is_finite()).collect();
     if nearest.is_empty() {
         return 0.0;
     }
