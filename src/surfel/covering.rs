@@ -22,12 +22,17 @@
 //!   angularly consecutive surrounding neighbours has a circumradius ≤ r_s (an angle
 //!   ≤ 120° between sides ≤ r_s), so the ellipse covers every gap of the sampling (on a
 //!   square grid of spacing h: a circle of radius h√2, through the diagonal neighbours).
-//! * **cap**: a point that no neighbourhood surrounds (a boundary) or whose nearest
-//!   neighbour lies more than [`MAX_SPACINGS`] times the neighbourhood's median spacing
-//!   away (a stray sample) closes no gap; it gets a circle of the distance to its
-//!   [`RADIUS_RANK`]-th distinct neighbour, capped at [`MAX_SPACINGS`] spacings, and is
-//!   counted. The spacing is the median, over the neighbourhood's [`SPACING_MEMBERS`]
-//!   nearest, of each member's distance to its nearest other member.
+//! * **cap**: a point that no neighbourhood surrounds (a boundary), whose nearest
+//!   neighbour lies more than [`MAX_SPACINGS`] times the neighbourhood's spacing away (a
+//!   stray sample), or that only an ellipse wider than [`MAX_GAP_SPACINGS`] spacings
+//!   surrounds (√(major · minor), so that an anisotropic sampling's long axis is not
+//!   held against it: a cluster of returns amid a scan gap or on water) closes no gap of
+//!   its sampling; it gets a circle of the distance to its [`BOUNDARY_RANK`]-th distinct
+//!   neighbour, capped at [`MAX_SPACINGS`] spacings (counted when the cap cuts it). The
+//!   spacing is the median, over the neighbourhood's [`SPACING_MEMBERS`] nearest, of
+//!   each member's distance to its second nearest other member: an airborne scanner's
+//!   twin returns a centimetre apart would make the nearest one's a tenth of the
+//!   sampling's.
 
 use arrayvec::ArrayVec;
 use glam::{DVec2, Vec2, Vec3};
@@ -43,10 +48,21 @@ pub const SURROUND_GROWTH: f32 = std::f32::consts::SQRT_2;
 /// Members of a neighbourhood, nearest first, whose spacing the cap takes
 /// ([`median_spacing`], quadratic in their number).
 pub const SPACING_MEMBERS: usize = 16;
-/// Which distinct neighbour sets the radius of a point no neighbourhood surrounds.
+/// Which distinct neighbour sets the radius of a mesh's isolated vertex
+/// ([`RadiusRule::Ranked`]).
 pub const RADIUS_RANK: usize = 6;
+/// Which distinct neighbour sets the radius of a cloud's point that closes no gap. On a
+/// boundary its neighbours fill a half-disc, whose 12th lies about 2 spacings out: two
+/// facing boundaries then bridge a gap of about 4 spacings, as a triangulation that
+/// drops edges over 4 median edges does (issue 13's references); the 6th left the
+/// tile's scan shadows open (holes 0.58 % against 0.47 %).
+pub const BOUNDARY_RANK: usize = 12;
 /// Largest radius of a point that closes no gap, in neighbourhood spacings.
 pub const MAX_SPACINGS: f32 = 4.0;
+/// Largest covering ellipse, as the radius √(major · minor) of the circle of its area,
+/// in neighbourhood spacings: a point that only a larger one surrounds sits in a gap
+/// far wider than its sampling (a cluster of returns amid a scan gap, water): capped.
+pub const MAX_GAP_SPACINGS: f32 = 8.0;
 /// Angular sectors of the ring.
 pub const SECTORS: usize = 6;
 const _: () = assert!(SECTORS == 6, "sector() splits by the lines at ±60°");
@@ -128,15 +144,20 @@ pub fn covering(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> Cover
     let Some(nearest) = offsets.first().map(|o| o.length()) else {
         return round(0.0, false);
     };
-    let ranked = offsets[RADIUS_RANK.min(offsets.len()) - 1].length();
+    let rank = |k: usize| offsets[k.min(offsets.len()) - 1].length();
     if rule == RadiusRule::Ranked {
-        return round(ranked, false);
+        return round(rank(RADIUS_RANK), false);
     }
-    let cap = MAX_SPACINGS * median_spacing(near);
+    let ranked = rank(BOUNDARY_RANK);
+    let spacing = median_spacing(near);
+    let cap = MAX_SPACINGS * spacing;
     let metric = axes(&offsets, circle);
+    let closes_a_gap =
+        |r: &f32| SURROUND_GROWTH * r * metric.ratio.sqrt() <= MAX_GAP_SPACINGS * spacing;
     match (nearest <= cap)
         .then(|| surrounding_distance(&offsets, &metric))
         .flatten()
+        .filter(closes_a_gap)
     {
         Some(r) => Covering {
             radius: SURROUND_GROWTH * r,
@@ -275,8 +296,9 @@ fn widest_gap(sorted: &[f32]) -> (f32, f32) {
 }
 
 /// The median, over `points` (the first [`SPACING_MEMBERS`]), of each one's distance to
-/// its nearest other distinct member: the sampling's spacing there, which a stray
-/// sample beside it does not change.
+/// its second nearest other distinct member (its nearest when it has one other): the
+/// sampling's spacing there, which neither a stray sample beside it nor twin returns
+/// change.
 fn median_spacing(points: &[Vec3]) -> f32 {
     let points = &points[..points.len().min(SPACING_MEMBERS)];
     // Coordinates in columns, padded with far points, so that each member's distances
@@ -289,13 +311,15 @@ fn median_spacing(points: &[Vec3]) -> f32 {
     }
     let [xs, ys, zs] = &columns;
     let nearest = points.iter().map(|a| {
-        let mut least = f32::INFINITY;
+        let (mut least, mut second) = (f32::INFINITY, f32::INFINITY);
         for ((x, y), z) in xs.iter().zip(ys).zip(zs) {
             let d = (x - a.x).powi(2) + (y - a.y).powi(2) + (z - a.z).powi(2);
             // The member itself (and a coinciding one) is at 0; a padding slot at ∞.
-            least = if d > 0.0 { least.min(d) } else { least };
+            let d = if d > 0.0 { d } else { f32::INFINITY };
+            second = second.min(least.max(d));
+            least = least.min(d);
         }
-        least
+        if second.is_finite() { second } else { least }
     });
     let mut nearest: ArrayVec<f32, SPACING_MEMBERS> = nearest.filter(|d| d.is_finite()).collect();
     if nearest.is_empty() {
@@ -380,6 +404,35 @@ mod tests {
         }
         let c = covering(Vec3::ZERO, Vec3::Z, &near, RadiusRule::Surrounding);
         assert!(c.capped && c.radius <= 4.0 && c.ratio == 1.0, "{c:?}");
+    }
+
+    #[test]
+    fn a_cluster_amid_a_wide_gap_keeps_a_circle_of_its_spacing() {
+        // Nine returns 0.1 apart at the origin, the nearest surface 10 away all round:
+        // the cluster's corner is surrounded, but only by an ellipse a hundred spacings
+        // wide.
+        let mut near = grid(-1..=1, -1..=1, 1.0)
+            .into_iter()
+            .map(|q| q * 0.1)
+            .collect::<Vec<_>>();
+        for k in 0..12 {
+            let t = k as f32 * std::f32::consts::TAU / 12.0;
+            near.push(Vec3::new(t.cos(), t.sin(), 0.0) * 10.0);
+        }
+        let corner = Vec3::new(0.1, 0.1, 0.0);
+        near.sort_by(|a, b| a.distance(corner).total_cmp(&b.distance(corner)));
+        let c = covering(corner, Vec3::Z, &near, RadiusRule::Surrounding);
+        assert!(c.radius <= 0.4 + 1e-6 && c.ratio == 1.0, "{c:?}");
+    }
+
+    #[test]
+    fn twin_returns_do_not_shrink_the_spacing() {
+        // A unit grid of points each doubled 0.01 above itself (two returns per pulse).
+        let mut near = Vec::new();
+        for q in grid(-2..=2, -2..=2, 1.0) {
+            near.extend([q, q + Vec3::Z * 0.01]);
+        }
+        assert_eq!(median_spacing(&near), 1.0);
     }
 
     #[test]
