@@ -216,6 +216,49 @@ mod tests {
     use super::*;
 
     #[test]
+    fn bounded_queries_find_the_same_neighbourhoods_as_unbounded_ones() {
+        // A wavy sheet on a jittered grid (a fixed LCG), queried in its own order and
+        // in a shuffled one (far consecutive queries: loose bounds).
+        let mut seed = 3u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let coords: Vec<[f32; 3]> = (0..4096)
+            .map(|i| {
+                let (x, y) = ((i % 64) as f32 + next(), (i / 64) as f32 + next());
+                [x / 64.0, y / 64.0, 0.05 * (x * 0.3).sin() * (y * 0.2).cos()]
+            })
+            .collect();
+        let tree = ImmutableKdTree::<f32, 3>::new_from_slice(&coords).unwrap();
+        let k = NonZero::new(K).unwrap();
+        let distances = |p: Vec3, found: &[u32]| -> Vec<f32> {
+            found
+                .iter()
+                .map(|&f| p.distance(Vec3::from(coords[f as usize])))
+                .collect()
+        };
+        let shuffled: Vec<usize> = (0..coords.len()).map(|i| i * 1237 % coords.len()).collect();
+        for order in [(0..coords.len()).collect::<Vec<_>>(), shuffled] {
+            let queries: Vec<Vec3> = order.iter().map(|&i| Vec3::from(coords[i])).collect();
+            for (p, found) in
+                queries
+                    .iter()
+                    .zip(nearest_in_order(&tree, k, queries.iter().copied()))
+            {
+                let all = tree
+                    .query(&p.to_array())
+                    .nearest_n::<SquaredEuclidean<f32>>(k)
+                    .execute();
+                let plain: Vec<u32> = all.iter().map(|f| f.item).collect();
+                assert_eq!(distances(*p, &found), distances(*p, &plain), "at {p}");
+            }
+        }
+    }
+
+    #[test]
     fn a_flat_tile_faces_up_and_a_sensor_frame_faces_its_sensor() {
         use crate::io::Bounds;
         let tile = Bounds {
