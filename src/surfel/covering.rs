@@ -311,15 +311,24 @@ fn median_spacing(points: &[Vec3]) -> f32 {
     }
     let [xs, ys, zs] = &columns;
     let nearest = points.iter().map(|a| {
-        let (mut least, mut second) = (f32::INFINITY, f32::INFINITY);
-        for ((x, y), z) in xs.iter().zip(ys).zip(zs) {
-            let d = (x - a.x).powi(2) + (y - a.y).powi(2) + (z - a.z).powi(2);
+        let mut d = [f32::INFINITY; SPACING_MEMBERS];
+        for (((d, x), y), z) in d.iter_mut().zip(xs).zip(ys).zip(zs) {
+            let d2 = (x - a.x).powi(2) + (y - a.y).powi(2) + (z - a.z).powi(2);
             // The member itself (and a coinciding one) is at 0; a padding slot at ∞.
-            let d = if d > 0.0 { d } else { f32::INFINITY };
-            second = second.min(least.max(d));
-            least = least.min(d);
+            *d = if d2 > 0.0 { d2 } else { f32::INFINITY };
         }
-        if second.is_finite() { second } else { least }
+        // Reductions over the row, each vectorised: the least, how many share it, and
+        // the least beyond it.
+        let least = d.iter().fold(f32::INFINITY, |m, &x| m.min(x));
+        let ties = d.iter().filter(|&&x| x == least).count();
+        let beyond = d
+            .iter()
+            .fold(f32::INFINITY, |m, &x| if x > least { m.min(x) } else { m });
+        if ties >= 2 || !beyond.is_finite() {
+            least
+        } else {
+            beyond
+        }
     });
     let mut nearest: ArrayVec<f32, SPACING_MEMBERS> = nearest.filter(|d| d.is_finite()).collect();
     if nearest.is_empty() {
