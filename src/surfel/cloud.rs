@@ -217,15 +217,13 @@ mod tests {
 
     #[test]
     fn bounded_queries_find_the_same_neighbourhoods_as_unbounded_ones() {
-        // A wavy sheet on a jittered grid (a fixed LCG), queried in its own order and
-        // in a shuffled one (far consecutive queries: loose bounds).
-        let mut seed = 3u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 40) as f32 / (1u64 << 24) as f32
-        };
+        // A wavy sheet on a jittered grid (proptest's seeded generator), queried in its
+        // own order and in a shuffled one (far consecutive queries: loose bounds).
+        use proptest::prelude::Rng;
+        let mut rng = proptest::test_runner::TestRng::deterministic_rng(
+            proptest::test_runner::RngAlgorithm::ChaCha,
+        );
+        let mut next = || rng.random::<f32>();
         let coords: Vec<[f32; 3]> = (0..4096)
             .map(|i| {
                 let (x, y) = ((i % 64) as f32 + next(), (i / 64) as f32 + next());
