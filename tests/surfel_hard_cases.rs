@@ -230,13 +230,7 @@ fn collinear_cloud_and_plane_cloud() {
             s.normal
         );
     }
-    let plane = PolyMesh {
-        positions: (0..400)
-            .map(|i| [(i % 20) as f64, (i / 20) as f64, 1.0])
-            .collect(),
-        ..PolyMesh::default()
-    };
-    let (_, leaves) = load(&plane, "plane.ply");
+    let (_, leaves) = load(&sheet(false), "plane.ply");
     for s in &leaves.surfels {
         assert!(s.normal.z.abs() > 0.999, "normal {:?}", s.normal);
         // √2 inside a unit grid; on its border a circle through the 12th distinct
@@ -246,6 +240,60 @@ fn collinear_cloud_and_plane_cloud() {
             "radius {}",
             s.radius
         );
+    }
+}
+
+/// A 20 × 20 grid of spacing 1 at height `z` (x, y in 0..20), or standing up at y = 2.
+fn sheet(standing: bool) -> PolyMesh {
+    PolyMesh {
+        positions: (0..400)
+            .map(|i| {
+                let (a, b) = ((i % 20) as f64, (i / 20) as f64);
+                if standing { [a, 2.0, b] } else { [a, b, 1.0] }
+            })
+            .collect(),
+        ..PolyMesh::default()
+    }
+}
+
+#[test]
+fn a_frame_s_border_splats_end_at_its_border_and_a_terrain_s_do_not() {
+    // Standing, the sheet is a sensor frame seen from the file's origin: its border
+    // splats are clipped at their samples, keeping the sheet's side.
+    let (_, leaves) = load(&sheet(true), "frame.ply");
+    for s in &leaves.surfels {
+        let shape = s.shape.unpack(s.normal.as_dvec3());
+        let p = s.position.as_dvec3() + leaves.origin;
+        let out = |c: f64| {
+            if c == 0.0 {
+                -1.0
+            } else if c == 19.0 {
+                1.0
+            } else {
+                0.0
+            }
+        };
+        let outward = glam::DVec3::new(out(p.x), 0.0, out(p.z));
+        let Some(outward) = outward.try_normalize() else {
+            assert_eq!(shape.clip, None, "inner splat at {p} clipped");
+            continue;
+        };
+        let clip = shape
+            .clip
+            .unwrap_or_else(|| panic!("border splat at {p} unclipped"));
+        let plane = |d: glam::DVec3| {
+            glam::DVec2::new(
+                d.dot(shape.axis),
+                d.dot(shape.minor_axis(s.normal.as_dvec3())),
+            )
+        };
+        assert!(clip.keeps(plane(-outward * 0.5)), "{p}: {clip:?}");
+        assert!(!clip.keeps(plane(outward * 0.5)), "{p}: {clip:?}");
+    }
+    // Lying flat, the sheet is a terrain, whose gaps are bridged: no clips.
+    let (_, leaves) = load(&sheet(false), "tile.ply");
+    for s in &leaves.surfels {
+        assert_eq!(s.shape.unpack(s.normal.as_dvec3()).clip, None, "{s:?}");
     }
 }
 

@@ -271,14 +271,15 @@ impl ModelInfo {
         line(
             "",
             format!(
-                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}",
+                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}",
                 count(st.degenerate_triangles),
                 count(st.isolated_vertices),
                 count(st.redundant_vertices),
                 count(st.cancelled_normals),
                 count(st.given_normals),
                 count(st.fallback_radii),
-                count(st.capped_radii)
+                count(st.capped_radii),
+                count(st.clipped_boundaries)
             ),
         );
         let t = &self.timing;

@@ -6,7 +6,9 @@
 //!   neighbours: enough to span several scan lines), unless the file gives a non-zero
 //!   one; oriented afterwards where a direction is known ([`Orientation`]);
 //! * radius and ellipse: the covering of [`super::covering`], from the same
-//!   neighbourhood; a capped one is counted ([`SurfelStats::capped_radii`]).
+//!   neighbourhood; a capped one is counted ([`SurfelStats::capped_radii`]);
+//! * clip: a splat on a boundary of the sampling ends there ([`boundary_clip`]), except
+//!   on a terrain (counted: [`SurfelStats::clipped_boundaries`]).
 //!
 //! Duplicated samples do not shrink a radius (only distinct neighbours count). A surfel
 //! whose neighbours all coincide with it takes the median radius of the others
@@ -21,7 +23,7 @@ use rayon::prelude::*;
 
 use super::covering::{Covering, RadiusRule, covering};
 use super::pca::plane_normal;
-use super::shape::Shape;
+use super::shape::{Clip, Shape};
 use super::{Surfel, SurfelStats};
 
 /// Neighbourhood size, the point itself included. An RGB-D frame's quantised depth
@@ -60,13 +62,15 @@ fn distinct_positions(points: &[Vec3], scale: f32) -> Vec<[f32; 3]> {
 
 /// Normal, radius and ellipse from the neighbours of each point listed in `which`, searching
 /// among all `points` (unit-scaled by `scale` for the search), written into `surfels`.
-/// Non-zero `given` normals are kept; a radius already set (from faces) is only grown.
-/// Afterwards every listed surfel whose radius is still 0 gets [`fallback_radius`].
+/// Non-zero `given` normals are kept, the estimated ones turned by `orientation`; a
+/// radius already set (from faces) is only grown. A boundary splat ends where its
+/// sampling does ([`boundary_clip`]) unless the cloud is a terrain. Afterwards every
+/// listed surfel whose radius is still 0 gets [`fallback_radius`].
 pub fn neighbour_disks(
     points: &[Vec3],
     scale: f32,
     which: &[u32],
-    rule: RadiusRule,
+    (rule, orientation): (RadiusRule, Orientation),
     given: Option<&[Vec3]>,
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
@@ -102,13 +106,26 @@ pub fn neighbour_disks(
         // A tree that cannot be built leaves every disk to the fallbacks.
         Err(_) => vec![(Vec3::Z, covering(Vec3::ZERO, Vec3::Z, &[], rule)); which.len()],
     };
+    let clips = orientation != Orientation::Up;
     for (&i, (normal, c)) in which.iter().zip(disks) {
         let s = &mut surfels[i as usize];
-        s.normal = normal;
+        let estimated = given.is_none_or(|g| g[i as usize] == Vec3::ZERO);
+        s.normal = if estimated {
+            orientation.apply(s.position, normal)
+        } else {
+            normal
+        };
         let radius = c.radius / scale;
         if radius >= s.radius {
             s.radius = radius;
-            s.shape = Shape::ellipse(normal.as_dvec3(), c.axis.as_dvec3(), c.ratio as f64).pack();
+            let n = s.normal.as_dvec3();
+            let mut shape = Shape::ellipse(n, c.axis.as_dvec3(), c.ratio as f64);
+            shape.clip = c
+                .open
+                .filter(|_| clips)
+                .map(|d| boundary_clip(&shape, n, d));
+            stats.clipped_boundaries += shape.clip.is_some() as u64;
+            s.shape = shape.pack();
         }
         stats.capped_radii += c.capped as u64;
     }
@@ -124,6 +141,25 @@ pub fn neighbour_disks(
             surfels[*i as usize].radius = r;
         }
         stats.fallback_radii += missing.len() as u64;
+    }
+}
+
+/// Where a boundary splat's kept side ends, major radii from its centre: at the
+/// sample itself, as a triangulation of the samples ends at its border vertices.
+pub const BOUNDARY_CLIP_OFFSET: f64 = 0.0;
+
+/// The clip of a boundary splat of normal `n` and `shape`, whose sampling ends in the
+/// tangent direction `open`: the line ⟂ `open` at [`BOUNDARY_CLIP_OFFSET`]. A sensor
+/// frame's or a scan's boundary is an occlusion edge or the scan's end, and the splat's
+/// disk beyond it draws surface that nothing sampled; a terrain has no such edge
+/// inside it (a height field is continuous, its scan shadows are walls), so its
+/// boundary disks are left whole to bridge them.
+fn boundary_clip(shape: &Shape, n: glam::DVec3, open: Vec3) -> Clip {
+    let d = open.as_dvec3();
+    let normal = glam::DVec2::new(d.dot(shape.axis), d.dot(shape.minor_axis(n)));
+    Clip::Line {
+        normal: normal.normalize_or(glam::DVec2::X),
+        offset: BOUNDARY_CLIP_OFFSET,
     }
 }
 

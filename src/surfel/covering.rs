@@ -33,6 +33,10 @@
 //!   each member's distance to its second nearest other member: an airborne scanner's
 //!   twin returns a centimetre apart would make the nearest one's a tenth of the
 //!   sampling's.
+//! * **open side**: a boundary's neighbours leave an angular gap wider than
+//!   [`MAX_GAP`] at every distance; the middle of their widest gap is where the sampled
+//!   surface ends ([`Covering::open`]), and the cloud's splat may be clipped there
+//!   (`cloud::boundary_clip`).
 
 use arrayvec::ArrayVec;
 use glam::{DVec2, Vec2, Vec3};
@@ -94,6 +98,10 @@ pub struct Covering {
     pub ratio: f32,
     /// Whether the radius was capped (a boundary or stray point).
     pub capped: bool,
+    /// On a boundary (no distance at which the neighbours surround the point): the
+    /// unit tangent direction of the middle of their widest angular gap, where the
+    /// sampled surface ends. `None` elsewhere.
+    pub open: Option<Vec3>,
 }
 
 /// The ellipse's metric: offsets in (major, minor / ratio, normal) coordinates.
@@ -122,6 +130,11 @@ impl Metric {
         let xy = Vec2::new(o.dot(self.u), o.dot(self.v) / self.ratio);
         (xy, xy.length_squared() + o.dot(self.n).powi(2))
     }
+
+    /// The unit tangent direction at `angle` in the metric's plane coordinates.
+    fn direction(&self, angle: f32) -> Vec3 {
+        (self.u * angle.cos() + self.v * (self.ratio * angle.sin())).normalize_or(self.u)
+    }
 }
 
 /// The covering of the point `p` of unit `normal` among its neighbours `near` (sorted
@@ -140,6 +153,7 @@ pub fn covering(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> Cover
         axis: circle.u,
         ratio: 1.0,
         capped,
+        open: None,
     };
     let Some(nearest) = offsets.first().map(|o| o.length()) else {
         return round(0.0, false);
@@ -154,18 +168,19 @@ pub fn covering(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> Cover
     let metric = axes(&offsets, circle);
     let closes_a_gap =
         |r: &f32| SURROUND_GROWTH * r * metric.ratio.sqrt() <= MAX_GAP_SPACINGS * spacing;
-    match (nearest <= cap)
-        .then(|| surrounding_distance(&offsets, &metric))
-        .flatten()
-        .filter(closes_a_gap)
-    {
-        Some(r) => Covering {
+    match (nearest <= cap).then(|| surrounding_distance(&offsets, &metric)) {
+        Some(Ok(r)) if closes_a_gap(&r) => Covering {
             radius: SURROUND_GROWTH * r,
             axis: metric.u,
             ratio: metric.ratio,
             capped: false,
+            open: None,
         },
-        None => round(ranked.min(cap), ranked > cap),
+        Some(Err((start, width))) => Covering {
+            open: Some(metric.direction(start + 0.5 * width)),
+            ..round(ranked.min(cap), ranked > cap)
+        },
+        _ => round(ranked.min(cap), ranked > cap),
     }
 }
 
@@ -213,9 +228,10 @@ fn ring_axes(offsets: &[Vec3], m: Metric) -> Option<Metric> {
     })
 }
 
-/// The least metric distance of `offsets` within which, taken nearest first, they
-/// leave no angular gap wider than [`MAX_GAP`]; `None` when even all of them do.
-fn surrounding_distance(offsets: &[Vec3], m: &Metric) -> Option<f32> {
+/// The least metric distance of `offsets` (at least one) within which, taken nearest
+/// first, they leave no angular gap wider than [`MAX_GAP`]; when even all of them do,
+/// their widest gap (its start, counter-clockwise, and width; radians in the metric).
+fn surrounding_distance(offsets: &[Vec3], m: &Metric) -> Result<f32, (f32, f32)> {
     let mut mapped: ArrayVec<(f32, Vec2), MAX_NEIGHBOURS> = offsets
         .iter()
         .map(|&o| {
@@ -237,12 +253,12 @@ fn surrounding_distance(offsets: &[Vec3], m: &Metric) -> Option<f32> {
         if angles.len() >= 3 && inside {
             let gap = widest_gap(&angles);
             if gap.1 <= MAX_GAP {
-                return Some(d2.sqrt());
+                return Ok(d2.sqrt());
             }
             widest = Some(gap);
         }
     }
-    None
+    Err(widest.unwrap_or_else(|| widest_gap(&angles)))
 }
 
 /// Which of the [`SECTORS`] = 6 sectors of 60° around the origin holds `xy`: 0–2 above
@@ -450,6 +466,15 @@ mod tests {
         let near: Vec<Vec3> = grid(0..=3, -2..=2, 1.0);
         let c = covering(Vec3::ZERO, Vec3::Z, &near[..16], RadiusRule::Surrounding);
         assert!(c.radius > 1.0 && c.radius <= 4.0 && c.ratio == 1.0, "{c:?}");
+        // Its sampling ends toward −x, the middle of the neighbours' 180° gap.
+        let open = c.open.expect("a boundary is open");
+        assert!(open.dot(-Vec3::X) > 0.999, "{c:?}");
+        // A point inside the same grid is surrounded: nothing open.
+        let p = Vec3::new(2.0, 0.0, 0.0);
+        let mut around = grid(0..=4, -2..=2, 1.0);
+        around.sort_by(|a, b| a.distance(p).total_cmp(&b.distance(p)));
+        let inner = covering(p, Vec3::Z, &around, RadiusRule::Surrounding);
+        assert!(inner.open.is_none() && !inner.capped, "{inner:?}");
     }
 
     #[test]

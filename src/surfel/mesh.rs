@@ -208,7 +208,7 @@ pub fn vertex_disks(
         points,
         scale,
         &from_neighbours,
-        RadiusRule::Ranked,
+        (RadiusRule::Ranked, super::cloud::Orientation::Unknown),
         given,
         surfels,
         stats,

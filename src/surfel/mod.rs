@@ -64,6 +64,9 @@ pub struct SurfelStats {
     /// Cloud surfels that close no gap (a boundary, a stray sample) whose radius was
     /// capped at a few neighbourhood spacings ([`covering::MAX_SPACINGS`]).
     pub capped_radii: u64,
+    /// Cloud surfels on a boundary of their sampling, clipped where it ends
+    /// ([`cloud::BOUNDARY_CLIP_OFFSET`]); a terrain's are left whole.
+    pub clipped_boundaries: u64,
     /// A mesh's normals all negated to face outward (its triangles wound inward, or
     /// its given normals pointing in): see [`mesh::orient_outward`].
     pub turned_outward: bool,
@@ -199,24 +202,16 @@ fn leaf_surfels_among(g: &Geometry, own: usize) -> LeafSurfels {
     let mut redundant = Vec::new();
     let oriented = if g.triangles.is_empty() {
         let all: Vec<u32> = (0..own as u32).collect();
+        let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
         cloud::neighbour_disks(
             &g.positions,
             scale,
             &all,
-            covering::RadiusRule::Surrounding,
+            (covering::RadiusRule::Surrounding, orientation),
             given,
             &mut surfels,
             &mut stats,
         );
-        let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
-        surfels[..own]
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(i, s)| {
-                if given.is_none_or(|n| n[i] == Vec3::ZERO) {
-                    s.normal = orientation.apply(s.position, s.normal);
-                }
-            });
         given.is_some() && stats.given_normals == own as u64
     } else {
         redundant = mesh::vertex_disks(
