@@ -14,7 +14,7 @@ use crate::io::model::read_model;
 use crate::io::triangulate::{sensor_grid, terrain};
 use crate::render::metrics::compare;
 use crate::render::perceptual::{downsample, flip_mean, ssim_mean};
-use crate::render::{Camera, Image, Renderer, Scene, Settings};
+use crate::render::{Camera, Image, OrbitAxes, Renderer, Scene, Settings};
 
 /// How a cloud is triangulated for its reference.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -134,7 +134,10 @@ pub fn measure(
     let mut out = Vec::new();
     for k in 0..views {
         let azimuth = 360.0 * k as f64 / views as f64;
-        let camera = Camera::orbit(models.cloud.meta(), azimuth, 20.0, distance, fov);
+        // About z, as issue 13 measured them (a sensor frame's own axes would look
+        // from its sensor).
+        let orbit = [azimuth, 20.0, distance];
+        let camera = Camera::orbit_about(OrbitAxes::Z_UP, models.cloud.meta(), orbit, fov);
         let mesh = |s: u32| {
             renderer.render(
                 &models.reference,

@@ -4,7 +4,7 @@
 use anyhow::bail;
 use glam::{DVec3, Vec3};
 
-use crate::render::{Camera, Culling, Mode, Scene, Settings};
+use crate::render::{Camera, Culling, Mode, OrbitAxes, Scene, Settings};
 
 /// The options `spt render` (and the viewer's screenshots) take.
 #[derive(Debug, Clone, clap::Args)]
@@ -12,8 +12,11 @@ pub struct RenderArgs {
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "1024x768", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Orbit camera: azimuth and elevation in degrees, distance in bounding-sphere radii
-    /// (default: the whole model framed from azimuth 30, elevation 20).
+    /// Orbit camera: azimuth and elevation in degrees, distance in bounding-sphere radii,
+    /// about z up, or for a sensor frame (a cloud seen from its file's origin) about its
+    /// image's up, azimuth 0 and elevation 0 looking from the sensor (default: the
+    /// whole model framed from azimuth 30, elevation 20; 45 for a terrain; a sensor
+    /// frame from its sensor).
     #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, conflicts_with_all = ["eye", "target"])]
     pub orbit: Option<[f64; 3]>,
     /// Eye position in the model file's coordinates (with --target).
@@ -150,7 +153,7 @@ impl RenderArgs {
                 Camera {
                     eye,
                     target,
-                    up: DVec3::Z,
+                    up: OrbitAxes::of(meta).up,
                     fov_y: fov,
                 }
             }

@@ -26,10 +26,67 @@ pub fn bounding_sphere(meta: &TreeMeta) -> (DVec3, f64) {
     ((lo + hi) * 0.5, radius)
 }
 
+/// The axes an orbit turns about: the azimuth about `up`, from `north` toward east =
+/// north × up, the elevation toward `up`. Azimuth 0, elevation 0 puts the eye on the
+/// −north side, looking north. Unit and orthogonal.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrbitAxes {
+    pub north: DVec3,
+    pub up: DVec3,
+}
+
+impl OrbitAxes {
+    /// z up, azimuth 0 looking toward +y: every model's, but a sensor frame's.
+    pub const Z_UP: OrbitAxes = OrbitAxes {
+        north: DVec3::Y,
+        up: DVec3::Z,
+    };
+
+    /// A sensor frame's ([`TreeMeta::sensor`]): north from the sensor toward the
+    /// model's centre, up = x × north, so that azimuth 0, elevation 0 looks from the
+    /// sensor with the image upright: both camera conventions that frames are written
+    /// in put x to the image's right (OpenCV: y down, z forward, so up is −y; OpenGL:
+    /// y up, z backward, so up is +y). [`OrbitAxes::Z_UP`] for every other model.
+    pub fn of(meta: &TreeMeta) -> OrbitAxes {
+        let Some(sensor) = meta.sensor() else {
+            return OrbitAxes::Z_UP;
+        };
+        let north = (bounding_sphere(meta).0 - sensor).normalize_or(DVec3::Y);
+        match DVec3::X.cross(north).try_normalize() {
+            Some(up) => OrbitAxes { north, up },
+            None => OrbitAxes::Z_UP,
+        }
+    }
+
+    pub fn east(&self) -> DVec3 {
+        self.north.cross(self.up)
+    }
+
+    /// The unit vector from the target toward the eye at an azimuth and an elevation
+    /// (degrees): east · sin az cos el − north · cos az cos el + up · sin el.
+    pub fn toward_eye(&self, azimuth_deg: f64, elevation_deg: f64) -> DVec3 {
+        let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
+        self.east() * (az.sin() * el.cos()) - self.north * (az.cos() * el.cos())
+            + self.up * el.sin()
+    }
+
+    /// The azimuth and elevation (degrees) of the unit vector `toward_eye`.
+    pub fn angles(&self, toward_eye: DVec3) -> (f64, f64) {
+        let (x, y, z) = (
+            toward_eye.dot(self.east()),
+            toward_eye.dot(self.north),
+            toward_eye.dot(self.up),
+        );
+        (
+            x.atan2(-y).to_degrees(),
+            z.clamp(-1.0, 1.0).asin().to_degrees(),
+        )
+    }
+}
+
 impl Camera {
-    /// Orbit around the model's centre: azimuth and elevation in degrees (azimuth 0,
-    /// elevation 0 puts the eye on the −y side looking toward +y; z is up), distance in
-    /// bounding-sphere radii.
+    /// Orbit around the model's centre about its axes ([`OrbitAxes::of`]): azimuth and
+    /// elevation in degrees, distance in bounding-sphere radii.
     pub fn orbit(
         meta: &TreeMeta,
         azimuth_deg: f64,
@@ -37,13 +94,18 @@ impl Camera {
         distance: f64,
         fov_y: f64,
     ) -> Camera {
+        let axes = OrbitAxes::of(meta);
+        Camera::orbit_about(axes, meta, [azimuth_deg, elevation_deg, distance], fov_y)
+    }
+
+    /// [`Camera::orbit`] about the given axes: `[azimuth°, elevation°, distance]`.
+    pub fn orbit_about(axes: OrbitAxes, meta: &TreeMeta, orbit: [f64; 3], fov_y: f64) -> Camera {
         let (centre, radius) = bounding_sphere(meta);
-        let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
-        let dir = DVec3::new(az.sin() * el.cos(), -az.cos() * el.cos(), el.sin());
+        let [azimuth_deg, elevation_deg, distance] = orbit;
         Camera {
-            eye: centre + dir * distance * radius,
+            eye: centre + axes.toward_eye(azimuth_deg, elevation_deg) * distance * radius,
             target: centre,
-            up: DVec3::Z,
+            up: axes.up,
             fov_y,
         }
     }
@@ -57,14 +119,22 @@ impl Camera {
 
     /// The whole model framed, seen from a three-quarter view (from 45° above for a
     /// terrain, a box less than a quarter as high as it is wide, which a low view would
-    /// see edge-on): the least distance at which all eight corners of the model's box
-    /// fall inside both fields of view (a corner c, in view axes relative to the centre,
-    /// needs d ≥ c_z + |c_x| / tan(fov_x/2) and d ≥ c_z + |c_y| / tan(fov_y/2)), with a
-    /// 5 % margin.
+    /// see edge-on; a sensor frame from its sensor's side, as the sensor saw it): the
+    /// least distance at which all eight corners of the model's box fall inside both
+    /// fields of view (a corner c, in view axes relative to the centre, needs
+    /// d ≥ c_z + |c_x| / tan(fov_x/2) and d ≥ c_z + |c_y| / tan(fov_y/2)), with a 5 %
+    /// margin.
     pub fn framed(meta: &TreeMeta, fov_y: f64, aspect: f64) -> Camera {
         let e = DVec3::from(meta.bounds.max) - DVec3::from(meta.bounds.min);
         let flat = e.z < 0.25 * e.x.max(e.y);
-        Camera::framed_from(meta, 30.0, if flat { 45.0 } else { 20.0 }, fov_y, aspect)
+        let (azimuth, elevation) = if OrbitAxes::of(meta) != OrbitAxes::Z_UP {
+            (0.0, 0.0)
+        } else if flat {
+            (30.0, 45.0)
+        } else {
+            (30.0, 20.0)
+        };
+        Camera::framed_from(meta, azimuth, elevation, fov_y, aspect)
     }
 
     /// [`Camera::framed`] seen from a given azimuth and elevation (degrees).
@@ -78,7 +148,7 @@ impl Camera {
         let probe = Camera::orbit(meta, azimuth_deg, elevation_deg, 1.0, fov_y);
         let (centre, radius) = bounding_sphere(meta);
         let forward = (probe.target - probe.eye).normalize();
-        let right = forward.cross(DVec3::Z).normalize_or(DVec3::X);
+        let right = forward.cross(probe.up).normalize_or(DVec3::X);
         let up = right.cross(forward);
         let (tan_y, tan_x) = ((fov_y * 0.5).tan(), (fov_y * 0.5).tan() * aspect);
         let (lo, hi) = (DVec3::from(meta.bounds.min), DVec3::from(meta.bounds.max));
@@ -147,5 +217,56 @@ impl Camera {
             aspect as f32,
             near as f32,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cloud of estimated normals in the box `min`–`max` (file coordinates).
+    fn cloud(min: [f64; 3], max: [f64; 3]) -> TreeMeta {
+        let mut meta = TreeMeta::empty(1.0);
+        (meta.bounds.min, meta.bounds.max) = (min, max);
+        meta.origin = meta.bounds.center().to_array();
+        meta
+    }
+
+    #[test]
+    fn a_sensor_frame_is_seen_upright_from_its_sensor() {
+        // An OpenCV-convention frame: the sensor at the origin looking along +z, y down.
+        let frame = cloud([-1.0, -1.5, 0.8], [1.8, 0.4, 3.8]);
+        let axes = OrbitAxes::of(&frame);
+        assert!(axes.up.dot(-DVec3::Y) > 0.95, "{axes:?}");
+        assert!(axes.east().dot(DVec3::X) > 0.95, "{axes:?}");
+        let camera = Camera::framed(&frame, 45f64.to_radians(), 4.0 / 3.0);
+        let (centre, _) = bounding_sphere(&frame);
+        let toward_sensor = (DVec3::ZERO - centre).normalize();
+        let toward_eye = (camera.eye - centre).normalize();
+        assert!(toward_eye.dot(toward_sensor) > 1.0 - 1e-9, "{camera:?}");
+        assert!(camera.up.dot(axes.up) > 1.0 - 1e-12);
+        // The angles round-trip.
+        let d = axes.toward_eye(30.0, 20.0);
+        let (az, el) = axes.angles(d);
+        assert!(
+            (az - 30.0).abs() < 1e-9 && (el - 20.0).abs() < 1e-9,
+            "{az} {el}"
+        );
+        // An OpenGL-convention frame (looking along −z, y up) keeps +y up.
+        let gl = cloud([-1.0, -0.4, -3.8], [1.8, 1.5, -0.8]);
+        assert!(OrbitAxes::of(&gl).up.dot(DVec3::Y) > 0.95);
+    }
+
+    #[test]
+    fn meshes_terrains_and_clouds_around_their_origin_orbit_about_z() {
+        let around = cloud([-1.0; 3], [1.0; 3]);
+        assert_eq!(OrbitAxes::of(&around), OrbitAxes::Z_UP);
+        let tile = cloud([500.0, 700.0, 10.0], [900.0, 1100.0, 40.0]);
+        assert_eq!(OrbitAxes::of(&tile), OrbitAxes::Z_UP);
+        let mut mesh = cloud([-1.0, -1.5, 0.8], [1.8, 0.4, 3.8]);
+        mesh.oriented_normals = true;
+        assert_eq!(OrbitAxes::of(&mesh), OrbitAxes::Z_UP);
+        let c = Camera::orbit(&mesh, 0.0, 0.0, 2.0, 1.0);
+        assert!(c.eye.y < c.target.y && c.up == DVec3::Z, "{c:?}");
     }
 }

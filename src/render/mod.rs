@@ -35,7 +35,7 @@ mod targets;
 mod upload;
 
 pub use crate::tree::scene::{MeshData, Scene};
-pub use camera::Camera;
+pub use camera::{Camera, OrbitAxes};
 pub use counters::{CounterReadback, GpuCounters};
 pub use fullscreen::{fragment_texture, fullscreen_pipeline};
 pub use gpu::Gpu;

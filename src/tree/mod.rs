@@ -64,6 +64,21 @@ pub struct TreeMeta {
 }
 
 impl TreeMeta {
+    /// Where the sensor of a sensor frame stood, in the file's coordinates: the file's
+    /// origin, for a cloud whose estimated normals were turned toward it
+    /// ([`crate::surfel::cloud::Orientation::Toward`], decided here on the leaf box);
+    /// `None` for a mesh, a cloud with given normals, a terrain or any other cloud.
+    pub fn sensor(&self) -> Option<DVec3> {
+        use crate::surfel::cloud::Orientation;
+        let origin = DVec3::from(self.origin);
+        let frame = !self.oriented_normals
+            && matches!(
+                Orientation::of(&self.bounds, &self.bounds, origin),
+                Orientation::Toward(_)
+            );
+        frame.then_some(DVec3::ZERO)
+    }
+
     /// The description of a tree with nothing in it yet, errors relative to `scale`.
     pub fn empty(error_scale: f32) -> TreeMeta {
         TreeMeta {

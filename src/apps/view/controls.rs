@@ -1,11 +1,12 @@
 //! The viewer's camera, free of any window system: an orbit camera (a target, a
-//! distance, azimuth and elevation around z-up) that mouse drags, the wheel and held
+//! distance, azimuth and elevation about the model's axes, [`OrbitAxes`]: z up, or a
+//! sensor frame's own) that mouse drags, the wheel and held
 //! keys move. Speeds scale with the distance to the target, so they suit a model of any
 //! size and stay usable close up.
 
 use glam::DVec3;
 
-use crate::render::Camera;
+use crate::render::{Camera, OrbitAxes};
 
 /// Degrees of orbit per pixel dragged.
 const ORBIT_DEG_PER_PX: f64 = 0.3;
@@ -16,8 +17,7 @@ const KEY_ORBIT_DEG_PER_S: f64 = 90.0;
 /// Elevation stays this far from the poles, where the azimuth is undefined.
 const MAX_ELEVATION_DEG: f64 = 89.5;
 
-/// Eye = target + distance · (sin az cos el, −cos az cos el, sin el), as
-/// [`Camera::orbit`] places it.
+/// Eye = target + distance · [`OrbitAxes::toward_eye`], as [`Camera::orbit`] places it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OrbitCamera {
     pub target: DVec3,
@@ -27,38 +27,36 @@ pub struct OrbitCamera {
     pub fov_y: f64,
     /// The least distance to the target (a small fraction of the model's size).
     pub min_distance: f64,
+    pub axes: OrbitAxes,
 }
 
 impl OrbitCamera {
-    /// The orbit camera that looks as `camera` does (z up).
-    pub fn from_camera(camera: &Camera, model_radius: f64) -> OrbitCamera {
+    /// The orbit camera about `axes` that looks as `camera` does.
+    pub fn from_camera(camera: &Camera, axes: OrbitAxes, model_radius: f64) -> OrbitCamera {
         let offset = camera.eye - camera.target;
         let distance = offset.length();
-        let d = offset / distance;
+        let (azimuth_deg, elevation_deg) = axes.angles(offset / distance);
         OrbitCamera {
             target: camera.target,
             distance,
-            azimuth_deg: d.x.atan2(-d.y).to_degrees(),
-            elevation_deg: d.z.clamp(-1.0, 1.0).asin().to_degrees(),
+            azimuth_deg,
+            elevation_deg,
             fov_y: camera.fov_y,
             min_distance: (model_radius * 1e-5).min(distance),
+            axes,
         }
     }
 
     /// Unit vector from the target toward the eye.
     fn toward_eye(&self) -> DVec3 {
-        let (az, el) = (
-            self.azimuth_deg.to_radians(),
-            self.elevation_deg.to_radians(),
-        );
-        DVec3::new(az.sin() * el.cos(), -az.cos() * el.cos(), el.sin())
+        self.axes.toward_eye(self.azimuth_deg, self.elevation_deg)
     }
 
     pub fn camera(&self) -> Camera {
         Camera {
             eye: self.target + self.toward_eye() * self.distance,
             target: self.target,
-            up: DVec3::Z,
+            up: self.axes.up,
             fov_y: self.fov_y,
         }
     }
@@ -66,7 +64,7 @@ impl OrbitCamera {
     /// Forward, right and up axes of the view.
     fn axes(&self) -> (DVec3, DVec3, DVec3) {
         let forward = -self.toward_eye();
-        let right = forward.cross(DVec3::Z).normalize_or(DVec3::X);
+        let right = forward.cross(self.axes.up).normalize_or(self.axes.east());
         (forward, right, right.cross(forward))
     }
 
@@ -133,6 +131,7 @@ mod tests {
                 up: DVec3::Z,
                 fov_y: 0.8,
             },
+            OrbitAxes::Z_UP,
             1.0,
         )
     }

@@ -17,7 +17,7 @@ use crate::render::camera::bounding_sphere;
 use crate::render::residency::Residency;
 use crate::render::{
     Camera, CounterReadback, EncodedFrame, FrameTargets, GpuCounters, GpuScene, MeshUpload, Mode,
-    Renderer, Scene, Settings, SliceUpload,
+    OrbitAxes, Renderer, Scene, Settings, SliceUpload,
 };
 
 /// A model ready to draw.
@@ -119,7 +119,7 @@ impl Viewer {
         camera: &Camera,
     ) {
         let radius = bounding_sphere(scene.meta()).1;
-        let orbit = OrbitCamera::from_camera(camera, radius);
+        let orbit = OrbitCamera::from_camera(camera, OrbitAxes::of(scene.meta()), radius);
         let counters = CounterReadback::new(&self.renderer.gpu, &gpu_scene);
         if self.settings.mode == Mode::Mesh && gpu_scene.mesh_triangles() == 0 {
             self.settings.mode = Mode::Shaded;
@@ -259,7 +259,7 @@ impl Viewer {
                         aspect,
                     );
                     let min = m.camera.min_distance;
-                    m.camera = OrbitCamera::from_camera(&framed, 0.0);
+                    m.camera = OrbitCamera::from_camera(&framed, m.camera.axes, 0.0);
                     m.camera.min_distance = min;
                 }
             }
