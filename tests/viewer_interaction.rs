@@ -36,6 +36,7 @@ fn viewer_on(model: &std::path::Path) -> Viewer {
         .expect("model loads");
     let camera = Camera::framed(
         scene.meta(),
+        scene.index.chunks(),
         45f64.to_radians(),
         SIZE.0 as f64 / SIZE.1 as f64,
     );

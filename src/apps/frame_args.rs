@@ -157,7 +157,7 @@ impl RenderArgs {
                     fov_y: fov,
                 }
             }
-            _ => Camera::framed(meta, fov, aspect),
+            _ => Camera::framed(meta, scene.index.chunks(), fov, aspect),
         })
     }
 }

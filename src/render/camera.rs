@@ -6,6 +6,7 @@
 use glam::{DVec3, Mat4};
 
 use crate::tree::TreeMeta;
+use crate::tree::chunks::Chunk;
 use crate::tree::select::ViewCone;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,20 +43,27 @@ impl OrbitAxes {
         up: DVec3::Z,
     };
 
-    /// A sensor frame's ([`TreeMeta::sensor`]): north from the sensor toward the
-    /// model's centre, up = x × north, so that azimuth 0, elevation 0 looks from the
-    /// sensor with the image upright: both camera conventions that frames are written
-    /// in put x to the image's right (OpenCV: y down, z forward, so up is −y; OpenGL:
-    /// y up, z backward, so up is +y). [`OrbitAxes::Z_UP`] for every other model.
+    /// A sensor frame's ([`TreeMeta::sensor`]): north along its optical axis, the
+    /// coordinate axis nearest the direction from the sensor to the model's centre, so
+    /// that azimuth 0, elevation 0 looks the way the sensor did. Up, for an optical
+    /// axis along ±z, is x × north, the image upright: both camera conventions with z
+    /// on the axis put x to the image's right (OpenCV: y down, z forward, so up is −y;
+    /// OpenGL: y up, z backward, so up is +y); with x or y on it (a robot's x forward),
+    /// z. [`OrbitAxes::Z_UP`] for every other model.
     pub fn of(meta: &TreeMeta) -> OrbitAxes {
         let Some(sensor) = meta.sensor() else {
             return OrbitAxes::Z_UP;
         };
-        let north = (bounding_sphere(meta).0 - sensor).normalize_or(DVec3::Y);
-        match DVec3::X.cross(north).try_normalize() {
-            Some(up) => OrbitAxes { north, up },
-            None => OrbitAxes::Z_UP,
-        }
+        let d = bounding_sphere(meta).0 - sensor;
+        let axis = d.abs().max_position();
+        let mut north = DVec3::ZERO;
+        north[axis] = d[axis].signum();
+        let up = if axis == 2 {
+            DVec3::X.cross(north)
+        } else {
+            DVec3::Z
+        };
+        OrbitAxes { north, up }
     }
 
     pub fn east(&self) -> DVec3 {
@@ -123,8 +131,11 @@ impl Camera {
     /// least distance at which all eight corners of the model's box fall inside both
     /// fields of view (a corner c, in view axes relative to the centre, needs
     /// d ≥ c_z + |c_x| / tan(fov_x/2) and d ≥ c_z + |c_y| / tan(fov_y/2)), with a 5 %
-    /// margin.
-    pub fn framed(meta: &TreeMeta, fov_y: f64, aspect: f64) -> Camera {
+    /// margin. With `chunks`, the corners of their boxes of node centres instead: the
+    /// model's box holds empty space that a view from a frame's sensor sees at wide
+    /// angles (its near face is as wide as its far one), the chunks' boxes hug the
+    /// samples.
+    pub fn framed(meta: &TreeMeta, chunks: &[Chunk], fov_y: f64, aspect: f64) -> Camera {
         let e = DVec3::from(meta.bounds.max) - DVec3::from(meta.bounds.min);
         let flat = e.z < 0.25 * e.x.max(e.y);
         let (azimuth, elevation) = if OrbitAxes::of(meta) != OrbitAxes::Z_UP {
@@ -134,14 +145,14 @@ impl Camera {
         } else {
             (30.0, 20.0)
         };
-        Camera::framed_from(meta, azimuth, elevation, fov_y, aspect)
+        Camera::framed_from(meta, chunks, [azimuth, elevation], fov_y, aspect)
     }
 
-    /// [`Camera::framed`] seen from a given azimuth and elevation (degrees).
+    /// [`Camera::framed`] seen from a given `[azimuth, elevation]` (degrees).
     pub fn framed_from(
         meta: &TreeMeta,
-        azimuth_deg: f64,
-        elevation_deg: f64,
+        chunks: &[Chunk],
+        [azimuth_deg, elevation_deg]: [f64; 2],
         fov_y: f64,
         aspect: f64,
     ) -> Camera {
@@ -151,14 +162,20 @@ impl Camera {
         let right = forward.cross(probe.up).normalize_or(DVec3::X);
         let up = right.cross(forward);
         let (tan_y, tan_x) = ((fov_y * 0.5).tan(), (fov_y * 0.5).tan() * aspect);
-        let (lo, hi) = (DVec3::from(meta.bounds.min), DVec3::from(meta.bounds.max));
         let mut distance = 0.0f64;
-        for k in 0..8 {
-            let corner = DVec3::new(
-                if k & 1 == 0 { lo.x } else { hi.x },
-                if k & 2 == 0 { lo.y } else { hi.y },
-                if k & 4 == 0 { lo.z } else { hi.z },
-            ) - centre;
+        let origin = DVec3::from(meta.origin);
+        let chunk_corners = chunks.iter().flat_map(|c| {
+            let at = |v: [f32; 3]| (origin + glam::Vec3::from(v).as_dvec3()).to_array();
+            box_corners(at(c.centre_min), at(c.centre_max))
+        });
+        let model_corners = box_corners(meta.bounds.min, meta.bounds.max);
+        let corners: Box<dyn Iterator<Item = DVec3>> = if chunks.is_empty() {
+            Box::new(model_corners)
+        } else {
+            Box::new(chunk_corners)
+        };
+        for corner in corners {
+            let corner = corner - centre;
             let toward = -corner.dot(forward);
             distance = distance
                 .max(toward + corner.dot(right).abs() / tan_x)
@@ -220,6 +237,17 @@ impl Camera {
     }
 }
 
+/// The eight corners of the box `lo`–`hi`.
+fn box_corners(lo: [f64; 3], hi: [f64; 3]) -> impl Iterator<Item = DVec3> {
+    (0..8).map(move |k| {
+        DVec3::new(
+            if k & 1 == 0 { lo[0] } else { hi[0] },
+            if k & 2 == 0 { lo[1] } else { hi[1] },
+            if k & 4 == 0 { lo[2] } else { hi[2] },
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -237,14 +265,15 @@ mod tests {
         // An OpenCV-convention frame: the sensor at the origin looking along +z, y down.
         let frame = cloud([-1.0, -1.5, 0.8], [1.8, 0.4, 3.8]);
         let axes = OrbitAxes::of(&frame);
-        assert!(axes.up.dot(-DVec3::Y) > 0.95, "{axes:?}");
-        assert!(axes.east().dot(DVec3::X) > 0.95, "{axes:?}");
-        let camera = Camera::framed(&frame, 45f64.to_radians(), 4.0 / 3.0);
-        let (centre, _) = bounding_sphere(&frame);
-        let toward_sensor = (DVec3::ZERO - centre).normalize();
-        let toward_eye = (camera.eye - centre).normalize();
-        assert!(toward_eye.dot(toward_sensor) > 1.0 - 1e-9, "{camera:?}");
-        assert!(camera.up.dot(axes.up) > 1.0 - 1e-12);
+        assert_eq!(
+            (axes.north, axes.up, axes.east()),
+            (DVec3::Z, -DVec3::Y, DVec3::X)
+        );
+        // Framed looking along the optical axis, from the sensor's side.
+        let camera = Camera::framed(&frame, &[], 45f64.to_radians(), 4.0 / 3.0);
+        let view = (camera.target - camera.eye).normalize();
+        assert!(view.dot(DVec3::Z) > 1.0 - 1e-12, "{camera:?}");
+        assert!(camera.eye.z < 0.8 && camera.up == -DVec3::Y, "{camera:?}");
         // The angles round-trip.
         let d = axes.toward_eye(30.0, 20.0);
         let (az, el) = axes.angles(d);
@@ -254,7 +283,11 @@ mod tests {
         );
         // An OpenGL-convention frame (looking along −z, y up) keeps +y up.
         let gl = cloud([-1.0, -0.4, -3.8], [1.8, 1.5, -0.8]);
-        assert!(OrbitAxes::of(&gl).up.dot(DVec3::Y) > 0.95);
+        assert_eq!(OrbitAxes::of(&gl).up, DVec3::Y);
+        // A robot's frame (x forward, z up) keeps z up.
+        let robot = cloud([0.8, -1.0, -1.5], [3.8, 1.8, 0.4]);
+        assert_eq!(OrbitAxes::of(&robot).north, DVec3::X);
+        assert_eq!(OrbitAxes::of(&robot).up, DVec3::Z);
     }
 
     #[test]

@@ -253,8 +253,8 @@ impl Viewer {
                     let aspect = viewport.0 as f64 / viewport.1.max(1) as f64;
                     let framed = Camera::framed_from(
                         m.scene.meta(),
-                        m.camera.azimuth_deg,
-                        m.camera.elevation_deg,
+                        m.scene.index.chunks(),
+                        [m.camera.azimuth_deg, m.camera.elevation_deg],
                         m.camera.fov_y,
                         aspect,
                     );
