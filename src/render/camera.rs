@@ -168,13 +168,10 @@ impl Camera {
             let at = |v: [f32; 3]| (origin + glam::Vec3::from(v).as_dvec3()).to_array();
             box_corners(at(c.centre_min), at(c.centre_max))
         });
-        let model_corners = box_corners(meta.bounds.min, meta.bounds.max);
-        let corners: Box<dyn Iterator<Item = DVec3>> = if chunks.is_empty() {
-            Box::new(model_corners)
-        } else {
-            Box::new(chunk_corners)
-        };
-        for corner in corners {
+        // The model's box only where there are no chunks.
+        let model_corners = box_corners(meta.bounds.min, meta.bounds.max)
+            .take(if chunks.is_empty() { 8 } else { 0 });
+        for corner in chunk_corners.chain(model_corners) {
             let corner = corner - centre;
             let toward = -corner.dot(forward);
             distance = distance
@@ -288,6 +285,37 @@ mod tests {
         let robot = cloud([0.8, -1.0, -1.5], [3.8, 1.8, 0.4]);
         assert_eq!(OrbitAxes::of(&robot).north, DVec3::X);
         assert_eq!(OrbitAxes::of(&robot).up, DVec3::Z);
+    }
+
+    #[test]
+    fn chunk_boxes_frame_the_samples_not_the_model_s_box() {
+        // A box 2 wide whose samples all lie in one chunk 0.2 wide at its centre.
+        let mut meta = cloud([-1.0; 3], [1.0; 3]);
+        meta.oriented_normals = true;
+        let chunk = Chunk {
+            start: 0,
+            count: 1,
+            level: 0,
+            centre_min: [-0.1; 3],
+            centre_max: [0.1; 3],
+            radius_max: 0.0,
+            error_min: 0.0,
+        };
+        let distance = |chunks: &[Chunk]| {
+            let c = Camera::framed(&meta, chunks, 1.0, 1.0);
+            (c.eye - c.target).length()
+        };
+        let (whole, hugged) = (distance(&[]), distance(&[chunk]));
+        assert!(hugged < 0.15 * whole, "{hugged} against {whole}");
+        // Every corner of the chunk's box in view (fov 1 rad both ways).
+        let c = Camera::framed(&meta, &[chunk], 1.0, 1.0);
+        let (right, up, forward) = c.axes();
+        for corner in box_corners([-0.1; 3], [0.1; 3]) {
+            let d = corner - c.eye;
+            let depth = d.dot(forward);
+            assert!(d.dot(right).abs() < depth * 0.5f64.tan(), "{corner}");
+            assert!(d.dot(up).abs() < depth * 0.5f64.tan(), "{corner}");
+        }
     }
 
     #[test]
