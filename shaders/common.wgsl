@@ -39,7 +39,8 @@ struct Frame {
     // which a pixel is fully covered (silhouettes fade below it; 0: off).
     radius_scale: f32,
     coverage_weight: f32,
-    // Lowest and highest node centre z, relative to the model origin (MODE_ELEVATION).
+    // Lowest and highest node centre height along elevation_up, relative to the model
+    // origin (MODE_ELEVATION).
     elevation_range: vec2<f32>,
     // The eye the level of detail is chosen for, relative to the camera's eye
     // (world-aligned); used when lod_frozen is set.
@@ -54,6 +55,9 @@ struct Frame {
     // 1 when the model's normals face out of its surface (meshes, clouds with given
     // normals): a splat seen from behind is then the surface's back (see fs_attributes).
     oriented_normals: u32,
+    // The model's up (z, or a sensor frame's image up), unit: heights are taken along it.
+    elevation_up: vec3<f32>,
+    elevation_pad: f32,
 }
 
 const MODE_SHADED: u32 = 0u;
@@ -115,9 +119,10 @@ fn attribute_color(mode: u32, a: u32) -> vec3<f32> {
 }
 
 // The elevation ramp: blue (lowest) through cyan, green and yellow to red (highest),
-// linear RGB; `z` relative to the model origin. Kept in step with the viewer's legend
-// (src/apps/view/legend.rs, ELEVATION_RAMP).
-fn elevation_color(z: f32) -> vec3<f32> {
+// linear RGB, at `position` relative to the model origin. Kept in step with the
+// viewer's legend (src/apps/view/legend.rs, ELEVATION_RAMP).
+fn elevation_color(position: vec3<f32>) -> vec3<f32> {
+    let z = dot(position, frame.elevation_up);
     let span = max(frame.elevation_range.y - frame.elevation_range.x, 1e-30);
     let t = clamp((z - frame.elevation_range.x) / span, 0.0, 1.0) * 4.0;
     let k = min(u32(t), 3u);

@@ -176,7 +176,7 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     switch frame.mode {
         case MODE_LEVELS: { color = vec4<f32>(level_color(node.level), 1.0); }
         case MODE_RADIUS: { color = vec4<f32>(radius_color(node.radius), 1.0); }
-        case MODE_ELEVATION: { color = vec4<f32>(elevation_color(node.position.z), 1.0); }
+        case MODE_ELEVATION: { color = vec4<f32>(elevation_color(node.position), 1.0); }
         case MODE_CLASSIFICATION, MODE_INTENSITY, MODE_RETURNS: {
             let a = attributes[min(index, arrayLength(&attributes) - 1u)];
             color = vec4<f32>(attribute_color(frame.mode, a), 1.0);

@@ -234,6 +234,22 @@ impl Camera {
     }
 }
 
+/// The model's up ([`OrbitAxes::of`]) and its node centres' lowest and highest heights
+/// along it, relative to its origin: what the elevation ramp spans.
+pub fn heights(meta: &TreeMeta) -> (DVec3, [f32; 2]) {
+    let up = OrbitAxes::of(meta).up;
+    let (lo, hi) = (
+        meta.centre_min.map(f64::from),
+        meta.centre_max.map(f64::from),
+    );
+    let (low, high) = box_corners(lo, hi)
+        .map(|c| c.dot(up))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), h| {
+            (a.min(h), b.max(h))
+        });
+    (up, [low as f32, high as f32])
+}
+
 /// The eight corners of the box `lo`–`hi`.
 fn box_corners(lo: [f64; 3], hi: [f64; 3]) -> impl Iterator<Item = DVec3> {
     (0..8).map(move |k| {
@@ -316,6 +332,15 @@ mod tests {
             assert!(d.dot(right).abs() < depth * 0.5f64.tan(), "{corner}");
             assert!(d.dot(up).abs() < depth * 0.5f64.tan(), "{corner}");
         }
+    }
+
+    #[test]
+    fn heights_run_along_the_model_s_up() {
+        let mut frame = cloud([-1.0, -1.5, 0.8], [1.8, 0.4, 3.8]);
+        (frame.centre_min, frame.centre_max) = ([-1.0, -2.0, -1.5], [2.0, 3.0, 1.5]);
+        assert_eq!(heights(&frame), (-DVec3::Y, [-3.0, 2.0]));
+        frame.oriented_normals = true;
+        assert_eq!(heights(&frame), (DVec3::Z, [-1.5, 1.5]));
     }
 
     #[test]

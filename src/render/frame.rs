@@ -4,12 +4,12 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
-use super::camera::Camera;
+use super::camera::{Camera, heights};
 use super::settings::{DEPTH_PUSH, Mode, PREFILTER_PX, Settings};
 use crate::tree::TreeMeta;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl`, field for field (the WGSL file
-/// documents each); 288 bytes, with the padding WGSL's vec3 alignment asks for.
+/// documents each); 304 bytes, with the padding WGSL's vec3 alignment asks for.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub(super) struct FrameUniform {
@@ -41,9 +41,11 @@ pub(super) struct FrameUniform {
     pub intensity_range: [f32; 2],
     pub has_attributes: u32,
     pub oriented_normals: u32,
+    pub elevation_up: [f32; 3],
+    pub elevation_pad: f32,
 }
 
-const _: () = assert!(std::mem::size_of::<FrameUniform>() == 288);
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 304);
 
 /// The layout of bind group 0 of every pass: the frame uniform.
 pub(super) fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
@@ -137,7 +139,7 @@ impl FrameUniform {
             } else {
                 0.0
             },
-            elevation_range: [meta.centre_min[2], meta.centre_max[2]],
+            elevation_range: heights(meta).1,
             lod_eye: settings
                 .lod_eye
                 .map_or(DVec3::ZERO, |e| e - camera.eye)
@@ -147,6 +149,8 @@ impl FrameUniform {
             intensity_range: meta.intensity_range.map(f32::from),
             has_attributes: meta.has_attributes as u32,
             oriented_normals: meta.oriented_normals as u32,
+            elevation_up: heights(meta).0.as_vec3().to_array(),
+            elevation_pad: 0.0,
         }
     }
 }

@@ -3,6 +3,7 @@
 //! `elevation_color`), linear RGB; a test keeps the two in step.
 
 use crate::render::Mode;
+use crate::render::camera::heights;
 use crate::tree::TreeMeta;
 
 /// The stops of `elevation_color`, lowest first, evenly spaced over the height range.
@@ -51,12 +52,11 @@ fn swatch(ui: &mut egui::Ui, [r, g, b]: [f32; 3], label: String) {
 }
 
 /// The elevation ramp as a bar, with the model's lowest and highest node heights (the
-/// file's z) at its ends.
+/// file's z, or along a sensor frame's up) at its ends.
 fn elevation_bar(ui: &mut egui::Ui, meta: &TreeMeta) {
-    let (lo, hi) = (
-        meta.origin[2] + meta.centre_min[2] as f64,
-        meta.origin[2] + meta.centre_max[2] as f64,
-    );
+    let (up, [low, high]) = heights(meta);
+    let base = glam::DVec3::from(meta.origin).dot(up);
+    let (lo, hi) = (base + low as f64, base + high as f64);
     ui.horizontal(|ui| {
         ui.label(format!("{lo:.2}"));
         let (rect, _) = ui.allocate_exact_size(egui::vec2(120.0, 12.0), egui::Sense::hover());
