@@ -136,11 +136,9 @@ impl Camera {
     /// angles (its near face is as wide as its far one), the chunks' boxes hug the
     /// samples.
     pub fn framed(meta: &TreeMeta, chunks: &[Chunk], fov_y: f64, aspect: f64) -> Camera {
-        let e = DVec3::from(meta.bounds.max) - DVec3::from(meta.bounds.min);
-        let flat = e.z < 0.25 * e.x.max(e.y);
         let (azimuth, elevation) = if OrbitAxes::of(meta) != OrbitAxes::Z_UP {
             (0.0, 0.0)
-        } else if flat {
+        } else if meta.is_flat() {
             (30.0, 45.0)
         } else {
             (30.0, 20.0)

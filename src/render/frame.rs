@@ -112,6 +112,7 @@ impl FrameUniform {
         };
         let light = settings.light.normalize_or(Vec3::Z);
         let [r, g, b] = settings.background.map(srgb_to_linear);
+        let (elevation_up, elevation_range) = heights(meta);
         FrameUniform {
             view: camera.view_rotation().to_cols_array_2d(),
             proj: camera.projection(aspect, near).to_cols_array_2d(),
@@ -139,7 +140,7 @@ impl FrameUniform {
             } else {
                 0.0
             },
-            elevation_range: heights(meta).1,
+            elevation_range,
             lod_eye: settings
                 .lod_eye
                 .map_or(DVec3::ZERO, |e| e - camera.eye)
@@ -149,7 +150,7 @@ impl FrameUniform {
             intensity_range: meta.intensity_range.map(f32::from),
             has_attributes: meta.has_attributes as u32,
             oriented_normals: meta.oriented_normals as u32,
-            elevation_up: heights(meta).0.as_vec3().to_array(),
+            elevation_up: elevation_up.as_vec3().to_array(),
             elevation_pad: 0.0,
         }
     }

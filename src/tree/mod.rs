@@ -30,6 +30,7 @@ use serde::Serialize;
 use crate::io::{Bounds, PointAttributes};
 use crate::surfel::LeafSurfels;
 use crate::surfel::Surfel;
+use crate::surfel::cloud::Orientation;
 use crate::surfel::shape::{Shape, SplatShape};
 use chunks::Chunk;
 use errors::{Disk, node_error, parent_disk};
@@ -69,14 +70,19 @@ impl TreeMeta {
     /// ([`crate::surfel::cloud::Orientation::Toward`], decided here on the leaf box);
     /// `None` for a mesh, a cloud with given normals, a terrain or any other cloud.
     pub fn sensor(&self) -> Option<DVec3> {
-        use crate::surfel::cloud::Orientation;
-        let origin = DVec3::from(self.origin);
-        let frame = !self.oriented_normals
-            && matches!(
-                Orientation::of(&self.bounds, &self.bounds, origin),
-                Orientation::Toward(_)
-            );
+        let frame = !self.oriented_normals && matches!(self.orientation(), Orientation::Toward(_));
         frame.then_some(DVec3::ZERO)
+    }
+
+    /// Whether the leaf box is a terrain's: less than a quarter as high as it is wide
+    /// (the rule that turns a cloud's normals up, [`Orientation::of`]).
+    pub fn is_flat(&self) -> bool {
+        self.orientation() == Orientation::Up
+    }
+
+    /// [`Orientation::of`] the leaf box, seen from the file's origin.
+    fn orientation(&self) -> Orientation {
+        Orientation::of(&self.bounds, &self.bounds, DVec3::from(self.origin))
     }
 
     /// The description of a tree with nothing in it yet, errors relative to `scale`.

@@ -61,8 +61,8 @@ impl OrbitCamera {
         }
     }
 
-    /// Forward, right and up axes of the view.
-    fn axes(&self) -> (DVec3, DVec3, DVec3) {
+    /// Forward, right and up axes of the view (not the orbit's `axes`).
+    fn view_axes(&self) -> (DVec3, DVec3, DVec3) {
         let forward = -self.toward_eye();
         let right = forward.cross(self.axes.up).normalize_or(self.axes.east());
         (forward, right, right.cross(forward))
@@ -84,7 +84,7 @@ impl OrbitCamera {
     /// Moves eye and target in the view plane so that the point under the pointer
     /// follows it.
     pub fn pan(&mut self, dx_px: f64, dy_px: f64, viewport: (u32, u32)) {
-        let (_, right, up) = self.axes();
+        let (_, right, up) = self.view_axes();
         let k = self.units_per_px(viewport.1 as f64);
         self.target += (-dx_px * right + dy_px * up) * k;
     }
@@ -97,7 +97,7 @@ impl OrbitCamera {
         let new_distance = (self.distance * factor).max(self.min_distance);
         let factor = new_distance / self.distance;
         let (w, h) = (viewport.0.max(1) as f64, viewport.1.max(1) as f64);
-        let (_, right, up) = self.axes();
+        let (_, right, up) = self.view_axes();
         let k = self.units_per_px(h);
         let under = self.target + (at.0 - w * 0.5) * k * right - (at.1 - h * 0.5) * k * up;
         // Scale the eye and target about the point under the pointer.
@@ -108,7 +108,7 @@ impl OrbitCamera {
     /// Moves eye and target together by `forward`, `right` and `up` times the distance
     /// to the target (WASD, Q/E).
     pub fn walk(&mut self, forward: f64, right: f64, up: f64) {
-        let (f, r, u) = self.axes();
+        let (f, r, u) = self.view_axes();
         self.target += (f * forward + r * right + u * up) * self.distance;
     }
 
@@ -152,12 +152,12 @@ mod tests {
         after.zoom_at(3.0, at, viewport);
         assert!((after.distance - before.distance * 0.85f64.powi(3)).abs() < 1e-12);
         // The point under the pointer on the old target plane projects to the same pixel.
-        let (_, right, up) = before.axes();
+        let (_, right, up) = before.view_axes();
         let k = before.units_per_px(600.0);
         let p = before.target + (at.0 - 400.0) * k * right - (at.1 - 300.0) * k * up;
         let project = |o: &OrbitCamera| {
             let cam = o.camera();
-            let (f, r, u) = o.axes();
+            let (f, r, u) = o.view_axes();
             let v = p - cam.eye;
             let t = (o.fov_y * 0.5).tan() * v.dot(f);
             (400.0 + v.dot(r) / t * 300.0, 300.0 - v.dot(u) / t * 300.0)
