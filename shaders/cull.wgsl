@@ -1,18 +1,26 @@
 #import constants
 #import common
+#import shape
 
 // Compute culling: each node of the frame's ranges in the list slice bound here (the
-// visible chunks' prefixes) is tested once; survivors are appended to a list whose
-// length is the instance count of the indirect draw that follows (4 vertices per
-// survivor).
+// visible chunks' prefixes) is tested once. Survivors go to two lists in one array,
+// each counted as the instance count of an indirect draw (4 vertices per survivor):
+// those whose rim may lie on an outline (`on_outline`) from the array's end backwards,
+// the others from its start.
 
-struct Compaction {
-    // DrawIndirectArgs: vertex count (4), instance count (the survivors), first vertex,
-    // first instance.
+// DrawIndirectArgs: vertex count (4), instance count (the survivors), first vertex,
+// first instance.
+struct DrawArgs {
     vertex_count: u32,
     instance_count: atomic<u32>,
     first_vertex: u32,
     first_instance: u32,
+}
+
+struct Compaction {
+    // The draws of the survivors on an outline, then of the others.
+    outline: DrawArgs,
+    inner: DrawArgs,
     // Nodes of this slice to test, in how many ranges.
     count: u32,
     range_count: u32,
@@ -29,6 +37,7 @@ struct TestRange {
 @group(1) @binding(1) var<storage, read_write> survivors: array<u32>;
 @group(1) @binding(2) var<storage, read_write> compaction: Compaction;
 @group(1) @binding(3) var<storage, read> ranges: array<TestRange>;
+@group(1) @binding(4) var<storage, read> shapes: array<SplatShape>;
 
 // The node (slice index) that thread i tests: in the first range whose running end
 // exceeds i, found by binary search.
@@ -57,7 +66,13 @@ fn cull(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let i = tested_node(id.x);
     let node = decode_node(nodes[2u * i], nodes[2u * i + 1u]);
-    if splat_visible(node, view_disk(node)) {
-        survivors[atomicAdd(&compaction.instance_count, 1u)] = i;
+    let disk = view_disk(node);
+    if !splat_visible(node, disk) {
+        return;
+    }
+    if on_outline(disk, shapes[i]) {
+        survivors[arrayLength(&survivors) - 1u - atomicAdd(&compaction.outline.instance_count, 1u)] = i;
+    } else {
+        survivors[atomicAdd(&compaction.inner.instance_count, 1u)] = i;
     }
 }

@@ -1,5 +1,6 @@
 #import common
 #import constants
+#import shape
 
 // Splats: pass 1 (visibility, depth only) and pass 2 (attributes, additive blending),
 // one instanced quad of 4 vertices per node of the list slice bound here: every node
@@ -12,13 +13,6 @@
 // Each node's LiDAR attributes (one u32 of zero for a model without them).
 @group(1) @binding(3) var<storage, read> attributes: array<u32>;
 
-// A splat's ellipse, normal field and clip, as src/surfel/shape.rs packs it.
-struct SplatShape {
-    axis: u32,       // major axis u, octahedral snorm16 × 2
-    ratio_a: u32,    // minor / major semi-axis, a: two f16
-    b_c: u32,        // b, c: two f16
-    clip: u32,       // a line or a wedge, see clip_vector
-}
 
 // A splat's clip (src/surfel/clip.rs) in one vec4, for the fragments: a wedge as the
 // unit directions (start, end) of its sides, a line as (cos θ, sin θ, d, LINE_TAG). No
@@ -77,6 +71,23 @@ struct SplatVarying {
     @location(9) @interpolate(flat) push: f32,
 }
 
+// Where a splat's colour comes from (pipeline-overridable: src/render/splats.rs makes a
+// pipeline per source, so that each vertex runs only its own).
+override COLOR_SOURCE: u32 = COLOR_NODE;
+
+fn splat_color(node: Node, index: u32) -> vec4<f32> {
+    switch COLOR_SOURCE {
+        case COLOR_LEVELS: { return vec4<f32>(level_color(node.level), 1.0); }
+        case COLOR_RADIUS: { return vec4<f32>(radius_color(node.radius), 1.0); }
+        case COLOR_ELEVATION: { return vec4<f32>(elevation_color(node.position), 1.0); }
+        case COLOR_ATTRIBUTES: {
+            let a = attributes[min(index, arrayLength(&attributes) - 1u)];
+            return vec4<f32>(attribute_color(frame.mode, a), 1.0);
+        }
+        default: { return node.color; }
+    }
+}
+
 fn culled() -> SplatVarying {
     var out: SplatVarying;
     // Every corner at one point outside the clip volume: a degenerate quad.
@@ -89,19 +100,12 @@ fn vs_splat(@builtin(vertex_index) corner: u32, @builtin(instance_index) index: 
     return splat_vertex(index, corner, true);
 }
 
+// The cull pass lists the survivors that `on_outline` keeps from the end of the list
+// backwards, the others from its start.
 @vertex
 fn vs_splat_compacted(@builtin(vertex_index) corner: u32, @builtin(instance_index) index: u32) -> SplatVarying {
-    return splat_vertex(survivors[index], corner, false);
-}
-
-// The unit tangent nearest to `axis` (made ⟂ to `normal`), or any tangent when the
-// two are (numerically) parallel.
-fn major_axis(normal: vec3<f32>, axis: vec3<f32>) -> vec3<f32> {
-    let t = axis - normal * dot(axis, normal);
-    if dot(t, t) > 1e-12 {
-        return normalize(t);
-    }
-    return normalize(select(cross(normal, vec3<f32>(0.0, 0.0, 1.0)), cross(normal, vec3<f32>(1.0, 0.0, 0.0)), abs(normal.z) > 0.9));
+    let slot = select(index, arrayLength(&survivors) - 1u - index, SPLAT_CLASS == OUTLINE_SPLATS);
+    return splat_vertex(survivors[slot], corner, false);
 }
 
 // Pixels per view-space unit of a displacement `d` at view-space point `c`: the
@@ -141,11 +145,15 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     let r = disk.radius;
     let near = frame.near;
     let packed = shapes[index];
-    let axis = (frame.view * vec4<f32>(oct_decode(unpack2x16snorm(packed.axis)), 0.0)).xyz;
-    let u = major_axis(normal, axis);
-    let v = cross(normal, u);
-    let ratio_a = unpack2x16float(packed.ratio_a);
-    let ratio = ratio_a.x;
+    let shape = shape_frame(packed, normal);
+    let u = shape.u;
+    let v = shape.v;
+    let ratio = shape.ratio;
+    // Vertex culling draws pass 2 twice, each draw keeping its own kind of splat (the
+    // compacted draws read lists that the cull pass sorted by the same test).
+    if cull && SPLAT_CLASS != ALL_SPLATS && on_outline(disk, packed) != (SPLAT_CLASS == OUTLINE_SPLATS) {
+        return culled();
+    }
     // Footprint: the screen box of the ellipse's bounding rectangle p ± R u ± ratio R v.
     // A splat crossing the near plane is skipped rather than drawn garbled.
     var lo = vec2<f32>(1e30, 1e30);
@@ -172,20 +180,9 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     out.center = center;
     out.normal = normal;
     out.tangent_u = u;
-    var color = node.color;
-    switch frame.mode {
-        case MODE_LEVELS: { color = vec4<f32>(level_color(node.level), 1.0); }
-        case MODE_RADIUS: { color = vec4<f32>(radius_color(node.radius), 1.0); }
-        case MODE_ELEVATION: { color = vec4<f32>(elevation_color(node.position), 1.0); }
-        case MODE_CLASSIFICATION, MODE_INTENSITY, MODE_RETURNS: {
-            let a = attributes[min(index, arrayLength(&attributes) - 1u)];
-            color = vec4<f32>(attribute_color(frame.mode, a), 1.0);
-        }
-        default: {}
-    }
-    out.color = color;
+    out.color = splat_color(node, index);
     out.extra = vec4<f32>(r, center_px, ratio);
-    out.gradient = vec3<f32>(ratio_a.y, unpack2x16float(packed.b_c));
+    out.gradient = shape.gradient;
     let covariance = screen_covariance(center, r * u, ratio * r * v);
     out.conic = prefiltered_conic(covariance, frame.prefilter_px);
     let conic0 = prefiltered_conic(covariance, 1e-3);
@@ -396,7 +393,8 @@ const MIN_WEIGHT: f32 = 1.0 / 1024.0;
 // the half-float targets' subnormals.
 const BAND_WEIGHT: f32 = 1.0 / 16.0;
 
-// Pass 2: kernel weight of the splat-space distance, additive blending.
+// Pass 2 for the splats on an outline: kernel weight of the splat-space distance,
+// additive blending, and the pixel's coverage samples.
 @fragment
 fn fs_attributes(in: SplatVarying) -> Attributes {
     let h = hit(in);
@@ -411,6 +409,25 @@ fn fs_attributes(in: SplatVarying) -> Attributes {
         w = 0.0;
     }
     w *= select(BAND_WEIGHT, 1.0, h.centre_inside);
+    return blended(in, h, w, coverage);
+}
+
+// Pass 2 for the splats inside the picture's outlines: fragments whose centre the patch
+// covers, as covering the whole pixel. Those of the prefilter's band are left out: they
+// only give colour where no patch covers a pixel's centre, which inside the outlines
+// the neighbouring patches do.
+@fragment
+fn fs_attributes_inner(in: SplatVarying) -> Attributes {
+    let h = hit(in);
+    if !h.centre_inside {
+        discard;
+    }
+    return blended(in, h, select(kernel(h.rho2), 0.0, kernel(h.rho2) < MIN_WEIGHT), vec4<f32>(1.0));
+}
+
+// A pass 2 fragment of weight w: (colour·w, w), (normal·w, z·w) and the coverage.
+fn blended(in: SplatVarying, h: Hit, weight: f32, coverage: vec4<f32>) -> Attributes {
+    var w = weight;
     let q = view_ray(in.clip.xy) * h.depth;
     // Two-sided: a normal facing away from the eye is flipped before blending. Where
     // normals face out of the surface, such a fragment shows the surface's back, which

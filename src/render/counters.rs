@@ -23,10 +23,10 @@ pub struct GpuCounters {
     pub drawn: Option<u64>,
 }
 
-/// Bytes of one frame's counters: two u64 timestamps, then one u32 per slice (of the
-/// whole list, uploaded or not).
+/// Bytes of one frame's counters: two u64 timestamps, then two u32 per slice (of the
+/// whole list, uploaded or not): its survivors on an outline and the others.
 fn counters_bytes(gpu_scene: &GpuScene) -> u64 {
-    16 + 4 * gpu_scene.planned_slices().max(1) as u64
+    16 + 8 * gpu_scene.planned_slices().max(1) as u64
 }
 
 /// Records copies of the frame's counters into `into` (at least `counters_bytes`).
@@ -41,9 +41,11 @@ pub(super) fn copy_counters(
     }
     // The resident slices in order, as the frame's `slices` counts them.
     for (k, slice) in gpu_scene.resident().enumerate() {
-        // The indirect draw's instance count: the survivors.
-        let at = Compaction::SURVIVORS_AT;
-        encoder.copy_buffer_to_buffer(&slice.compaction, at, into, 16 + 4 * k as u64, 4);
+        // The indirect draws' instance counts: the survivors.
+        for (j, at) in Compaction::SURVIVORS_AT.into_iter().enumerate() {
+            let to = 16 + 4 * (2 * k + j) as u64;
+            encoder.copy_buffer_to_buffer(&slice.compaction, at, into, to, 4);
+        }
     }
 }
 
@@ -55,7 +57,7 @@ pub(super) fn parse_counters(gpu: &Gpu, bytes: &[u8], frame: &EncodedFrame) -> G
         t[1].saturating_sub(t[0]) as f64 * period_ns / 1e6
     });
     let drawn = frame.compute.then(|| {
-        bytes[16..16 + 4 * frame.slices]
+        bytes[16..16 + 8 * frame.slices]
             .chunks_exact(4)
             .map(|c| u32::from_le_bytes(c.try_into().unwrap()) as u64)
             .sum()

@@ -11,18 +11,27 @@ use bytemuck::{Pod, Zeroable};
 use super::gpu_scene::Share;
 use super::shaders::{WORKGROUP_SIZE, module};
 
-/// A slice's compaction record (`struct Compaction` in cull.wgsl): the indirect draw's
-/// arguments, whose instance count the pass counts up, then the nodes of the slice to
-/// test and in how many ranges.
+/// A slice's compaction record (`struct Compaction` in cull.wgsl): the arguments of the
+/// two indirect draws, of the survivors on an outline and of the others, whose
+/// instance counts the pass counts up; then the nodes of the slice to test and in how
+/// many ranges.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub(super) struct Compaction {
+    pub outline: DrawIndirectArgs,
+    pub inner: DrawIndirectArgs,
+    pub count: u32,
+    pub range_count: u32,
+}
+
+/// `wgpu::util::DrawIndirectArgs`, as a Pod field (`struct DrawArgs` in cull.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub(super) struct DrawIndirectArgs {
     pub vertex_count: u32,
     pub instance_count: u32,
     pub first_vertex: u32,
     pub first_instance: u32,
-    pub count: u32,
-    pub range_count: u32,
 }
 
 /// One range of a slice to test (`struct TestRange` in cull.wgsl): its first node
@@ -54,25 +63,38 @@ impl TestRange {
 }
 
 const _: () = assert!(
-    std::mem::offset_of!(Compaction, count) == std::mem::size_of::<wgpu::util::DrawIndirectArgs>()
+    std::mem::size_of::<DrawIndirectArgs>() == std::mem::size_of::<wgpu::util::DrawIndirectArgs>()
 );
 
 impl Compaction {
     /// Before culling: 4 vertices per splat, no survivor yet, `count` nodes to test in
     /// `range_count` ranges.
     pub fn reset(count: u32, range_count: u32) -> Compaction {
-        Compaction {
+        let draw = DrawIndirectArgs {
             vertex_count: 4,
             instance_count: 0,
             first_vertex: 0,
             first_instance: 0,
+        };
+        Compaction {
+            outline: draw,
+            inner: draw,
             count,
             range_count,
         }
     }
 
-    /// Byte offset of the instance count (the survivors), for reading it back.
-    pub const SURVIVORS_AT: u64 = std::mem::offset_of!(Compaction, instance_count) as u64;
+    /// Byte offsets of the two draws' arguments, in the order `splats.rs` draws them.
+    pub const DRAWS_AT: [u64; 2] = [
+        std::mem::offset_of!(Compaction, outline) as u64,
+        std::mem::offset_of!(Compaction, inner) as u64,
+    ];
+
+    /// Byte offsets of the two instance counts (the survivors), for reading them back.
+    pub const SURVIVORS_AT: [u64; 2] = [
+        Compaction::DRAWS_AT[0] + std::mem::offset_of!(DrawIndirectArgs, instance_count) as u64,
+        Compaction::DRAWS_AT[1] + std::mem::offset_of!(DrawIndirectArgs, instance_count) as u64,
+    ];
 }
 
 /// A storage-buffer entry of bind group 1, visible to the compute stage.
@@ -89,7 +111,8 @@ fn storage(binding: u32, read_only: bool, min_size: u64) -> wgpu::BindGroupLayou
     }
 }
 
-/// The cull pass: its bind group layout (nodes, survivors, compaction) and pipeline.
+/// The cull pass: its bind group layout (nodes, survivors, compaction, test ranges,
+/// shapes) and pipeline.
 pub(super) struct CullPass {
     pub layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
@@ -98,6 +121,7 @@ pub(super) struct CullPass {
 impl CullPass {
     pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> CullPass {
         let node = std::mem::size_of::<crate::tree::NodeRecord>() as u64;
+        let shape = std::mem::size_of::<crate::tree::record::SplatShape>() as u64;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull"),
             entries: &[
@@ -105,6 +129,7 @@ impl CullPass {
                 storage(1, false, 4),
                 storage(2, false, std::mem::size_of::<Compaction>() as u64),
                 storage(3, true, std::mem::size_of::<TestRange>() as u64),
+                storage(4, true, shape),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -163,6 +188,7 @@ mod tests {
     fn the_compaction_record_has_the_size_of_the_wgsl_struct() {
         super::super::shaders::assert_wgsl_size::<super::Compaction>("cull", "Compaction");
         super::super::shaders::assert_wgsl_size::<TestRange>("cull", "TestRange");
+        super::super::shaders::assert_wgsl_size::<super::DrawIndirectArgs>("cull", "DrawArgs");
     }
 
     #[test]

@@ -141,7 +141,12 @@ impl Renderer {
             (Mode::Points, _) => draw(encoder, "points", false, &pipelines.points),
             _ => {
                 draw(encoder, "visibility", true, &pipelines.visibility);
-                draw(encoder, "attributes", false, &pipelines.attributes);
+                draw(
+                    encoder,
+                    "attributes",
+                    false,
+                    pipelines.attributes(settings.mode),
+                );
             }
         }
         self.shading.encode(encoder, targets);

@@ -11,6 +11,7 @@
 //! upgrades. The test below parses and validates every composed module with naga, so a
 //! broken shader fails `cargo test` without a GPU.
 
+use super::settings::Mode;
 use crate::tree::record::{WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
 
 /// Threads per workgroup of the compute passes (`@workgroup_size(WORKGROUP_SIZE)`).
@@ -24,18 +25,72 @@ const FILES: &[(&str, &str)] = &[
     ("mesh", include_str!("../../shaders/mesh.wgsl")),
     ("present", include_str!("../../shaders/present.wgsl")),
     ("shade", include_str!("../../shaders/shade.wgsl")),
+    ("shape", include_str!("../../shaders/shape.wgsl")),
     ("splat", include_str!("../../shaders/splat.wgsl")),
 ];
 
+/// Which splats a pipeline draws (the WGSL override `SPLAT_CLASS`; its values are
+/// given to WGSL as constants).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum SplatClass {
+    All = 0,
+    /// Those whose rim may lie on an outline (`on_outline` in `shaders/shape.wgsl`).
+    Outline = 1,
+    Inner = 2,
+}
+
+/// Where a splat's colour comes from (the WGSL override `COLOR_SOURCE`; its values are
+/// given to WGSL as constants).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum ColorSource {
+    /// The node's own colour (grey without colours).
+    Node = 0,
+    Levels = 1,
+    Radius = 2,
+    Elevation = 3,
+    /// The node's LiDAR attributes, as `frame.mode` picks.
+    Attributes = 4,
+}
+
+impl ColorSource {
+    pub const COUNT: usize = 5;
+
+    pub fn of(mode: Mode) -> ColorSource {
+        match mode {
+            Mode::Levels => ColorSource::Levels,
+            Mode::Radius => ColorSource::Radius,
+            Mode::Elevation => ColorSource::Elevation,
+            Mode::Classification | Mode::Intensity | Mode::Returns => ColorSource::Attributes,
+            Mode::Shaded | Mode::Normals | Mode::Points | Mode::Mesh | Mode::Edl => {
+                ColorSource::Node
+            }
+        }
+    }
+}
+
 /// The WGSL of the shared constants, generated from their Rust definitions.
 pub fn constants_wgsl() -> String {
-    format!(
+    let mut out = format!(
         "// Generated from Rust (src/render/shaders.rs): constants shared with the CPU.\n\
          const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\n\
          const WEDGE_MARGIN: f32 = {WEDGE_MARGIN:?};\n\
          const WEDGE_ANGLE_BITS: u32 = {WEDGE_ANGLE_BITS}u;\n\
          const WEDGE_TAG: u32 = {WEDGE_TAG}u;\n"
-    )
+    );
+    let values = [
+        ("ALL_SPLATS", SplatClass::All as u32),
+        ("OUTLINE_SPLATS", SplatClass::Outline as u32),
+        ("INNER_SPLATS", SplatClass::Inner as u32),
+        ("COLOR_NODE", ColorSource::Node as u32),
+        ("COLOR_LEVELS", ColorSource::Levels as u32),
+        ("COLOR_RADIUS", ColorSource::Radius as u32),
+        ("COLOR_ELEVATION", ColorSource::Elevation as u32),
+        ("COLOR_ATTRIBUTES", ColorSource::Attributes as u32),
+    ];
+    for (name, value) in values {
+        out.push_str(&format!("const {name}: u32 = {value}u;\n"));
+    }
+    out
 }
 
 fn source(name: &str) -> Option<String> {

@@ -4,19 +4,35 @@
 //! node: every node of the prefix, culled in the vertex stage ("direct"), or the
 //! survivors that `cull.rs` compacted, drawn indirectly ("compacted"). WGSL:
 //! `shaders/splat.wgsl`. The splat passes read each drawn node's record (32 bytes) and
-//! shape (16 bytes, [`SplatShape`]); the cull pass reads only the record.
+//! shape (16 bytes, [`SplatShape`]); the cull pass reads each tested node's record and
+//! each survivor's shape, to sort it into one of its two lists.
 
+use std::sync::OnceLock;
+
+use wgpu::CompareFunction::{Greater, GreaterEqual};
+
+use super::cull::Compaction;
 use super::gbuffer::{ADD, color_targets, depth_state};
 use super::gpu_scene::Share;
-use super::shaders::module;
+use super::settings::Mode;
+use super::shaders::{ColorSource, SplatClass, module};
 use crate::tree::NodeRecord;
 use crate::tree::record::{PointAttributes, SplatShape};
 
-/// The three splat pipelines of one culling strategy.
+/// The splat pipelines of one culling strategy. Pass 2 draws two kinds of splat (WGSL
+/// `SPLAT_CLASS`, `on_outline` in `shaders/shape.wgsl`) with two pipelines: those whose
+/// rim may lie on an outline, with the coverage samples, and the others, without them.
+/// After compute culling each kind is a list of its own, so every pass draws both
+/// lists, each with its pipeline; vertex culling draws passes 1 and points once, and
+/// pass 2 twice, each draw keeping its kind. Each colour source (WGSL `COLOR_SOURCE`)
+/// has its own pass 2 pipelines, made when a frame first needs them: llvmpipe runs
+/// every branch of a shader, so a colour chosen by a uniform `switch` cost every
+/// vertex all of them (a sixth of the knot's frame at 64×64).
 pub(super) struct SplatPipelines {
-    pub visibility: wgpu::RenderPipeline,
-    pub attributes: wgpu::RenderPipeline,
-    pub points: wgpu::RenderPipeline,
+    pub visibility: Vec<wgpu::RenderPipeline>,
+    pub points: Vec<wgpu::RenderPipeline>,
+    attributes: [OnceLock<[wgpu::RenderPipeline; 2]>; ColorSource::COUNT],
+    maker: PipelineMaker,
 }
 
 /// Layouts of bind group 1 and the pipelines of both culling strategies.
@@ -43,52 +59,112 @@ fn vertex_storage(binding: u32, min_size: u64) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// The pipelines of vertex entry point `vs` (bind group 1 laid out by `nodes`).
-fn pipelines(
-    device: &wgpu::Device,
-    shader: &wgpu::ShaderModule,
-    layout: &wgpu::PipelineLayout,
-    vs: &str,
-) -> SplatPipelines {
-    let pipeline = |fs: &str, targets: &[Option<wgpu::ColorTargetState>], depth| {
-        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(fs),
-            layout: Some(layout),
-            vertex: wgpu::VertexState {
-                module: shader,
-                entry_point: Some(vs),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleStrip,
-                ..Default::default()
-            },
-            depth_stencil: depth,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: shader,
-                entry_point: Some(fs),
-                compilation_options: Default::default(),
-                targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
-    };
-    use wgpu::CompareFunction::{Greater, GreaterEqual};
-    SplatPipelines {
-        visibility: pipeline("fs_visibility", &[], depth_state(Greater, true)),
-        attributes: pipeline(
-            "fs_attributes",
-            &color_targets(Some(ADD)),
-            depth_state(GreaterEqual, false),
-        ),
-        points: pipeline(
-            "fs_points",
-            &color_targets(None),
-            depth_state(Greater, true),
-        ),
+/// Makes the splat pipelines of vertex entry point `vs` (bind group 1 laid out as
+/// `layout` says), which reads compacted lists or not.
+struct PipelineMaker {
+    device: wgpu::Device,
+    shader: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+    vs: &'static str,
+    compacted: bool,
+}
+
+impl PipelineMaker {
+    /// The pipeline of fragment entry point `fs`, its vertex stage specialised to the
+    /// splat class and colour source given.
+    fn pipeline(
+        &self,
+        fs: &str,
+        targets: &[Option<wgpu::ColorTargetState>],
+        depth: Option<wgpu::DepthStencilState>,
+        (class, color): (SplatClass, ColorSource),
+    ) -> wgpu::RenderPipeline {
+        self.device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(fs),
+                layout: Some(&self.layout),
+                vertex: wgpu::VertexState {
+                    module: &self.shader,
+                    entry_point: Some(self.vs),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &[
+                            ("SPLAT_CLASS", class as u32 as f64),
+                            ("COLOR_SOURCE", color as u32 as f64),
+                        ],
+                        ..Default::default()
+                    },
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleStrip,
+                    ..Default::default()
+                },
+                depth_stencil: depth,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &self.shader,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+    }
+
+    /// Pass 2's pipelines for `color`: the outline splats', then the others'.
+    fn attributes(&self, color: ColorSource) -> [wgpu::RenderPipeline; 2] {
+        let targets = color_targets(Some(ADD));
+        let depth = || depth_state(GreaterEqual, false);
+        [
+            self.pipeline(
+                "fs_attributes",
+                &targets,
+                depth(),
+                (SplatClass::Outline, color),
+            ),
+            self.pipeline(
+                "fs_attributes_inner",
+                &targets,
+                depth(),
+                (SplatClass::Inner, color),
+            ),
+        ]
+    }
+
+    /// The pipelines of fragment entry point `fs` for all splats: one per list after
+    /// compute culling (outline, inner), else one.
+    fn every_splat(
+        &self,
+        fs: &str,
+        targets: &[Option<wgpu::ColorTargetState>],
+        depth: Option<wgpu::DepthStencilState>,
+    ) -> Vec<wgpu::RenderPipeline> {
+        let classes: &[SplatClass] = match self.compacted {
+            true => &[SplatClass::Outline, SplatClass::Inner],
+            false => &[SplatClass::All],
+        };
+        let draw = |&class| self.pipeline(fs, targets, depth.clone(), (class, ColorSource::Node));
+        classes.iter().map(draw).collect()
+    }
+
+    fn pipelines(self) -> SplatPipelines {
+        let points = color_targets(None);
+        let nearest = depth_state(Greater, true);
+        SplatPipelines {
+            visibility: self.every_splat("fs_visibility", &[], nearest.clone()),
+            points: self.every_splat("fs_points", &points, nearest),
+            attributes: Default::default(),
+            maker: self,
+        }
+    }
+}
+
+impl SplatPipelines {
+    /// Pass 2's pipelines for display mode `mode`, made at the first call.
+    pub fn attributes(&self, mode: Mode) -> &[wgpu::RenderPipeline; 2] {
+        let color = ColorSource::of(mode);
+        self.attributes[color as usize].get_or_init(|| self.maker.attributes(color))
     }
 }
 
@@ -128,40 +204,45 @@ impl SplatPasses {
             })
         };
         let shader = module(device, "splat");
+        let maker = |layout: &wgpu::BindGroupLayout, vs, compacted| PipelineMaker {
+            device: device.clone(),
+            shader: shader.clone(),
+            layout: pipeline_layout(layout),
+            vs,
+            compacted,
+        };
         SplatPasses {
-            direct: pipelines(device, &shader, &pipeline_layout(&nodes_layout), "vs_splat"),
-            compacted: pipelines(
-                device,
-                &shader,
-                &pipeline_layout(&compacted_layout),
-                "vs_splat_compacted",
-            ),
+            direct: maker(&nodes_layout, "vs_splat", false).pipelines(),
+            compacted: maker(&compacted_layout, "vs_splat_compacted", true).pipelines(),
             nodes_layout,
             compacted_layout,
         }
     }
 
-    /// Draws each slice's share of the frame's ranges with `pipeline`: the compacted
-    /// survivors (indirect) after compute culling, else every node of each range (its
+    /// Draws each slice's share of the frame's ranges with each of `pipelines` in turn.
+    /// After compute culling, pipeline k draws the k-th list of survivors (indirect,
+    /// [`Compaction::DRAWS_AT`]); else every pipeline draws every node of each range (its
     /// instances are its nodes' slice indices).
     pub fn draw(
         &self,
         pass: &mut wgpu::RenderPass,
-        pipeline: &wgpu::RenderPipeline,
+        pipelines: &[wgpu::RenderPipeline],
         frame_bind: &wgpu::BindGroup,
         shares: &[Share],
         compacted: bool,
     ) {
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, frame_bind, &[]);
-        for share in shares.iter().filter(|s| s.count > 0) {
-            if compacted {
-                pass.set_bind_group(1, &share.slice.compacted, &[]);
-                pass.draw_indirect(&share.slice.compaction, 0);
-            } else {
-                pass.set_bind_group(1, &share.slice.direct, &[]);
-                for r in &share.ranges {
-                    pass.draw(0..4, r.clone());
+        for (pipeline, draw_at) in pipelines.iter().zip(Compaction::DRAWS_AT) {
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, frame_bind, &[]);
+            for share in shares.iter().filter(|s| s.count > 0) {
+                if compacted {
+                    pass.set_bind_group(1, &share.slice.compacted, &[]);
+                    pass.draw_indirect(&share.slice.compaction, draw_at);
+                } else {
+                    pass.set_bind_group(1, &share.slice.direct, &[]);
+                    for r in &share.ranges {
+                        pass.draw(0..4, r.clone());
+                    }
                 }
             }
         }
@@ -181,6 +262,6 @@ impl SplatPasses {
 mod tests {
     #[test]
     fn the_shape_record_matches_its_wgsl_struct() {
-        super::super::shaders::assert_wgsl_size::<super::SplatShape>("splat", "SplatShape");
+        super::super::shaders::assert_wgsl_size::<super::SplatShape>("shape", "SplatShape");
     }
 }

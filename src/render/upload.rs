@@ -162,7 +162,13 @@ pub(super) fn upload_slice(
         cull: bind(
             device,
             &cull.layout,
-            &[(0, &nodes), (1, &survivors), (2, &compaction), (3, &ranges)],
+            &[
+                (0, &nodes),
+                (1, &survivors),
+                (2, &compaction),
+                (3, &ranges),
+                (4, &shapes),
+            ],
         ),
         compacted: bind(
             device,
