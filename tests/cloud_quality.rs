@@ -4,10 +4,11 @@
 //! triangulation rendered at 4×4 and averaged in linear light (`spt::apps::cloud_quality`).
 //!
 //! What this asserts is what holds today, so that it cannot get worse unnoticed: the
-//! bounds below sit just above the measured medians (kinect FLIP 0.297, holes 0.20 %;
-//! terrain FLIP 0.257, holes 0.47 %; before the surfels of issue 13: 0.37 / 8.9 % and
-//! 0.26 / 1.0 %). Issue 13's hole bound (0.5 %) holds on both, on the frame's every
-//! view; its FLIP target (0.12) is not reached.
+//! bounds below sit just above the measured medians and worst views (kinect FLIP 0.297,
+//! holes 0.12 %, worst view 0.23 %; terrain FLIP 0.257, holes 0.32 %, worst view 0.70 %;
+//! before the surfels of issue 13: 0.37 / 8.9 % and 0.26 / 1.0 %). Issue 13's hole
+//! bound (0.5 %) holds on the frame's every view and on three of the tile's four; its
+//! FLIP target (0.12) is not reached.
 //! The display modes of clouds (EDL, elevation) are checked on the tile.
 
 mod common;
@@ -20,7 +21,8 @@ fn median(figures: &[ViewFigures], get: fn(&ViewFigures) -> f64) -> f64 {
     quantile(&mut figures.iter().map(get).collect::<Vec<_>>(), 0.5).unwrap()
 }
 
-fn check(file: &str, triangulation: Triangulation, max_flip: f64, max_holes: f64) {
+/// Asserts the median FLIP over the views, and the median and worst views' hole rates.
+fn check(file: &str, triangulation: Triangulation, max_flip: f64, max_holes: [f64; 2]) {
     let Some(dir) = common::shared_data() else {
         return;
     };
@@ -35,17 +37,27 @@ fn check(file: &str, triangulation: Triangulation, max_flip: f64, max_holes: f64
     .unwrap();
     let flip = median(&figures, |f| f.splat_flip);
     let holes = median(&figures, |f| f.hole_rate);
+    let worst = figures.iter().map(|f| f.hole_rate).fold(0.0, f64::max);
     let mesh = median(&figures, |f| f.mesh_flip);
     eprintln!(
-        "{file}: splat FLIP {flip:.4} (triangulation at 1x {mesh:.4}), holes {:.3} %",
-        100.0 * holes
+        "{file}: splat FLIP {flip:.4} (triangulation at 1x {mesh:.4}), holes {:.3} % \
+         (worst view {:.3} %)",
+        100.0 * holes,
+        100.0 * worst
     );
     assert!(
         mesh > 0.0 && mesh < 0.1,
         "{file}: the reference's own aliasing {mesh}"
     );
     assert!(flip <= max_flip, "{file}: FLIP {flip} over {max_flip}");
-    assert!(holes <= max_holes, "{file}: holes {holes} over {max_holes}");
+    assert!(
+        holes <= max_holes[0],
+        "{file}: holes {holes} over {max_holes:?}"
+    );
+    assert!(
+        worst <= max_holes[1],
+        "{file}: holes {worst} over {max_holes:?}"
+    );
 }
 
 #[test]
@@ -54,12 +66,17 @@ fn kinect_frame_against_its_sensor_grid() {
         width: 640,
         height: 480,
     };
-    check("kinect_rgb.ply", grid, 0.31, 0.005);
+    check("kinect_rgb.ply", grid, 0.31, [0.0015, 0.003]);
 }
 
 #[test]
 fn terrain_tile_against_its_delaunay_terrain() {
-    check("terrain_utm.ply", Triangulation::Terrain, 0.265, 0.005);
+    check(
+        "terrain_utm.ply",
+        Triangulation::Terrain,
+        0.265,
+        [0.004, 0.0075],
+    );
 }
 
 #[test]
