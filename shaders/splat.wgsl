@@ -13,7 +13,6 @@
 // Each node's LiDAR attributes (one u32 of zero for a model without them).
 @group(1) @binding(3) var<storage, read> attributes: array<u32>;
 
-
 // A splat's clip (src/surfel/clip.rs) in one vec4, for the fragments: a wedge as the
 // unit directions (start, end) of its sides, a line as (cos θ, sin θ, d, LINE_TAG). No
 // clip: a line beyond the ellipse (d = 2).
@@ -384,6 +383,8 @@ const KERNEL_SHARPNESS: f32 = 2.5;
 // bunny, dragon FLIP): 1 (no weighting) 0.0737, 0.0362, 0.0323; 1/16 0.0703, 0.0348,
 // 0.0297; 1/64 0.0700, 0.0346, 0.0294; 1/256 0.0699, 0.0346, 0.0292.
 const BACK_WEIGHT: f32 = 1.0 / 64.0;
+// The least weight a fragment adds: below it, colour·w would fall to the half-float
+// targets' subnormals (a band fragment's is set to 0, see `centre_weight` for the others).
 const MIN_WEIGHT: f32 = 1.0 / 1024.0;
 // What a fragment of the prefilter's band weighs against one whose centre a patch
 // covers: it gives colour to a pixel that no patch covers at its centre (a silhouette
