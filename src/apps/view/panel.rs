@@ -203,10 +203,19 @@ fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
     });
 }
 
+/// Width of the stats grid's label column, points: "splats drawn", the longest.
+const STATS_LABEL_WIDTH: f32 = 90.0;
+
 fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
     let st = &viewer.stats;
     let ms = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.2} ms"));
-    egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
+    // The labels' column is as wide as its longest label from the first frame on (a
+    // grid learns its widths from the frame before, so a first-frame screenshot
+    // overlapped them).
+    let grid = egui::Grid::new("stats")
+        .num_columns(2)
+        .min_col_width(STATS_LABEL_WIDTH);
+    grid.show(ui, |ui| {
         let mut row = |name: &str, value: String| {
             ui.label(name);
             ui.label(value);
@@ -228,7 +237,11 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
                 "splats drawn",
                 match st.gpu.drawn {
                     Some(d) => format!("{} / {}", count(d), count(total)),
-                    None => format!("– / {} (vertex culling)", count(total)),
+                    None if viewer.settings.culling == Culling::Vertex => {
+                        format!("– / {} (vertex culling)", count(total))
+                    }
+                    // The GPU's counts come back a few frames late.
+                    None => format!("– / {}", count(total)),
                 },
             );
             if let Some(f) = &st.frame {
