@@ -70,7 +70,8 @@ fn cull(@builtin(global_invocation_id) id: vec3<u32>) {
     if !splat_visible(node, disk) {
         return;
     }
-    if on_outline(disk, shapes[i]) {
+    let packed = shapes[i];
+    if on_outline(disk, shape_frame(packed, disk.normal), packed.clip) {
         survivors[arrayLength(&survivors) - 1u - atomicAdd(&compaction.outline.instance_count, 1u)] = i;
     } else {
         survivors[atomicAdd(&compaction.inner.instance_count, 1u)] = i;

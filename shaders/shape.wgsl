@@ -11,7 +11,13 @@ struct SplatShape {
     axis: u32,       // major axis u, octahedral snorm16 × 2
     ratio_a: u32,    // minor / major semi-axis, a: two f16
     b_c: u32,        // b, c: two f16
-    clip: u32,       // a line or a wedge, see clip_vector
+    clip: u32,       // a line or a wedge, see is_clipped and clip_vector
+}
+
+// Whether a packed clip (src/surfel/clip.rs) cuts anything: a wedge (its tag sets the
+// high bits) or a line at a finite offset; NO_CLIP is a line at +∞.
+fn is_clipped(bits: u32) -> bool {
+    return (bits >> 16u) != (NO_CLIP >> 16u);
 }
 
 // The ellipse's axes in view space: u along the stored major axis, v = n × u.
@@ -60,13 +66,10 @@ const OUTLINE_MARGIN_PX: f32 = 4.0;
 // slope, it reaches 0 after m/|w| radii, which project to ∫ (m − |w| s) ds = m²/(2|w|)
 // radii on the screen (the surface shrinks by e·n as it turns away). Clouds, whose
 // normals are not oriented outward, sample every splat.
-fn on_outline(disk: ViewDisk, packed: SplatShape) -> bool {
-    let clip_bits = packed.clip;
-    let clipped = (clip_bits & WEDGE_TAG) == WEDGE_TAG || (clip_bits >> 16u) != 0x7C00u;
-    if frame.oriented_normals == 0u || clipped {
+fn on_outline(disk: ViewDisk, f: ShapeFrame, clip_bits: u32) -> bool {
+    if frame.oriented_normals == 0u || is_clipped(clip_bits) {
         return true;
     }
-    let f = shape_frame(packed, disk.normal);
     let g = f.gradient;
     let r = disk.radius;
     let d = length(disk.center);

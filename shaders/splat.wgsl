@@ -24,7 +24,7 @@ fn clip_vector(bits: u32) -> vec4<f32> {
         let e = f32(bits & (steps - 1u)) * step;
         return vec4<f32>(cos(s), sin(s), cos(e), sin(e));
     }
-    if (bits >> 16u) == 0x7C00u {
+    if !is_clipped(bits) {
         return vec4<f32>(1.0, 0.0, 2.0, LINE_TAG);
     }
     let angle = f32(bits & 0xffffu) * (6.283185307179586 / 65536.0);
@@ -150,7 +150,7 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     let ratio = shape.ratio;
     // Vertex culling draws pass 2 twice, each draw keeping its own kind of splat (the
     // compacted draws read lists that the cull pass sorted by the same test).
-    if cull && SPLAT_CLASS != ALL_SPLATS && on_outline(disk, packed) != (SPLAT_CLASS == OUTLINE_SPLATS) {
+    if cull && SPLAT_CLASS != ALL_SPLATS && on_outline(disk, shape, packed.clip) != (SPLAT_CLASS == OUTLINE_SPLATS) {
         return culled();
     }
     // Footprint: the screen box of the ellipse's bounding rectangle p ± R u ± ratio R v.

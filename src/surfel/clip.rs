@@ -45,7 +45,8 @@ pub enum Clip {
 // wedge no larger than a line keeps that memory where it was.
 const _: () = assert!(std::mem::size_of::<Option<Clip>>() == 32);
 
-const NONE: u32 = (f16::INFINITY.to_bits() as u32) << 16;
+/// The packed "no clip": a line at offset +∞ (the shader tests the offset's bits).
+pub const NO_CLIP: u32 = (f16::INFINITY.to_bits() as u32) << 16;
 /// Bits of each of a wedge's two angles (the shader reads this and [`WEDGE_TAG`]).
 pub const WEDGE_ANGLE_BITS: u32 = 13;
 /// The top bits that mark a wedge: f16 bits 0b111111 (−∞ or a NaN), never a line's
@@ -96,7 +97,7 @@ impl Clip {
                 let end = steps(end).ceil() as u32 & mask;
                 WEDGE_TAG | start << WEDGE_ANGLE_BITS | end
             }
-            _ => NONE,
+            _ => NO_CLIP,
         }
     }
 
