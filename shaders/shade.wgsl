@@ -2,14 +2,23 @@
 #import fullscreen
 
 // Pass 3: normalize the blended attributes and shade each pixel (Blinn-Phong with a
-// movable light); background where no splat contributed. Writes an sRGB target.
+// movable light); background where no splat contributed, unless the pixel is a gap
+// between two pixels of one surface (`gap_fill`). Writes an sRGB target and the mask
+// of the pixels that show a surface.
 
 @group(1) @binding(0) var color_sum: texture_2d<f32>;
 @group(1) @binding(1) var normal_sum: texture_2d<f32>;
 // The four coverage samples of each pixel (max over the splats drawn there).
 @group(1) @binding(2) var coverage: texture_2d<f32>;
-// The depth of the nearest surface at the pixel centre (reversed Z; 0: none).
-@group(1) @binding(3) var depth: texture_depth_2d;
+// The depth of the nearest surface at the pixel centre (reversed Z; 0: none), read as
+// a float texture (GLSL cannot load texels of a depth texture).
+@group(1) @binding(3) var depth: texture_2d<f32>;
+
+// A pixel's G-buffer sums: colour·w and w, normal·w and view distance·w.
+struct Sums {
+    c: vec4<f32>,
+    nz: vec4<f32>,
+}
 
 // The pixel and its four neighbours.
 const CROSS = array<vec2<i32>, 5>(vec2<i32>(0, 0), vec2<i32>(1, 0), vec2<i32>(-1, 0), vec2<i32>(0, 1), vec2<i32>(0, -1));
@@ -20,37 +29,60 @@ const CROSS = array<vec2<i32>, 5>(vec2<i32>(0, 0), vec2<i32>(1, 0), vec2<i32>(-1
 fn surrounded(texel: vec2<i32>) -> bool {
     let last = vec2<i32>(textureDimensions(depth)) - 1;
     for (var k = 0; k < 5; k++) {
-        if textureLoad(depth, clamp(texel + CROSS[k], vec2<i32>(0), last), 0) <= 0.0 {
+        if textureLoad(depth, clamp(texel + CROSS[k], vec2<i32>(0), last), 0).x <= 0.0 {
             return false;
         }
     }
     return true;
 }
 
+// Pass 3's targets: the shaded colour, and 1 where the pixel shows a surface, 0 where
+// it shows the background (what image metrics read back as the covered pixels).
+struct Shaded {
+    @location(0) color: vec4<f32>,
+    @location(1) covered: f32,
+}
+
 @fragment
-fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
+fn fs_shade(@builtin(position) frag: vec4<f32>) -> Shaded {
     let texel = vec2<i32>(frag.xy);
-    let c = textureLoad(color_sum, texel, 0);
-    let nz = textureLoad(normal_sum, texel, 0);
-    if c.w <= 0.0 {
-        return vec4<f32>(frame.background.rgb, 1.0);
+    var sums = Sums(textureLoad(color_sum, texel, 0), textureLoad(normal_sum, texel, 0));
+    var covered = sums.c.w > 0.5 * frame.coverage_weight && any(textureLoad(coverage, texel, 0) > vec4<f32>(0.0));
+    var filled = false;
+    if textureLoad(depth, texel, 0).x <= 0.0 {
+        let gap = gap_fill(texel);
+        if gap.c.w > 0.0 {
+            sums = gap;
+            filled = true;
+            covered = true;
+        }
     }
-    let color = c.rgb / c.w;
-    let n = normalize(nz.xyz);
+    if sums.c.w <= 0.0 {
+        return Shaded(vec4<f32>(frame.background.rgb, 1.0), 0.0);
+    }
+    let alpha = select(coverage_alpha(texel, sums.c.w), 1.0, filled);
+    return Shaded(vec4<f32>(shade(frag.xy, texel, sums, alpha), 1.0), f32(covered));
+}
+
+// The colour of a pixel whose G-buffer sums are `sums`, blended over the background
+// by `alpha`.
+fn shade(frag: vec2<f32>, texel: vec2<i32>, sums: Sums, alpha: f32) -> vec3<f32> {
+    let color = sums.c.rgb / sums.c.w;
+    let n = normalize(sums.nz.xyz);
     if frame.mode == MODE_NORMALS {
-        return vec4<f32>(n * 0.5 + 0.5, 1.0);
+        return n * 0.5 + 0.5;
     }
     if frame.mode == MODE_EDL {
-        return vec4<f32>(mix(frame.background.rgb, color * eye_dome(texel), coverage_alpha(texel, c.w)), 1.0);
+        return mix(frame.background.rgb, color * eye_dome(texel), alpha);
     }
-    let q = view_ray(frag.xy) * (nz.w / c.w);
+    let q = view_ray(frag) * (sums.nz.w / sums.c.w);
     let l = normalize(frame.light_dir);
     let v = normalize(-q);
     let h = normalize(l + v);
     let diffuse = max(dot(n, l), 0.0);
     let specular = frame.specular * pow(max(dot(n, h), 0.0), 32.0) * select(0.0, 1.0, diffuse > 0.0);
     let shaded = color * (0.25 + 0.75 * diffuse) + vec3<f32>(specular);
-    return vec4<f32>(mix(frame.background.rgb, shaded, coverage_alpha(texel, c.w)), 1.0);
+    return mix(frame.background.rgb, shaded, alpha);
 }
 
 // The share of the pixel's samples that the splats cover (all of it where the pixel
@@ -78,7 +110,7 @@ const EDL_DIRECTIONS = array<vec2<f32>, 8>(
 // of pass 2 is a half-float sum, whose rounding the factor 300 would make visible.
 // Background neighbours count nothing.
 fn eye_dome(texel: vec2<i32>) -> f32 {
-    let here = textureLoad(depth, texel, 0);
+    let here = textureLoad(depth, texel, 0).x;
     if here <= 0.0 {
         return 1.0;
     }
@@ -86,10 +118,84 @@ fn eye_dome(texel: vec2<i32>) -> f32 {
     var sum = 0.0;
     for (var k = 0; k < 8; k++) {
         let offset = vec2<i32>(round(frame.edl_radius_px * EDL_DIRECTIONS[k]));
-        let there = textureLoad(depth, clamp(texel + offset, vec2<i32>(0), last), 0);
+        let there = textureLoad(depth, clamp(texel + offset, vec2<i32>(0), last), 0).x;
         if there > 0.0 {
             sum += max(0.0, log2(there) - log2(here));
         }
     }
     return exp(-300.0 * frame.edl_strength * sum / 8.0);
+}
+
+// Directions across which a pixel may be a gap: x, y and the two diagonals.
+const GAP_DIRECTIONS = array<vec2<i32>, 4>(vec2<i32>(1, 0), vec2<i32>(0, 1), vec2<i32>(1, 1), vec2<i32>(1, -1));
+
+// How much nearer one side of a gap may be than the other, as a ratio of pass 1's
+// reversed-Z depths (= inverse view distances): 10 %.
+const GAP_DEPTH_RATIO = 1.1;
+
+// Across how many of the four directions a pixel must lie between one surface's pixels
+// to be a gap: three, as inside a slit of any slope; the notches of an outline are
+// closed across fewer.
+const GAP_MIN_DIRECTIONS = 2;
+
+// Fills a pixel that no splat reached when, along x, y or a diagonal, the pixels on
+// both sides within two pixels show one surface (pass 1's depth at their centres,
+// within GAP_DEPTH_RATIO): the sampling left a slit narrower than the splats' spacing,
+// which the triangles between the same samples would cover. Returns the sums of the
+// two sides' normalized attributes, for every direction across which the pixel is such
+// a gap (w = the number of pixels summed; w = 0: not a gap). Only clouds whose
+// normals were estimated (not oriented) are filled, as `on_outline` tells them: a
+// mesh's splats cover its triangles by construction, so a gap between them is the
+// mesh's own (and the mesh pass has none); plain points show the splats as they are.
+fn gap_fill(texel: vec2<i32>) -> Sums {
+    var sums = Sums(vec4<f32>(0.0), vec4<f32>(0.0));
+    if frame.mode == MODE_MESH || frame.mode == MODE_POINTS || frame.oriented_normals != 0u {
+        return sums;
+    }
+    var across = 0;
+    for (var k = 0; k < 4; k++) {
+        let d = GAP_DIRECTIONS[k];
+        let ahead = surface_depth(texel + d);
+        let behind = surface_depth(texel - d);
+        var sides = vec2<i32>(0);
+        if one_surface(ahead, behind) {
+            sides = vec2<i32>(1, 1);
+        } else if one_surface(ahead, surface_depth(texel - 2 * d)) {
+            sides = vec2<i32>(1, 2);
+        } else if one_surface(surface_depth(texel + 2 * d), behind) {
+            sides = vec2<i32>(2, 1);
+        } else {
+            continue;
+        }
+        add_normalized(&sums, texel + sides.x * d);
+        add_normalized(&sums, texel - sides.y * d);
+        across += 1;
+    }
+    if across < GAP_MIN_DIRECTIONS {
+        sums = Sums(vec4<f32>(0.0), vec4<f32>(0.0));
+    }
+    return sums;
+}
+
+// Pass 1's depth at a texel's centre; 0 (none) outside the target.
+fn surface_depth(texel: vec2<i32>) -> f32 {
+    if any(texel < vec2<i32>(0)) || any(texel >= vec2<i32>(textureDimensions(depth))) {
+        return 0.0;
+    }
+    return textureLoad(depth, texel, 0).x;
+}
+
+fn one_surface(a: f32, b: f32) -> bool {
+    return min(a, b) > 0.0 && max(a, b) <= GAP_DEPTH_RATIO * min(a, b);
+}
+
+// Adds a texel's normalized colour, unit normal and view distance to `sums`, weight 1.
+fn add_normalized(sums: ptr<function, Sums>, texel: vec2<i32>) {
+    let c = textureLoad(color_sum, texel, 0);
+    if c.w <= 0.0 {
+        return;
+    }
+    let nz = textureLoad(normal_sum, texel, 0);
+    (*sums).c += vec4<f32>(c.rgb / c.w, 1.0);
+    (*sums).nz += vec4<f32>(normalize(nz.xyz), nz.w / c.w);
 }

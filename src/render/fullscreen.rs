@@ -3,14 +3,15 @@
 //! presentation.
 
 /// A full-screen pipeline: `vs_fullscreen` (which `module` must import) and the
-/// fragment stage `fragment` writing one target of `format`.
+/// fragment stage `fragment` writing one target of each of `formats`.
 pub fn fullscreen_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     fragment: &str,
-    format: wgpu::TextureFormat,
+    formats: &[wgpu::TextureFormat],
 ) -> wgpu::RenderPipeline {
+    let targets: Vec<_> = formats.iter().map(|f| Some((*f).into())).collect();
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(fragment),
         layout: Some(layout),
@@ -27,7 +28,7 @@ pub fn fullscreen_pipeline(
             module,
             entry_point: Some(fragment),
             compilation_options: Default::default(),
-            targets: &[Some(format.into())],
+            targets: &targets,
         }),
         multiview_mask: None,
         cache: None,

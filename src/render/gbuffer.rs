@@ -39,7 +39,6 @@ pub(super) fn target(
 pub(super) struct GBuffer {
     pub color_sum: wgpu::Texture,
     pub normal_sum: wgpu::Texture,
-    pub coverage: wgpu::Texture,
     pub color_view: wgpu::TextureView,
     pub normal_view: wgpu::TextureView,
     pub coverage_view: wgpu::TextureView,
@@ -65,7 +64,6 @@ impl GBuffer {
             color_view: color_sum.create_view(&Default::default()),
             normal_view: normal_sum.create_view(&Default::default()),
             coverage_view: coverage.create_view(&Default::default()),
-            coverage,
             depth_view: depth.create_view(&Default::default()),
             color_sum,
             normal_sum,

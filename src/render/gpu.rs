@@ -17,6 +17,9 @@ pub struct Gpu {
     pub info: wgpu::AdapterInfo,
     /// Timestamp queries are available (GPU times are measured).
     pub timestamps: bool,
+    /// A texture can be viewed in another format of its family (not on GL): the viewer
+    /// then draws its panel through the output's gamma view ([`crate::render::overlay_format`]).
+    pub view_formats: bool,
 }
 
 /// Parses a backend name: vulkan, gl, metal, dx12, or `all` (any).
@@ -91,6 +94,8 @@ impl Gpu {
         }))
         .context("cannot open the GPU device")?;
         let info = adapter.get_info();
+        let view_formats = (adapter.get_downlevel_capabilities().flags)
+            .contains(wgpu::DownlevelFlags::VIEW_FORMATS);
         Ok(Gpu {
             instance,
             adapter,
@@ -98,6 +103,7 @@ impl Gpu {
             queue,
             info,
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            view_formats,
         })
     }
 

@@ -99,21 +99,12 @@ pub(super) fn unpad_rgba8(data: &[u8], width: u32, height: u32) -> Vec<u8> {
         .collect()
 }
 
-/// Which pixels of a padded Rgba16Float copy have a weight (alpha) above `threshold`.
-pub(super) fn coverage(data: &[u8], width: u32, height: u32, threshold: f32) -> Vec<bool> {
-    let row = padded_row(width, 8) as usize;
+/// Which pixels of a padded R8Unorm copy of a mask are set.
+pub(super) fn mask(data: &[u8], width: u32, height: u32) -> Vec<bool> {
+    let row = padded_row(width, 1) as usize;
     (0..height as usize)
-        .flat_map(|y| (0..width as usize).map(move |x| y * row + x * 8 + 6))
-        .map(|at| half::f16::from_le_bytes([data[at], data[at + 1]]).to_f32() > threshold)
-        .collect()
-}
-
-/// Which pixels of a padded Rgba8 copy of the coverage samples have one covered.
-pub(super) fn any_sample(data: &[u8], width: u32, height: u32) -> Vec<bool> {
-    let row = padded_row(width, 4) as usize;
-    (0..height as usize)
-        .flat_map(|y| (0..width as usize).map(move |x| y * row + x * 4))
-        .map(|at| data[at..at + 4].iter().any(|v| *v > 0))
+        .flat_map(|y| &data[y * row..y * row + width as usize])
+        .map(|v| *v > 127)
         .collect()
 }
 

@@ -97,7 +97,7 @@ impl Renderer {
         Ok(FrameTargets::new(
             device,
             size,
-            self.gpu.timestamps,
+            (self.gpu.timestamps, self.gpu.view_formats),
             &self.frame_layout,
             (gbuffer, gbuffer_bind),
         ))
@@ -264,30 +264,18 @@ impl Renderer {
         let device = &self.gpu.device;
         let mut encoder = device.create_command_encoder(&Default::default());
         let frame = self.encode(&mut encoder, targets, scene, gpu_scene, camera, settings)?;
-        // Read back: the output, the weight channel of the colour sum, the coverage
-        // samples and the blended depth.
+        // Read back: the output, pass 3's covered mask, and the colour and normal sums
+        // (their weights and view distances give the depth).
         let g = &targets.gbuffer;
         let out_buffer = readback::copy_texture(device, &mut encoder, &targets.output, 4);
+        let covered_buffer = readback::copy_texture(device, &mut encoder, &targets.covered, 1);
         let weight_buffer = readback::copy_texture(device, &mut encoder, &g.color_sum, 8);
         let normal_buffer = readback::copy_texture(device, &mut encoder, &g.normal_sum, 8);
-        let samples_buffer = readback::copy_texture(device, &mut encoder, &g.coverage, 4);
         let counters = read_counters_now(&self.gpu, encoder, targets, gpu_scene, &frame)?;
         let (width, height) = targets.size;
         let rgba = readback::unpad_rgba8(&readback::read(device, &out_buffer)?, width, height);
-        // A pixel counts as covered when a splat covers one of its samples (and, with
-        // coverage_weight, once it is at least half opaque).
-        let coverage_threshold = if settings.mode == Mode::Shaded {
-            0.5 * settings.coverage_weight
-        } else {
-            0.0
-        };
+        let covered = readback::mask(&readback::read(device, &covered_buffer)?, width, height);
         let weights = readback::read(device, &weight_buffer)?;
-        let samples = readback::read(device, &samples_buffer)?;
-        let covered = readback::coverage(&weights, width, height, coverage_threshold)
-            .into_iter()
-            .zip(readback::any_sample(&samples, width, height))
-            .map(|(a, b)| a && b)
-            .collect();
         let depth = readback::depth(
             &weights,
             &readback::read(device, &normal_buffer)?,

@@ -6,7 +6,7 @@
 use super::fullscreen::{fragment_texture, fullscreen_pipeline};
 use super::gbuffer::{GBuffer, store};
 use super::shaders::module;
-use super::targets::{FrameTargets, OUTPUT};
+use super::targets::{COVERED, FrameTargets, OUTPUT};
 
 pub(super) struct ShadingPass {
     /// Bind group 1: the colour and normal sums, the coverage and the depth, as textures.
@@ -22,16 +22,8 @@ impl ShadingPass {
                 fragment_texture(0),
                 fragment_texture(1),
                 fragment_texture(2),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                // The depth, as an unfilterable float texture (see shade.wgsl).
+                fragment_texture(3),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -40,7 +32,8 @@ impl ShadingPass {
             immediate_size: 0,
         });
         let shader = module(device, "shade");
-        let pipeline = fullscreen_pipeline(device, &pipeline_layout, &shader, "fs_shade", OUTPUT);
+        let targets = [OUTPUT, COVERED];
+        let pipeline = fullscreen_pipeline(device, &pipeline_layout, &shader, "fs_shade", &targets);
         ShadingPass { layout, pipeline }
     }
 
@@ -62,16 +55,20 @@ impl ShadingPass {
         })
     }
 
-    /// Shades `targets`' G-buffer into its output; writes the frame's end timestamp.
+    /// Shades `targets`' G-buffer into its output and its covered mask; writes the
+    /// frame's end timestamp.
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, targets: &FrameTargets) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("shade"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &targets.output_view,
+        let attach = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: store(wgpu::LoadOp::Clear(wgpu::Color::BLACK)),
-            })],
+            })
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shade"),
+            color_attachments: &[attach(&targets.output_view), attach(&targets.covered_view)],
             depth_stencil_attachment: None,
             timestamp_writes: targets.end_timestamp(),
             occlusion_query_set: None,

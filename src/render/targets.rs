@@ -3,10 +3,12 @@
 //! the bind groups that point at them, and the timestamp queries.
 
 use super::frame::FrameUniform;
-use super::gbuffer::GBuffer;
+use super::gbuffer::{GBuffer, target};
 
 /// The shaded output: written linear, stored sRGB-encoded.
-pub(super) const OUTPUT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+pub const OUTPUT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Whether a pixel of the output shows a surface (1) or the background (0).
+pub(super) const COVERED: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 /// The same bytes seen without sRGB decoding (overlays, presentation).
 pub const OUTPUT_GAMMA: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
@@ -15,10 +17,14 @@ pub struct FrameTargets {
     pub size: (u32, u32),
     pub(super) gbuffer: GBuffer,
     /// The shaded frame: RGBA8, sRGB-encoded. Can also be viewed as plain `Rgba8Unorm`
-    /// ([`FrameTargets::gamma_view`]) to draw an overlay in gamma space or to copy the
+    /// ([`FrameTargets::overlay_view`]) to draw an overlay in gamma space or to copy the
     /// bytes as they are.
     pub output: wgpu::Texture,
     pub(super) output_view: wgpu::TextureView,
+    /// Pass 3's mask of the pixels that show a surface ([`COVERED`]), read back with
+    /// the output.
+    pub(super) covered: wgpu::Texture,
+    pub(super) covered_view: wgpu::TextureView,
     pub(super) frame_buffer: wgpu::Buffer,
     pub(super) frame_bind: wgpu::BindGroup,
     pub(super) gbuffer_bind: wgpu::BindGroup,
@@ -28,11 +34,12 @@ pub struct FrameTargets {
 
 impl FrameTargets {
     /// Targets of `size` around `gbuffer` (of the same size) and its bind group for
-    /// shading; the frame uniform bound as `frame_layout` says.
+    /// shading; the frame uniform bound as `frame_layout` says; with timestamp queries
+    /// and the output's gamma view where the adapter has them ([`super::Gpu`]).
     pub(super) fn new(
         device: &wgpu::Device,
         size: (u32, u32),
-        timestamps: bool,
+        (timestamps, view_formats): (bool, bool),
         frame_layout: &wgpu::BindGroupLayout,
         (gbuffer, gbuffer_bind): (GBuffer, wgpu::BindGroup),
     ) -> FrameTargets {
@@ -50,8 +57,15 @@ impl FrameTargets {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::COPY_SRC
                 | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[OUTPUT_GAMMA],
+            view_formats: if view_formats { &[OUTPUT_GAMMA] } else { &[] },
         });
+        let covered = target(
+            device,
+            size,
+            COVERED,
+            "covered",
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
         let frame_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame"),
             size: std::mem::size_of::<FrameUniform>() as u64,
@@ -84,6 +98,8 @@ impl FrameTargets {
             size,
             output_view: output.create_view(&Default::default()),
             output,
+            covered_view: covered.create_view(&Default::default()),
+            covered,
             gbuffer,
             frame_buffer,
             frame_bind,
@@ -114,14 +130,22 @@ impl FrameTargets {
             })
     }
 
-    /// The output seen as plain `Rgba8Unorm`: its bytes are already sRGB-encoded, so an
-    /// overlay drawn through this view blends in gamma space, as egui expects.
-    pub fn gamma_view(&self) -> wgpu::TextureView {
+    /// The output seen as `format`: [`OUTPUT_GAMMA`] (its bytes as they are, already
+    /// sRGB-encoded, so that an overlay blends in gamma space as egui expects, and a copy
+    /// moves the bytes unchanged) where the adapter can reinterpret views, else
+    /// [`OUTPUT`] itself ([`overlay_format`]).
+    pub fn overlay_view(&self, format: wgpu::TextureFormat) -> wgpu::TextureView {
         self.output.create_view(&wgpu::TextureViewDescriptor {
-            format: Some(OUTPUT_GAMMA),
+            format: Some(format),
             ..Default::default()
         })
     }
+}
+
+/// The format the viewer sees the output in, to draw its panel and to present it:
+/// [`OUTPUT_GAMMA`] where views can be reinterpreted (not on GL), else [`OUTPUT`].
+pub fn overlay_format(view_formats: bool) -> wgpu::TextureFormat {
+    if view_formats { OUTPUT_GAMMA } else { OUTPUT }
 }
 
 /// Checks that a `width`×`height` frame fits the adapter's limits (texture side, and a

@@ -6,14 +6,17 @@ use std::sync::Arc;
 use winit::window::Window;
 
 use crate::render::{
-    FrameTargets, OUTPUT_GAMMA, Renderer, fragment_texture, fullscreen_pipeline, shader_module,
+    FrameTargets, Renderer, fragment_texture, fullscreen_pipeline, overlay_format, shader_module,
 };
 
 pub struct Presenter {
     window: Arc<Window>,
     surface: wgpu::Surface<'static>,
     config: wgpu::SurfaceConfiguration,
-    /// The surface seen without sRGB encoding: the frame's bytes are copied as they are.
+    /// The frame and the surface, both seen without sRGB encoding, so that the frame's
+    /// bytes are copied as they are; or, where views cannot be reinterpreted (GL), both
+    /// with it, so that they are decoded and encoded again (exactly, at 8 bits).
+    source_format: wgpu::TextureFormat,
     view_format: wgpu::TextureFormat,
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::RenderPipeline,
@@ -36,13 +39,18 @@ impl Presenter {
     ) -> anyhow::Result<Presenter> {
         let gpu = &renderer.gpu;
         let caps = surface.get_capabilities(&gpu.adapter);
+        let source_format = overlay_format(gpu.view_formats);
         let format = *caps
             .formats
             .iter()
-            .find(|f| !f.is_srgb())
+            .find(|f| f.is_srgb() == source_format.is_srgb())
             .or(caps.formats.first())
             .ok_or_else(|| anyhow::anyhow!("the GPU cannot draw into this window"))?;
-        let view_format = format.remove_srgb_suffix();
+        let view_format = if gpu.view_formats {
+            format.remove_srgb_suffix()
+        } else {
+            format
+        };
         let size = window.inner_size();
         let config = wgpu::SurfaceConfiguration {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
@@ -74,12 +82,18 @@ impl Presenter {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline =
-            fullscreen_pipeline(device, &pipeline_layout, &module, "fs_present", view_format);
+        let pipeline = fullscreen_pipeline(
+            device,
+            &pipeline_layout,
+            &module,
+            "fs_present",
+            &[view_format],
+        );
         let presenter = Presenter {
             window,
             surface,
             config,
+            source_format,
             view_format,
             layout,
             pipeline,
@@ -163,10 +177,7 @@ impl Presenter {
         texture: wgpu::SurfaceTexture,
     ) {
         let device = &renderer.gpu.device;
-        let source = targets.output.create_view(&wgpu::TextureViewDescriptor {
-            format: Some(OUTPUT_GAMMA),
-            ..Default::default()
-        });
+        let source = targets.overlay_view(self.source_format);
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("present"),
             layout: &self.layout,
