@@ -59,13 +59,8 @@ impl FrameTargets {
                 | wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: if view_formats { &[OUTPUT_GAMMA] } else { &[] },
         });
-        let covered = target(
-            device,
-            size,
-            COVERED,
-            "covered",
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        );
+        let read_back = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+        let covered = target(device, size, COVERED, "covered", read_back);
         let frame_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame"),
             size: std::mem::size_of::<FrameUniform>() as u64,
