@@ -134,12 +134,14 @@ const GAP_DIRECTIONS = array<vec2<i32>, 4>(vec2<i32>(1, 0), vec2<i32>(0, 1), vec
 const GAP_DEPTH_RATIO = 1.1;
 
 // Across how many of the four directions a pixel must lie between one surface's pixels
-// to be a gap: three, as inside a slit of any slope; the notches of an outline are
-// closed across fewer.
+// to be a gap: two. A pixel inside a slit of any slope lies across at least two (the
+// one nearest the slit's normal and a diagonal); a one-pixel notch in an outline,
+// across one. (One: the outline's notches filled, more spill; three: the tile's worst
+// view kept 0.58 % holes. README, issue 13.)
 const GAP_MIN_DIRECTIONS = 2;
 
-// Fills a pixel that no splat reached when, along x, y or a diagonal, the pixels on
-// both sides within two pixels show one surface (pass 1's depth at their centres,
+// Fills a pixel whose centre no splat covers when, along GAP_MIN_DIRECTIONS or more of
+// x, y and the diagonals, the pixels on both sides within two pixels show one surface (pass 1's depth at their centres,
 // within GAP_DEPTH_RATIO): the sampling left a slit narrower than the splats' spacing,
 // which the triangles between the same samples would cover. Returns the sums of the
 // two sides' normalized attributes, for every direction across which the pixel is such
@@ -185,6 +187,7 @@ fn surface_depth(texel: vec2<i32>) -> f32 {
     return textureLoad(depth, texel, 0).x;
 }
 
+// Whether two pass 1 depths are both of a surface, and within GAP_DEPTH_RATIO.
 fn one_surface(a: f32, b: f32) -> bool {
     return min(a, b) > 0.0 && max(a, b) <= GAP_DEPTH_RATIO * min(a, b);
 }
