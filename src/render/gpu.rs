@@ -4,6 +4,8 @@
 
 use anyhow::{Context, bail};
 
+use super::targets::{OUTPUT, OUTPUT_GAMMA};
+
 /// Where the backend choice comes from when none is given.
 pub const BACKEND_ENV: &str = "SPT_BACKEND";
 
@@ -18,7 +20,7 @@ pub struct Gpu {
     /// Timestamp queries are available (GPU times are measured).
     pub timestamps: bool,
     /// A texture can be viewed in another format of its family (not on GL): the viewer
-    /// then draws its panel through the output's gamma view ([`crate::render::overlay_format`]).
+    /// then draws its panel through the output's gamma view ([`Gpu::overlay_format`]).
     pub view_formats: bool,
 }
 
@@ -105,6 +107,16 @@ impl Gpu {
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
             view_formats,
         })
+    }
+
+    /// The format the viewer sees the output in, to draw its panel and to present it:
+    /// [`OUTPUT_GAMMA`] where views can be reinterpreted (not on GL), else [`OUTPUT`].
+    pub fn overlay_format(&self) -> wgpu::TextureFormat {
+        if self.view_formats {
+            OUTPUT_GAMMA
+        } else {
+            OUTPUT
+        }
     }
 
     /// "name (backend, driver)".

@@ -44,4 +44,4 @@ pub use plan::EncodedFrame;
 pub use renderer::{FrameStats, Image, Renderer};
 pub use settings::{Culling, Mode, Settings};
 pub use shaders::module as shader_module;
-pub use targets::{FrameTargets, OUTPUT, OUTPUT_GAMMA, overlay_format};
+pub use targets::{FrameTargets, OUTPUT, OUTPUT_GAMMA};

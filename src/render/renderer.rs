@@ -95,9 +95,8 @@ impl Renderer {
         let gbuffer = GBuffer::new(device, size);
         let gbuffer_bind = self.shading.bind(device, &gbuffer);
         Ok(FrameTargets::new(
-            device,
+            &self.gpu,
             size,
-            (self.gpu.timestamps, self.gpu.view_formats),
             &self.frame_layout,
             (gbuffer, gbuffer_bind),
         ))

@@ -2,6 +2,7 @@
 //! keeps one per window size): the G-buffer, the shaded output, the frame uniform and
 //! the bind groups that point at them, and the timestamp queries.
 
+use super::Gpu;
 use super::frame::FrameUniform;
 use super::gbuffer::{GBuffer, target};
 
@@ -35,14 +36,14 @@ pub struct FrameTargets {
 impl FrameTargets {
     /// Targets of `size` around `gbuffer` (of the same size) and its bind group for
     /// shading; the frame uniform bound as `frame_layout` says; with timestamp queries
-    /// and the output's gamma view where the adapter has them ([`super::Gpu`]).
+    /// and the output's gamma view where `gpu` has them.
     pub(super) fn new(
-        device: &wgpu::Device,
+        gpu: &Gpu,
         size: (u32, u32),
-        (timestamps, view_formats): (bool, bool),
         frame_layout: &wgpu::BindGroupLayout,
         (gbuffer, gbuffer_bind): (GBuffer, wgpu::BindGroup),
     ) -> FrameTargets {
+        let device = &gpu.device;
         let output = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("output"),
             size: wgpu::Extent3d {
@@ -57,7 +58,11 @@ impl FrameTargets {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::COPY_SRC
                 | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: if view_formats { &[OUTPUT_GAMMA] } else { &[] },
+            view_formats: if gpu.view_formats {
+                &[OUTPUT_GAMMA]
+            } else {
+                &[]
+            },
         });
         let read_back = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
         let covered = target(device, size, COVERED, "covered", read_back);
@@ -75,7 +80,7 @@ impl FrameTargets {
                 resource: frame_buffer.as_entire_binding(),
             }],
         });
-        let queries = timestamps.then(|| {
+        let queries = gpu.timestamps.then(|| {
             let set = device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("passes"),
                 ty: wgpu::QueryType::Timestamp,
@@ -128,19 +133,13 @@ impl FrameTargets {
     /// The output seen as `format`: [`OUTPUT_GAMMA`] (its bytes as they are, already
     /// sRGB-encoded, so that an overlay blends in gamma space as egui expects, and a copy
     /// moves the bytes unchanged) where the adapter can reinterpret views, else
-    /// [`OUTPUT`] itself ([`overlay_format`]).
+    /// [`OUTPUT`] itself ([`super::Gpu::overlay_format`]).
     pub fn overlay_view(&self, format: wgpu::TextureFormat) -> wgpu::TextureView {
         self.output.create_view(&wgpu::TextureViewDescriptor {
             format: Some(format),
             ..Default::default()
         })
     }
-}
-
-/// The format the viewer sees the output in, to draw its panel and to present it:
-/// [`OUTPUT_GAMMA`] where views can be reinterpreted (not on GL), else [`OUTPUT`].
-pub fn overlay_format(view_formats: bool) -> wgpu::TextureFormat {
-    if view_formats { OUTPUT_GAMMA } else { OUTPUT }
 }
 
 /// Checks that a `width`×`height` frame fits the adapter's limits (texture side, and a

@@ -22,7 +22,7 @@ use super::viewer::Viewer;
 use crate::apps::stats::Summary;
 use crate::apps::text::count;
 use crate::render::metrics::save_png;
-use crate::render::{Gpu, Renderer, overlay_format};
+use crate::render::{Gpu, Renderer};
 
 /// Sent to the event loop from other threads: something finished, redraw.
 #[derive(Debug, Clone, Copy)]
@@ -128,7 +128,7 @@ impl App {
         );
         let egui_renderer = egui_wgpu::Renderer::new(
             &renderer.gpu.device,
-            overlay_format(renderer.gpu.view_formats),
+            renderer.gpu.overlay_format(),
             egui_wgpu::RendererOptions::default(),
         );
         let mut viewer = Viewer::new(renderer, self.args.render.settings());
@@ -560,7 +560,7 @@ fn paint_panel(
         return;
     };
     {
-        let view = targets.overlay_view(overlay_format(renderer.gpu.view_formats));
+        let view = targets.overlay_view(renderer.gpu.overlay_format());
         let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("panel"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {

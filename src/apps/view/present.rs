@@ -5,9 +5,7 @@ use std::sync::Arc;
 
 use winit::window::Window;
 
-use crate::render::{
-    FrameTargets, Renderer, fragment_texture, fullscreen_pipeline, overlay_format, shader_module,
-};
+use crate::render::{FrameTargets, Renderer, fragment_texture, fullscreen_pipeline, shader_module};
 
 pub struct Presenter {
     window: Arc<Window>,
@@ -39,7 +37,7 @@ impl Presenter {
     ) -> anyhow::Result<Presenter> {
         let gpu = &renderer.gpu;
         let caps = surface.get_capabilities(&gpu.adapter);
-        let source_format = overlay_format(gpu.view_formats);
+        let source_format = gpu.overlay_format();
         let format = *caps
             .formats
             .iter()
