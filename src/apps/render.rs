@@ -39,6 +39,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
         }
     };
     let (mut gpu_ms, mut wall_ms) = (Vec::new(), Vec::new());
+    let mut passes_ms: [Vec<f64>; 3] = Default::default();
     let mut last = None;
     for _ in 0..args.frames {
         let start = std::time::Instant::now();
@@ -54,6 +55,12 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
             .with_context(|| format!("rendering {}", model.display()))?;
         wall_ms.push(start.elapsed().as_secs_f64() * 1e3);
         gpu_ms.extend(frame.1.gpu_ms);
+        for (all, ms) in passes_ms
+            .iter_mut()
+            .zip(frame.1.passes_ms.into_iter().flatten())
+        {
+            all.push(ms);
+        }
         last = Some(frame);
     }
     let (image, stats) = last.expect("at least one frame");
@@ -93,6 +100,12 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
         None => println!("gpu time  not measured (the adapter has no timestamp queries)"),
         Some(s) => {
             println!("gpu time  {}", summary(&mut gpu_ms));
+            let [visibility, attributes, shading] =
+                passes_ms.map(|mut v| Summary::of(&mut v).map_or(0.0, |s| s.median));
+            println!(
+                "passes    visibility {visibility:.3} ms, attributes {attributes:.3} ms, \
+                 shading {shading:.3} ms (medians)"
+            );
             println!(
                 "rate      {:.3} M splats/s (GPU)",
                 stats.selected as f64 / s.median / 1e3

@@ -1,5 +1,5 @@
-//! A frame's GPU counters: its two timestamps (GPU time) and, with compute culling, the
-//! survivors of each slice (splats drawn). Read either at once (offline frames) or a
+//! A frame's GPU counters: its timestamps (GPU time, in all and per pass) and, with
+//! compute culling, the survivors of each slice (splats drawn). Read either at once (offline frames) or a
 //! few frames late without stalling (the viewer), through one small copy per frame.
 
 use std::collections::VecDeque;
@@ -19,14 +19,33 @@ pub struct GpuCounters {
     /// From the first pass's start to the end of shading, when the adapter has
     /// timestamp queries.
     pub gpu_ms: Option<f64>,
+    /// The same time per pass: visibility (with the G-buffer's clear), attributes (or
+    /// the points or mesh pass), shading.
+    pub passes_ms: Option<[f64; 3]>,
     /// Splats the compute culling kept (None with vertex culling).
     pub drawn: Option<u64>,
 }
 
-/// Bytes of one frame's counters: two u64 timestamps, then two u32 per slice (of the
+/// The frame's timestamps, indices into its query set, each written once per frame.
+pub(super) mod stamp {
+    /// The start of the G-buffer's clear.
+    pub const START: u32 = 0;
+    /// The end of pass 1 (in the points and mesh modes, which have none, of the clear).
+    pub const VISIBILITY_END: u32 = 1;
+    /// The end of pass 2 (or of the points or mesh pass).
+    pub const ATTRIBUTES_END: u32 = 2;
+    /// The end of shading.
+    pub const END: u32 = 3;
+    pub const COUNT: u32 = 4;
+}
+
+/// Bytes of the frame's timestamps (u64 each).
+pub(super) const STAMP_BYTES: u64 = 8 * stamp::COUNT as u64;
+
+/// Bytes of one frame's counters: the timestamps, then two u32 per slice (of the
 /// whole list, uploaded or not): its survivors on an outline and the others.
 fn counters_bytes(gpu_scene: &GpuScene) -> u64 {
-    16 + 8 * gpu_scene.planned_slices().max(1) as u64
+    STAMP_BYTES + 8 * gpu_scene.planned_slices().max(1) as u64
 }
 
 /// Records copies of the frame's counters into `into` (at least `counters_bytes`).
@@ -37,13 +56,13 @@ pub(super) fn copy_counters(
     into: &wgpu::Buffer,
 ) {
     if let Some((_, resolve)) = &targets.queries {
-        encoder.copy_buffer_to_buffer(resolve, 0, into, 0, 16);
+        encoder.copy_buffer_to_buffer(resolve, 0, into, 0, STAMP_BYTES);
     }
     // The resident slices in order, as the frame's `slices` counts them.
     for (k, slice) in gpu_scene.resident().enumerate() {
         // The indirect draws' instance counts: the survivors.
         for (j, at) in Compaction::SURVIVORS_AT.into_iter().enumerate() {
-            let to = 16 + 4 * (2 * k + j) as u64;
+            let to = STAMP_BYTES + 4 * (2 * k + j) as u64;
             encoder.copy_buffer_to_buffer(&slice.compaction, at, into, to, 4);
         }
     }
@@ -51,18 +70,31 @@ pub(super) fn copy_counters(
 
 /// Decodes counters copied by [`copy_counters`].
 pub(super) fn parse_counters(gpu: &Gpu, bytes: &[u8], frame: &EncodedFrame) -> GpuCounters {
-    let gpu_ms = gpu.timestamps.then(|| {
-        let t: [u64; 2] = bytemuck::pod_read_unaligned(&bytes[..16]);
+    let stamps = STAMP_BYTES as usize;
+    let passes_ms = gpu.timestamps.then(|| {
+        let t: [u64; stamp::COUNT as usize] = bytemuck::pod_read_unaligned(&bytes[..stamps]);
         let period_ns = gpu.queue.get_timestamp_period() as f64;
-        t[1].saturating_sub(t[0]) as f64 * period_ns / 1e6
+        let ms = |from: u32, to: u32| {
+            t[to as usize].saturating_sub(t[from as usize]) as f64 * period_ns / 1e6
+        };
+        [
+            ms(stamp::START, stamp::VISIBILITY_END),
+            ms(stamp::VISIBILITY_END, stamp::ATTRIBUTES_END),
+            ms(stamp::ATTRIBUTES_END, stamp::END),
+        ]
     });
+    let gpu_ms = passes_ms.map(|p| p.iter().sum());
     let drawn = frame.compute.then(|| {
-        bytes[16..16 + 8 * frame.slices]
+        bytes[stamps..stamps + 8 * frame.slices]
             .chunks_exact(4)
             .map(|c| u32::from_le_bytes(c.try_into().unwrap()) as u64)
             .sum()
     });
-    GpuCounters { gpu_ms, drawn }
+    GpuCounters {
+        gpu_ms,
+        passes_ms,
+        drawn,
+    }
 }
 
 /// A mappable buffer of `size` bytes for one frame's counters.

@@ -108,8 +108,9 @@ impl MeshPass {
         gbuffer: &GBuffer,
         frame_bind: &wgpu::BindGroup,
         mesh: &MeshBuffers,
+        timestamps: Option<wgpu::RenderPassTimestampWrites>,
     ) {
-        let mut pass = gbuffer.pass(encoder, "mesh", false, false, None);
+        let mut pass = gbuffer.pass(encoder, "mesh", false, false, timestamps);
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, frame_bind, &[]);
         pass.set_vertex_buffer(0, mesh.vertices.slice(..));

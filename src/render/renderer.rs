@@ -14,7 +14,7 @@
 use rayon::prelude::*;
 
 use super::camera::Camera;
-use super::counters::read_counters_now;
+use super::counters::{read_counters_now, stamp};
 use super::cull::CullPass;
 use super::frame::{FrameUniform, frame_layout, srgb_to_linear};
 use super::gbuffer::{GBuffer, store};
@@ -56,6 +56,8 @@ pub struct FrameStats {
     pub selected: usize,
     /// GPU time of the frame (timestamp queries), when the adapter has them.
     pub gpu_ms: Option<f64>,
+    /// The same per pass: visibility, attributes, shading.
+    pub passes_ms: Option<[f64; 3]>,
     /// Splats the GPU drew, counted by the compute culling (None with vertex culling).
     pub gpu_drawn: Option<u64>,
     /// ε of the selection, world error per unit of distance, and whether it was raised
@@ -128,29 +130,47 @@ impl Renderer {
                 .encode(queue, encoder, &targets.frame_bind, &shares);
         }
         let g = &targets.gbuffer;
-        g.pass(encoder, "clear", false, true, targets.start_timestamp());
+        // Each timestamp is written once: the modes without pass 1 end it with the clear.
+        let one_pass = matches!(settings.mode, Mode::Mesh | Mode::Points);
+        let clear_end = one_pass.then_some(stamp::VISIBILITY_END);
+        let clear_stamps = targets.timestamps(Some(stamp::START), clear_end);
+        g.pass(encoder, "clear", false, true, clear_stamps);
         let pipelines = self.splats.of(compute);
-        let draw = |encoder: &mut wgpu::CommandEncoder, label, depth_only, pipeline| {
-            let mut pass = g.pass(encoder, label, depth_only, false, None);
+        let draw = |encoder: &mut wgpu::CommandEncoder, label, depth_only, pipeline, end| {
+            let mut pass = g.pass(
+                encoder,
+                label,
+                depth_only,
+                false,
+                targets.timestamps(None, end),
+            );
             self.splats
                 .draw(&mut pass, pipeline, &targets.frame_bind, &shares, compute);
         };
+        let attributes_end = Some(stamp::ATTRIBUTES_END);
         match (settings.mode, &gpu_scene.mesh) {
-            (Mode::Mesh, Some(mesh)) => self.mesh.encode(encoder, g, &targets.frame_bind, mesh),
-            (Mode::Points, _) => draw(encoder, "points", false, &pipelines.points),
+            (Mode::Mesh, Some(mesh)) => {
+                let stamps = targets.timestamps(None, attributes_end);
+                self.mesh
+                    .encode(encoder, g, &targets.frame_bind, mesh, stamps)
+            }
+            (Mode::Points, _) => draw(encoder, "points", false, &pipelines.points, attributes_end),
             _ => {
-                draw(encoder, "visibility", true, &pipelines.visibility);
+                let visibility_end = Some(stamp::VISIBILITY_END);
                 draw(
                     encoder,
-                    "attributes",
-                    false,
-                    pipelines.attributes(settings.mode),
+                    "visibility",
+                    true,
+                    &pipelines.visibility,
+                    visibility_end,
                 );
+                let attributes = pipelines.attributes(settings.mode);
+                draw(encoder, "attributes", false, attributes, attributes_end);
             }
         }
         self.shading.encode(encoder, targets);
         if let Some((set, resolve)) = &targets.queries {
-            encoder.resolve_query_set(set, 0..2, resolve, 0);
+            encoder.resolve_query_set(set, 0..stamp::COUNT, resolve, 0);
         }
         Ok(frame)
     }
@@ -303,6 +323,7 @@ impl Renderer {
                 chunks_tested: frame.ranges.len(),
                 selected,
                 gpu_ms: counters.gpu_ms,
+                passes_ms: counters.passes_ms,
                 gpu_drawn: counters.drawn,
                 eps: frame.eps,
                 coarsened: frame.coarsened,

@@ -3,6 +3,7 @@
 //! a movable light, two-sided); background where nothing contributed. Written linear
 //! into the sRGB output. WGSL: `shaders/shade.wgsl`.
 
+use super::counters::stamp;
 use super::fullscreen::{fragment_texture, fullscreen_pipeline};
 use super::gbuffer::{GBuffer, store};
 use super::shaders::module;
@@ -70,7 +71,7 @@ impl ShadingPass {
             label: Some("shade"),
             color_attachments: &[attach(&targets.output_view), attach(&targets.covered_view)],
             depth_stencil_attachment: None,
-            timestamp_writes: targets.end_timestamp(),
+            timestamp_writes: targets.timestamps(None, Some(stamp::END)),
             occlusion_query_set: None,
             multiview_mask: None,
         });

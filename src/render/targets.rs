@@ -3,6 +3,7 @@
 //! the bind groups that point at them, and the timestamp queries.
 
 use super::Gpu;
+use super::counters::{STAMP_BYTES, stamp};
 use super::frame::FrameUniform;
 use super::gbuffer::{GBuffer, target};
 
@@ -29,7 +30,7 @@ pub struct FrameTargets {
     pub(super) frame_buffer: wgpu::Buffer,
     pub(super) frame_bind: wgpu::BindGroup,
     pub(super) gbuffer_bind: wgpu::BindGroup,
-    /// Two timestamps (start of the first pass, end of shading) and their resolve buffer.
+    /// The frame's timestamps ([`stamp`]) and their resolve buffer.
     pub(super) queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
 }
 
@@ -84,11 +85,11 @@ impl FrameTargets {
             let set = device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("passes"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 2,
+                count: stamp::COUNT,
             });
             let resolve = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamps"),
-                size: 16,
+                size: STAMP_BYTES,
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
@@ -108,25 +109,18 @@ impl FrameTargets {
         }
     }
 
-    /// The timestamp at the start of the frame's first G-buffer pass.
-    pub(super) fn start_timestamp(&self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+    /// A pass's timestamp writes: [`stamp`] indices at its beginning and its end.
+    pub(super) fn timestamps(
+        &self,
+        begin: Option<u32>,
+        end: Option<u32>,
+    ) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
         self.queries
             .as_ref()
             .map(|(q, _)| wgpu::RenderPassTimestampWrites {
                 query_set: q,
-                beginning_of_pass_write_index: Some(0),
-                end_of_pass_write_index: None,
-            })
-    }
-
-    /// The timestamp at the end of shading.
-    pub(super) fn end_timestamp(&self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
-        self.queries
-            .as_ref()
-            .map(|(q, _)| wgpu::RenderPassTimestampWrites {
-                query_set: q,
-                beginning_of_pass_write_index: None,
-                end_of_pass_write_index: Some(1),
+                beginning_of_pass_write_index: begin,
+                end_of_pass_write_index: end,
             })
     }
 
