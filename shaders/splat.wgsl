@@ -70,6 +70,13 @@ struct SplatVarying {
     @location(9) @interpolate(flat) push: f32,
 }
 
+// Whether the pipeline's fragments draw the prefilter's band around each splat's
+// projected rim (pipeline-overridable, see splats.rs): pass 2 of the outline splats and
+// the points do; pass 1 and pass 2 of the inner splats keep only fragments whose centre
+// the patch covers, so their quads are not grown by the band (a sub-pixel splat's quad
+// is mostly band: without it, far fewer fragments).
+override PREFILTER_BAND: bool = true;
+
 // Where a splat's colour comes from (pipeline-overridable: src/render/splats.rs makes a
 // pipeline per source, so that each vertex runs only its own).
 override COLOR_SOURCE: u32 = COLOR_NODE;
@@ -167,8 +174,15 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
         lo = min(lo, p.xy / p.w);
         hi = max(hi, p.xy / p.w);
     }
-    // Grow by the prefilter radius, so that sub-pixel splats still cover a pixel.
-    let grow = 2.0 * frame.prefilter_px * frame.inv_viewport * select(0.0, 1.0, frame.ewa > 0.0);
+    // Grow by the prefilter radius, so that sub-pixel splats still cover a pixel; that
+    // also holds the curved patch where it bulges off its plane. A pipeline that keeps
+    // only the fragments whose centre a patch covers grows by the bulge alone, |h| ≤
+    // ½ ‖G‖ R (ρ ≤ 1, see patch_hit) as projected at the centre, up to the same radius.
+    let band_px = select(0.0, frame.prefilter_px, frame.ewa > 0.0);
+    let g = shape.gradient;
+    let g_norm = abs(0.5 * (g.x + g.z)) + sqrt(0.25 * (g.x - g.z) * (g.x - g.z) + g.y * g.y);
+    let bulge_px = min(abs(project_delta(center, normal * (0.5 * g_norm * r))), vec2<f32>(band_px));
+    let grow = 2.0 * select(bulge_px, vec2<f32>(band_px), PREFILTER_BAND) * frame.inv_viewport;
     lo -= grow;
     hi += grow;
     let pick = vec2<f32>(select(lo.x, hi.x, (corner & 1u) != 0u), select(lo.y, hi.y, (corner & 2u) != 0u));

@@ -59,6 +59,12 @@ fn vertex_storage(binding: u32, min_size: u64) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
+/// Whether fragment entry point `fs` draws the prefilter's band (WGSL `PREFILTER_BAND`):
+/// pass 1 and the inner splats' pass 2 keep only fragments whose centre a patch covers.
+fn draws_band(fs: &str) -> bool {
+    !matches!(fs, "fs_visibility" | "fs_attributes_inner")
+}
+
 /// Makes the splat pipelines of vertex entry point `vs` (bind group 1 laid out as
 /// `layout` says), which reads compacted lists or not.
 struct PipelineMaker {
@@ -90,6 +96,7 @@ impl PipelineMaker {
                         constants: &[
                             ("SPLAT_CLASS", class as u32 as f64),
                             ("COLOR_SOURCE", color as u32 as f64),
+                            ("PREFILTER_BAND", f64::from(u8::from(draws_band(fs)))),
                         ],
                         ..Default::default()
                     },
