@@ -1,6 +1,7 @@
 //! A frame's GPU counters: its timestamps (GPU time, in all and per pass) and, with
-//! compute culling, the survivors of each slice (splats drawn). Read either at once (offline frames) or a
-//! few frames late without stalling (the viewer), through one small copy per frame.
+//! compute culling, the survivors of each slice (splats drawn). Read either at once
+//! (offline frames) or a few frames late without stalling (the viewer), through one
+//! small copy per frame.
 
 use std::collections::VecDeque;
 use std::sync::Arc;
