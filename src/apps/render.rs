@@ -89,6 +89,19 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
             stats.tested as f64 / n.max(1) as f64
         );
     }
+    print_times(&mut gpu_ms, passes_ms, &mut wall_ms, stats.selected);
+    println!("wrote     {}", output.display());
+    Ok(())
+}
+
+/// Prints the frames' GPU time (in all and per pass, where the adapter measures it),
+/// the GPU's splat rate for `selected` splats, and the wall time.
+fn print_times(
+    gpu_ms: &mut Vec<f64>,
+    passes_ms: [Vec<f64>; 3],
+    wall_ms: &mut Vec<f64>,
+    selected: usize,
+) {
     let summary = |v: &mut Vec<f64>| match Summary::of(v) {
         Some(s) if s.count > 1 => format!(
             "{:.3} ms (median of {}), p95 {:.3} ms",
@@ -96,10 +109,10 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
         ),
         _ => format!("{:.3} ms", v.first().copied().unwrap_or(0.0)),
     };
-    match Summary::of(&mut gpu_ms) {
+    match Summary::of(gpu_ms) {
         None => println!("gpu time  not measured (the adapter has no timestamp queries)"),
         Some(s) => {
-            println!("gpu time  {}", summary(&mut gpu_ms));
+            println!("gpu time  {}", summary(gpu_ms));
             let [visibility, attributes, shading] =
                 passes_ms.map(|mut v| Summary::of(&mut v).map_or(0.0, |s| s.median));
             println!(
@@ -108,14 +121,12 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
             );
             println!(
                 "rate      {:.3} M splats/s (GPU)",
-                stats.selected as f64 / s.median / 1e3
+                selected as f64 / s.median / 1e3
             );
         }
     }
     println!(
         "wall time {} per frame (read-back included)",
-        summary(&mut wall_ms)
+        summary(wall_ms)
     );
-    println!("wrote     {}", output.display());
-    Ok(())
 }

@@ -12,7 +12,7 @@ use super::gpu::Gpu;
 use super::gpu_scene::GpuScene;
 use super::plan::EncodedFrame;
 use super::readback;
-use super::targets::FrameTargets;
+use super::targets::{FrameTargets, STAMP_BYTES, stamp};
 
 /// What the GPU measured of one frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -26,22 +26,6 @@ pub struct GpuCounters {
     /// Splats the compute culling kept (None with vertex culling).
     pub drawn: Option<u64>,
 }
-
-/// The frame's timestamps, indices into its query set, each written once per frame.
-pub(super) mod stamp {
-    /// The start of the G-buffer's clear.
-    pub const START: u32 = 0;
-    /// The end of pass 1 (in the points and mesh modes, which have none, of the clear).
-    pub const VISIBILITY_END: u32 = 1;
-    /// The end of pass 2 (or of the points or mesh pass).
-    pub const ATTRIBUTES_END: u32 = 2;
-    /// The end of shading.
-    pub const END: u32 = 3;
-    pub const COUNT: u32 = 4;
-}
-
-/// Bytes of the frame's timestamps (u64 each).
-pub(super) const STAMP_BYTES: u64 = 8 * stamp::COUNT as u64;
 
 /// Bytes of one frame's counters: the timestamps, then two u32 per slice (of the
 /// whole list, uploaded or not): its survivors on an outline and the others.

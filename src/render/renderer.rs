@@ -14,7 +14,7 @@
 use rayon::prelude::*;
 
 use super::camera::Camera;
-use super::counters::{read_counters_now, stamp};
+use super::counters::read_counters_now;
 use super::cull::CullPass;
 use super::frame::{FrameUniform, frame_layout, srgb_to_linear};
 use super::gbuffer::{GBuffer, store};
@@ -26,7 +26,7 @@ use super::readback;
 use super::settings::{Culling, Mode, Settings};
 use super::shading::ShadingPass;
 use super::splats::SplatPasses;
-use super::targets::{FrameTargets, check_size};
+use super::targets::{FrameTargets, check_size, stamp};
 use super::upload;
 use crate::tree::report::{Report, Silent, Step};
 use crate::tree::scene::Scene;

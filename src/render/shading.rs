@@ -3,11 +3,10 @@
 //! a movable light, two-sided); background where nothing contributed. Written linear
 //! into the sRGB output. WGSL: `shaders/shade.wgsl`.
 
-use super::counters::stamp;
 use super::fullscreen::{fragment_texture, fullscreen_pipeline};
 use super::gbuffer::{GBuffer, store};
 use super::shaders::module;
-use super::targets::{COVERED, FrameTargets, OUTPUT};
+use super::targets::{COVERED, FrameTargets, OUTPUT, stamp};
 
 pub(super) struct ShadingPass {
     /// Bind group 1: the colour and normal sums, the coverage and the depth, as textures.

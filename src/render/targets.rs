@@ -3,7 +3,6 @@
 //! the bind groups that point at them, and the timestamp queries.
 
 use super::Gpu;
-use super::counters::{STAMP_BYTES, stamp};
 use super::frame::FrameUniform;
 use super::gbuffer::{GBuffer, target};
 
@@ -13,6 +12,22 @@ pub const OUTPUT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 pub(super) const COVERED: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 /// The same bytes seen without sRGB decoding (overlays, presentation).
 pub const OUTPUT_GAMMA: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// The frame's timestamps, indices into its query set, each written once per frame.
+pub(super) mod stamp {
+    /// The start of the G-buffer's clear.
+    pub const START: u32 = 0;
+    /// The end of pass 1 (in the points and mesh modes, which have none, of the clear).
+    pub const VISIBILITY_END: u32 = 1;
+    /// The end of pass 2 (or of the points or mesh pass).
+    pub const ATTRIBUTES_END: u32 = 2;
+    /// The end of shading.
+    pub const END: u32 = 3;
+    pub const COUNT: u32 = 4;
+}
+
+/// Bytes of the frame's timestamps (u64 each).
+pub(super) const STAMP_BYTES: u64 = 8 * stamp::COUNT as u64;
 
 /// Render targets and per-frame buffers for one `size`.
 pub struct FrameTargets {
