@@ -71,7 +71,8 @@ fn cull(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let packed = shapes[i];
-    if on_outline(disk, shape_frame(packed, disk.normal), packed.clip) {
+    // `on_outline`, with the shape decoded only where its kind does not decide.
+    if outline_by_kind(packed.clip) || silhouette_near(disk, shape_frame(packed, disk.normal)) {
         survivors[arrayLength(&survivors) - 1u - atomicAdd(&compaction.outline.instance_count, 1u)] = i;
     } else {
         survivors[atomicAdd(&compaction.inner.instance_count, 1u)] = i;

@@ -67,9 +67,17 @@ const OUTLINE_MARGIN_PX: f32 = 4.0;
 // radii on the screen (the surface shrinks by e·n as it turns away). Clouds, whose
 // normals are not oriented outward, sample every splat.
 fn on_outline(disk: ViewDisk, f: ShapeFrame, clip_bits: u32) -> bool {
-    if frame.oriented_normals == 0u || is_clipped(clip_bits) {
-        return true;
-    }
+    return outline_by_kind(clip_bits) || silhouette_near(disk, f);
+}
+
+// Whether a splat is on an outline whatever its shape: a border (clipped), or any
+// splat of a cloud. The cull pass asks this first, before decoding the shape.
+fn outline_by_kind(clip_bits: u32) -> bool {
+    return frame.oriented_normals == 0u || is_clipped(clip_bits);
+}
+
+// Whether a silhouette may come within OUTLINE_MARGIN_PX of the splat (`on_outline`).
+fn silhouette_near(disk: ViewDisk, f: ShapeFrame) -> bool {
     let g = f.gradient;
     let r = disk.radius;
     let d = length(disk.center);
