@@ -2,7 +2,8 @@
 //! per view and as medians, FLIP and SSIM of the splats (leaves only), FLIP of the
 //! triangulation at 1×, hole rate (see `spt::apps::cloud_quality`); for a sensor frame,
 //! FLIP of the same triangulation over the points moved within their depth step. With `--images DIR`,
-//! each view's splats, triangulation and reference as PNG.
+//! each view's splats, triangulation and reference as PNG. With `--bounds`, also the
+//! triangulation's own splats and the triangulation shaded with the cloud's normals.
 //!
 //! ```text
 //! cargo run --release --example cloud_quality -- kinect_rgb.ply --grid 640x480
@@ -40,6 +41,10 @@ struct Args {
     /// Write each view's images (splats, triangulation at 1×, reference) into DIR.
     #[arg(long)]
     images: Option<PathBuf>,
+    /// Also score the triangulation's own splats (the mesh pipeline) and the
+    /// triangulation shaded with the cloud's estimated normals, against the reference.
+    #[arg(long)]
+    bounds: bool,
 }
 
 fn parse_grid(s: &str) -> Result<(u32, u32), String> {
@@ -57,7 +62,11 @@ fn main() -> anyhow::Result<()> {
     };
     let renderer = Renderer::new(Gpu::new(None)?);
     eprintln!("adapter: {}", renderer.gpu.describe());
-    let models = CloudAndReference::open(&args.cloud, triangulation)?;
+    let models = if args.bounds {
+        CloudAndReference::with_bounds(&args.cloud, triangulation)?
+    } else {
+        CloudAndReference::open(&args.cloud, triangulation)?
+    };
     let settings = Settings {
         ewa: !args.no_ewa,
         ..Settings::leaves()
@@ -108,6 +117,13 @@ fn main() -> anyhow::Result<()> {
         println!(
             "median requantized triangulation at 1x (points moved within their depth step) {:.4}",
             median(|f| f.requantized_flip.unwrap_or(f64::NAN))
+        );
+    }
+    if args.bounds {
+        println!(
+            "median triangulation's own splats {:.4}; triangulation at 1x with the cloud's normals {:.4}",
+            median(|f| f.mesh_splat_flip.unwrap_or(f64::NAN)),
+            median(|f| f.cloud_normals_flip.unwrap_or(f64::NAN)),
         );
     }
     Ok(())

@@ -15,6 +15,7 @@ use crate::io::triangulate::{sensor_grid, terrain};
 use crate::render::metrics::compare;
 use crate::render::perceptual::{downsample, flip_mean, ssim_mean};
 use crate::render::{Camera, Image, OrbitAxes, Renderer, Scene, Settings};
+use crate::surfel::leaf_surfels;
 
 /// How a cloud is triangulated for its reference.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -35,10 +36,24 @@ pub struct CloudAndReference {
     pub cloud: Scene,
     pub reference: Scene,
     pub requantized: Option<Scene>,
+    /// The same triangles shaded with the cloud's own estimated normals (the leaf
+    /// surfels' normals), when opened [`CloudAndReference::with_bounds`].
+    pub cloud_normals: Option<Scene>,
 }
 
 impl CloudAndReference {
+    /// The cloud, its triangulation and, for a sensor frame, the requantized one.
     pub fn open(path: &Path, triangulation: Triangulation) -> anyhow::Result<Self> {
+        Self::build(path, triangulation, false)
+    }
+
+    /// As [`CloudAndReference::open`], with the scene that separates the normals'
+    /// share of the splats' error from the rest ([`ViewFigures::cloud_normals_flip`]).
+    pub fn with_bounds(path: &Path, triangulation: Triangulation) -> anyhow::Result<Self> {
+        Self::build(path, triangulation, true)
+    }
+
+    fn build(path: &Path, triangulation: Triangulation, bounds: bool) -> anyhow::Result<Self> {
         let mut geometry: Geometry = read_model(path)?.geometry;
         geometry.triangles.clear();
         let triangles = match triangulation {
@@ -54,10 +69,22 @@ impl CloudAndReference {
             requantize(&mut moved);
             Scene::from_geometry(moved)
         });
+        let cloud_normals = bounds.then(|| {
+            let mut shaded = meshed.clone();
+            shaded.normals = Some(
+                leaf_surfels(&geometry)
+                    .surfels
+                    .iter()
+                    .map(|s| s.normal)
+                    .collect(),
+            );
+            Scene::from_geometry(shaded)
+        });
         Ok(CloudAndReference {
             cloud: Scene::from_geometry(geometry),
             reference: Scene::from_geometry(meshed),
             requantized,
+            cloud_normals,
         })
     }
 }
@@ -107,6 +134,13 @@ pub struct ViewFigures {
     pub mesh_flip: f64,
     /// The requantized triangulation at 1× against the reference (sensor frames).
     pub requantized_flip: Option<f64>,
+    /// The triangulation's own splats (the mesh pipeline: one-ring ellipses, normal
+    /// fields, clips) against the reference: what the splats score where the
+    /// reference's triangles themselves are known ([`CloudAndReference::with_bounds`]).
+    pub mesh_splat_flip: Option<f64>,
+    /// The triangulation at 1× shaded with the cloud's estimated normals against the
+    /// reference: the share of the splats' error that their normals alone make.
+    pub cloud_normals_flip: Option<f64>,
     pub hole_rate: f64,
 }
 
@@ -130,6 +164,10 @@ pub fn measure(
     let cloud_gpu = renderer.upload(&models.cloud);
     let mesh_gpu = renderer.upload(&models.reference);
     let requantized_gpu = models.requantized.as_ref().map(|s| (s, renderer.upload(s)));
+    let cloud_normals_gpu = models
+        .cloud_normals
+        .as_ref()
+        .map(|s| (s, renderer.upload(s)));
     let fov = 45f64.to_radians();
     let mut out = Vec::new();
     for k in 0..views {
@@ -162,7 +200,21 @@ pub fn measure(
             }
             None => None,
         };
+        let (mesh_splat_flip, cloud_normals_flip) = match &cloud_normals_gpu {
+            Some((scene, gpu)) => {
+                let splats =
+                    renderer.render(&models.reference, &mesh_gpu, &camera, settings, size, size)?;
+                let shaded = renderer.render(scene, gpu, &camera, &Settings::mesh(), size, size)?;
+                (
+                    Some(flip_mean(&splats.0, &images.reference)),
+                    Some(flip_mean(&shaded.0, &images.reference)),
+                )
+            }
+            None => (None, None),
+        };
         out.push(ViewFigures {
+            mesh_splat_flip,
+            cloud_normals_flip,
             splat_flip: flip_mean(&images.splats, &images.reference),
             splat_ssim: ssim_mean(&images.splats, &images.reference),
             mesh_flip: flip_mean(&images.mesh, &images.reference),
