@@ -3,7 +3,9 @@
 //! against the mesh rendered at 4×4 the size and averaged in linear light; and, with
 //! `--crops`, each image (`view{k}_image{i}.png`, i in the order printed), the FLIP maps,
 //! and side-by-side close-ups (splats | mesh reference) enlarged 3× without filtering,
-//! for the README.
+//! for the README. Each figure of a view is followed by its three parts: the pixels
+//! both images cover away from the reference's outlines, those near one (within 2
+//! pixels of a coverage step or an occluding edge), and those only one image covers.
 //!
 //! `--mesh` scores other meshes of the same surface at 1× on the same views (another
 //! triangulation of the same samples from `tools/alt_triangulation.py`, or a denser
@@ -116,8 +118,8 @@ fn main() -> anyhow::Result<()> {
             let image = render(m, &camera, settings, args.size)?;
             let (f, s) = (flip_mean(&image, &reference), ssim_mean(&image, &reference));
             let map = flip_map(&image, &reference);
-            let (inside, rim) = split(&map, &image, &reference);
-            line += &format!("  {name} {f:.4} ({inside:.4}+{rim:.4})/{s:.3}");
+            let [inside, outlines, rim] = split(&map, &image, &reference);
+            line += &format!("  {name} {f:.4} ({inside:.4}+{outlines:.4}+{rim:.4})/{s:.3}");
             flips[i].push(f);
             ssims[i].push(s);
             if let Some(dir) = &args.crops {
@@ -195,17 +197,58 @@ fn side_by_side(left: &Image, right: &Image, path: &std::path::Path) -> anyhow::
     Ok(())
 }
 
-/// FLIP summed over the pixels both images cover and over those only one covers, each
-/// divided by the union's size: the two parts of the mean.
-fn split(errors: &[f32], a: &Image, b: &Image) -> (f64, f64) {
-    let (mut inside, mut rim, mut n) = (0.0, 0.0, 0usize);
+/// FLIP summed over three kinds of pixels, each divided by the size of the union of
+/// both images' coverage (the three parts of the mean): those both images cover away
+/// from the reference's outlines, those both cover near one ([`near_outline`]), and
+/// those only one image covers.
+fn split(errors: &[f32], image: &Image, reference: &Image) -> [f64; 3] {
+    let near = near_outline(reference, OUTLINE_REACH);
+    let (mut parts, mut n) = ([0.0; 3], 0usize);
     for (i, e) in errors.iter().enumerate() {
-        match (a.covered[i], b.covered[i]) {
-            (true, true) => inside += *e as f64,
+        let part = match (image.covered[i], reference.covered[i]) {
             (false, false) => continue,
-            _ => rim += *e as f64,
-        }
+            (true, true) if near[i] => 1,
+            (true, true) => 0,
+            _ => 2,
+        };
+        parts[part] += *e as f64;
         n += 1;
     }
-    (inside / n.max(1) as f64, rim / n.max(1) as f64)
+    parts.map(|p| p / n.max(1) as f64)
+}
+
+/// How far (pixels, in x and y) from an outline a pixel counts as near it.
+const OUTLINE_REACH: i32 = 2;
+
+/// The pixels within `reach` of an outline of `image`: a step in coverage, or between
+/// covered neighbours whose depths differ by more than 5 % (an occluding edge).
+fn near_outline(image: &Image, reach: i32) -> Vec<bool> {
+    let (w, h) = (image.width as i32, image.height as i32);
+    let at = |x: i32, y: i32| (y * w + x) as usize;
+    let step = |a: usize, b: usize| {
+        let (da, db) = (image.depth[a], image.depth[b]);
+        image.covered[a] != image.covered[b]
+            || (image.covered[a] && (da - db).abs() > 0.05 * da.min(db))
+    };
+    let mut edge = vec![false; image.covered.len()];
+    for y in 0..h {
+        for x in 0..w {
+            let i = at(x, y);
+            if (x + 1 < w && step(i, at(x + 1, y))) || (y + 1 < h && step(i, at(x, y + 1))) {
+                edge[i] = true;
+            }
+        }
+    }
+    let mut near = vec![false; edge.len()];
+    for y in 0..h {
+        for x in 0..w {
+            near[at(x, y)] = (-reach..=reach).any(|dy| {
+                (-reach..=reach).any(|dx| {
+                    let (u, v) = (x + dx, y + dy);
+                    u >= 0 && v >= 0 && u < w && v < h && edge[at(u, v)]
+                })
+            });
+        }
+    }
+    near
 }
