@@ -35,10 +35,10 @@ struct Frame {
     cull_back_faces: u32,
     lod_on: u32,
     lod_frozen: u32,
-    // Splat radius scale (rendered radius / stored radius); the accumulated weight Σw at
-    // which a pixel is fully covered (silhouettes fade below it; 0: off).
+    // Splat radius scale (rendered radius / stored radius), and padding (elevation_range
+    // is 8-byte aligned).
     radius_scale: f32,
-    coverage_weight: f32,
+    radius_pad: f32,
     // Lowest and highest node centre height along elevation_up, relative to the model
     // origin (MODE_ELEVATION).
     elevation_range: vec2<f32>,

@@ -48,7 +48,7 @@ fn fs_shade(@builtin(position) frag: vec4<f32>) -> Shaded {
     let texel = vec2<i32>(frag.xy);
     var sums = Sums(textureLoad(color_sum, texel, 0), textureLoad(normal_sum, texel, 0));
     let samples = textureLoad(coverage, texel, 0);
-    var covered = sums.c.w > 0.5 * frame.coverage_weight && any(samples > vec4<f32>(0.0));
+    var covered = sums.c.w > 0.0 && any(samples > vec4<f32>(0.0));
     var filled = false;
     if textureLoad(depth, texel, 0).x <= 0.0 {
         let gap = gap_fill(texel);
@@ -61,7 +61,7 @@ fn fs_shade(@builtin(position) frag: vec4<f32>) -> Shaded {
     if sums.c.w <= 0.0 {
         return Shaded(vec4<f32>(frame.background.rgb, 1.0), 0.0);
     }
-    let alpha = select(coverage_alpha(texel, samples, sums.c.w), 1.0, filled);
+    let alpha = select(coverage_alpha(texel, samples), 1.0, filled);
     return Shaded(vec4<f32>(shade(frag.xy, texel, sums, alpha), 1.0), f32(covered));
 }
 
@@ -87,15 +87,9 @@ fn shade(frag: vec2<f32>, texel: vec2<i32>, sums: Sums, alpha: f32) -> vec3<f32>
 }
 
 // The share of the pixel's coverage `samples` that the splats cover (all of it where
-// the pixel and its neighbours show a surface at their centres); pixels reached only by
-// the fading rims of splats (total weight `w`) also blend into the background when
-// coverage_weight is set.
-fn coverage_alpha(texel: vec2<i32>, samples: vec4<f32>, w: f32) -> f32 {
-    var alpha = select(dot(samples, vec4<f32>(0.25)), 1.0, surrounded(texel));
-    if frame.coverage_weight > 0.0 {
-        alpha = min(alpha, clamp(w / frame.coverage_weight, 0.0, 1.0));
-    }
-    return alpha;
+// the pixel and its neighbours show a surface at their centres).
+fn coverage_alpha(texel: vec2<i32>, samples: vec4<f32>) -> f32 {
+    return select(dot(samples, vec4<f32>(0.25)), 1.0, surrounded(texel));
 }
 
 // The eight unit directions eye-dome lighting looks in, every 45°.

@@ -34,7 +34,7 @@ pub(super) struct FrameUniform {
     pub lod_on: u32,
     pub lod_frozen: u32,
     pub radius_scale: f32,
-    pub coverage_weight: f32,
+    pub radius_pad: f32,
     pub elevation_range: [f32; 2],
     pub lod_eye: [f32; 3],
     pub edl_radius_px: f32,
@@ -135,11 +135,7 @@ impl FrameUniform {
             lod_on: (lod_eps > 0.0) as u32,
             lod_frozen: settings.lod_eye.is_some() as u32,
             radius_scale: settings.radius_scale,
-            coverage_weight: if settings.mode == Mode::Shaded {
-                settings.coverage_weight
-            } else {
-                0.0
-            },
+            radius_pad: 0.0,
             elevation_range,
             lod_eye: settings
                 .lod_eye

@@ -57,9 +57,6 @@ pub struct Settings {
     pub background: [f32; 3],
     /// Rendered radius / stored radius: more overlap blends more smoothly.
     pub radius_scale: f32,
-    /// Accumulated weight at which a pixel counts as fully covered; below it the pixel
-    /// fades into the background (0: off). Also the coverage threshold of read-back masks.
-    pub coverage_weight: f32,
     pub culling: Culling,
     /// The eye the level of detail is chosen for (file coordinates) when it is frozen
     /// while the camera moves; None: the camera's own eye.
@@ -81,7 +78,6 @@ impl Default for Settings {
             light: Vec3::new(0.4, 0.6, 1.0),
             background: [1.0, 1.0, 1.0],
             radius_scale: 1.0,
-            coverage_weight: 0.0,
             culling: Culling::Compute,
             lod_eye: None,
             edl_strength: 1.0,
