@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, mpsc};
+use std::thread::JoinHandle;
 use std::time::Instant;
 
 use crate::render::residency::Residency;
@@ -83,6 +84,8 @@ pub struct Loading {
     pub started: Instant,
     result: mpsc::Receiver<anyhow::Result<Loaded>>,
     finished: bool,
+    /// The loading thread, joined on drop once finished (see [`Loading::drop`]).
+    loader: Option<JoinHandle<()>>,
 }
 
 /// Opens the scene and uploads it (all of it, or under `budget` bytes its first slice),
@@ -201,12 +204,12 @@ impl Loading {
                     deliver(Err(e));
                 }
             });
-        let result = match spawned {
-            Ok(_) => result,
+        let (result, loader) = match spawned {
+            Ok(loader) => (result, Some(loader)),
             Err(e) => {
                 let (send, receiver) = mpsc::channel();
                 let _ = send.send(Err(anyhow::anyhow!("cannot start loading: {e}")));
-                receiver
+                (receiver, None)
             }
         };
         Loading {
@@ -215,6 +218,7 @@ impl Loading {
             started: Instant::now(),
             result,
             finished: false,
+            loader,
         }
     }
 
@@ -249,7 +253,9 @@ impl Loading {
     }
 
     /// Blocks until the load ends and returns the whole scene (for scripts and tests).
-    pub fn wait(self) -> anyhow::Result<(Arc<Scene>, GpuScene)> {
+    pub fn wait(mut self) -> anyhow::Result<(Arc<Scene>, GpuScene)> {
+        // It returns after the last message: the thread is ending, and drop joins it.
+        self.finished = true;
         let mut scene = None;
         for message in self.result.iter() {
             match message? {
@@ -261,5 +267,18 @@ impl Loading {
             }
         }
         scene.ok_or_else(|| anyhow::anyhow!("{}: the loader stopped", self.path.display()))
+    }
+}
+
+impl Drop for Loading {
+    /// Joins a finished load's thread, whose handle on the renderer must be gone before
+    /// the window's (see `Streamer::drop`). An unfinished load is left to run: its end is
+    /// far off, and nobody reads its messages any more.
+    fn drop(&mut self) {
+        if self.finished
+            && let Some(loader) = self.loader.take()
+        {
+            let _ = loader.join();
+        }
     }
 }
