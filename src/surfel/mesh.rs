@@ -134,7 +134,8 @@ enum Source {
 
 /// Normals and radii of the vertices of a mesh, written into `surfels` (one per
 /// vertex). `scale` is the model's unit scale ([`super::unit_scale`]). Returns the
-/// isolated vertices that are redundant ([`super::isolated`]), ascending.
+/// isolated vertices that are redundant ([`super::isolated`]), ascending, and the vertex
+/// normals (the surfels' are their shading fields', `super::field`).
 pub fn vertex_disks(
     points: &[Vec3],
     scale: f32,
@@ -142,7 +143,7 @@ pub fn vertex_disks(
     given: Option<&[Vec3]>,
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
-) -> Vec<u32> {
+) -> (Vec<u32>, Vec<Vec3>) {
     let s = scale as f64;
     let runs = if triangles.len() < 1 << 16 { 1 } else { RUNS };
     let per_run = triangles.len().div_ceil(runs).max(1);
@@ -214,10 +215,10 @@ pub fn vertex_disks(
         stats,
     );
     stats.turned_outward = orient_outward(points, surfels);
-    super::ring::ring_shapes(points, scale, triangles, surfels);
+    let normals = super::ring::ring_shapes(points, scale, triangles, surfels);
     let redundant = super::isolated::redundant(points, scale, &isolated, surfels);
     stats.redundant_vertices = redundant.len() as u64;
-    redundant
+    (redundant, normals)
 }
 
 /// Gives each vertex of `cancelled` (whose face normals cancel) the normal of its

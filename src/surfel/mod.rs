@@ -10,6 +10,7 @@
 pub mod clip;
 pub mod cloud;
 pub mod covering;
+pub mod field;
 pub mod isolated;
 pub mod mesh;
 pub mod octahedral;
@@ -85,6 +86,9 @@ pub struct LeafSurfels {
     /// surfels must be drawn two-sided.
     pub oriented_normals: bool,
     pub stats: SurfelStats,
+    /// A mesh's vertex normals, which its triangles interpolate (the surfels' normals
+    /// are those of their shading fields, [`field`]); empty for a cloud.
+    pub vertex_normals: Vec<Vec3>,
     /// Surfels (ascending indices) that [`LeafSurfels::drop_redundant`] leaves out of
     /// the tree: a mesh's redundant isolated vertices ([`isolated`]).
     pub redundant: Vec<u32>,
@@ -199,7 +203,7 @@ fn leaf_surfels_among(g: &Geometry, own: usize) -> LeafSurfels {
                 .map_or_else(PointAttributes::default, |a| a[i]),
         })
         .collect();
-    let mut redundant = Vec::new();
+    let (mut redundant, mut vertex_normals) = (Vec::new(), Vec::new());
     let oriented = if g.triangles.is_empty() {
         let all: Vec<u32> = (0..own as u32).collect();
         let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
@@ -214,7 +218,7 @@ fn leaf_surfels_among(g: &Geometry, own: usize) -> LeafSurfels {
         );
         given.is_some() && stats.given_normals == own as u64
     } else {
-        redundant = mesh::vertex_disks(
+        (redundant, vertex_normals) = mesh::vertex_disks(
             &g.positions,
             scale,
             &g.triangles,
@@ -232,5 +236,6 @@ fn leaf_surfels_among(g: &Geometry, own: usize) -> LeafSurfels {
         oriented_normals: oriented,
         stats,
         redundant,
+        vertex_normals,
     }
 }

@@ -28,6 +28,7 @@ use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::Surfel;
+use super::field::fit_field;
 use super::mesh::{RADIUS_MARGIN, triangle_terms};
 use super::shape::{Clip, Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
 
@@ -202,11 +203,17 @@ fn corners_by_vertex(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<usize>
 
 /// Replaces the radius of every vertex that a triangle holds by the major semi-axis of
 /// its one-ring ellipse and sets its shape (see the module doc); other vertices get a
-/// circle. `points` are the model's positions, `scale` its unit scale; normals are read
-/// from `surfels`. Each vertex gathers over its own corners ([`corners_by_vertex`]), in
+/// circle; sets the normal of each ellipse to its shading field's ([`fit_field`]).
+/// `points` are the model's positions, `scale` its unit scale; the vertex normals are
+/// read from `surfels`, and returned. Each vertex gathers over its own corners ([`corners_by_vertex`]), in
 /// parallel, and everything it needs is its own: one pass, with no per-vertex
 /// temporaries (on the Lucy-size model they were 1.7 GB of fresh pages to fault in).
-pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels: &mut [Surfel]) {
+pub fn ring_shapes(
+    points: &[Vec3],
+    scale: f32,
+    triangles: &[[u32; 3]],
+    surfels: &mut [Surfel],
+) -> Vec<Vec3> {
     let s = scale as f64;
     let p = |i: u32| points[i as usize].as_dvec3() * s;
     let normals: Vec<Vec3> = surfels.iter().map(|q| q.normal).collect();
@@ -227,12 +234,19 @@ pub fn ring_shapes(points: &[Vec3], scale: f32, triangles: &[[u32; 3]], surfels:
         .for_each(
             |(v, surfel)| match vertex_shape(&p, &n, v as u32, || ring(v)) {
                 Some((r, shape)) => {
+                    let at = |w: u32| (p(w), n(w));
+                    let triangles =
+                        ring(v).map(|(_, next, previous)| [at(v as u32), at(next), at(previous)]);
+                    let (normal, shape) = fit_field(at(v as u32), (r, &shape), triangles)
+                        .unwrap_or((n(v as u32), shape));
                     surfel.radius = (r / s) as f32;
+                    surfel.normal = normal.as_vec3();
                     surfel.shape = shape.pack();
                 }
                 None => surfel.shape = SplatShape::circle(surfel.normal),
             },
         );
+    normals
 }
 
 /// Vertex v's one-ring ellipse (see the module doc): its major semi-axis (unit-scaled)

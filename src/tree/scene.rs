@@ -161,11 +161,12 @@ pub fn build_from_geometry(
     report: &dyn Report,
 ) -> (SequentialList, Option<MeshData>) {
     report.step(Step::Surfels, 0);
-    let leaves = leaf_surfels(&geometry);
+    let mut leaves = leaf_surfels(&geometry);
     report.finished(Finished::Surfels(&leaves));
+    let normals = std::mem::take(&mut leaves.vertex_normals);
     let mesh = (keep_mesh && !geometry.triangles.is_empty()).then(|| MeshData {
         positions: leaves.surfels.iter().map(|s| s.position).collect(),
-        normals: leaves.surfels.iter().map(|s| s.normal).collect(),
+        normals,
         colors: leaves.surfels.iter().map(|s| s.color).collect(),
         // The geometry is dropped next: its triangles move, they are not copied.
         triangles: std::mem::take(&mut geometry.triangles),
