@@ -384,13 +384,13 @@ struct Attributes {
 }
 
 // Splat kernel: a Gaussian of the splat-space distance, shifted and rescaled to reach 0
-// at the rim (ρ = 1) so that where a splat ends the blend has no step.
+// at the rim (ρ = 1) so that where a splat ends the blend has no step. Its k comes from
+// Rust (`surfel::field::kernel`, which the builder's colour fit models this blend with).
 fn kernel(rho2: f32) -> f32 {
     let rim = exp(-KERNEL_SHARPNESS);
     return max(exp(-KERNEL_SHARPNESS * rho2) - rim, 0.0) / (1.0 - rim);
 }
 
-const KERNEL_SHARPNESS: f32 = 2.5;
 // What a fragment seen from behind weighs against front ones, on a model whose normals
 // face outward. Where only such fragments reach a pixel the weight cancels out in pass 3;
 // where front ones blend with them they dominate. Measured, leaves only, 8 views (knot,

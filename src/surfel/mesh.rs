@@ -133,14 +133,15 @@ enum Source {
 }
 
 /// Normals and radii of the vertices of a mesh, written into `surfels` (one per
-/// vertex). `scale` is the model's unit scale ([`super::unit_scale`]). Returns the
+/// vertex). `scale` is the model's unit scale ([`super::unit_scale`]); `given` the
+/// file's normals, `colored` whether it has colours (the surfels' on entry). Returns the
 /// isolated vertices that are redundant ([`super::isolated`]), ascending, and the vertex
 /// normals (the surfels' are their shading fields', `super::field`).
 pub fn vertex_disks(
     points: &[Vec3],
     scale: f32,
     triangles: &[[u32; 3]],
-    given: Option<&[Vec3]>,
+    (given, colored): (Option<&[Vec3]>, bool),
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
 ) -> (Vec<u32>, Vec<Vec3>) {
@@ -215,7 +216,7 @@ pub fn vertex_disks(
         stats,
     );
     stats.turned_outward = orient_outward(points, surfels);
-    let normals = super::ring::ring_shapes(points, scale, triangles, surfels);
+    let normals = super::ring::ring_shapes(points, scale, triangles, surfels, colored);
     let redundant = super::isolated::redundant(points, scale, &isolated, surfels);
     stats.redundant_vertices = redundant.len() as u64;
     (redundant, normals)

@@ -87,7 +87,8 @@ pub struct LeafSurfels {
     pub oriented_normals: bool,
     pub stats: SurfelStats,
     /// A mesh's vertex normals, which its triangles interpolate (the surfels' normals
-    /// are those of their shading fields, [`field`]); empty for a cloud.
+    /// are those of their shading fields, and their colours fitted to the blend,
+    /// [`field`]; the vertex colours are the file's); empty for a cloud.
     pub vertex_normals: Vec<Vec3>,
     /// Surfels (ascending indices) that [`LeafSurfels::drop_redundant`] leaves out of
     /// the tree: a mesh's redundant isolated vertices ([`isolated`]).
@@ -222,7 +223,7 @@ fn leaf_surfels_among(g: &Geometry, own: usize) -> LeafSurfels {
             &g.positions,
             scale,
             &g.triangles,
-            given,
+            (given, g.colors.is_some()),
             &mut surfels,
             &mut stats,
         );

@@ -28,7 +28,7 @@ use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::Surfel;
-use super::field::fit_field;
+use super::field::{COLOR_STEPS, Footprint, color_step, fit_field};
 use super::mesh::{RADIUS_MARGIN, triangle_terms};
 use super::shape::{Clip, Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
 
@@ -204,8 +204,9 @@ fn corners_by_vertex(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<usize>
 /// Replaces the radius of every vertex that a triangle holds by the major semi-axis of
 /// its one-ring ellipse and sets its shape (see the module doc); other vertices get a
 /// circle; sets the normal of each ellipse to its shading field's ([`fit_field`]).
-/// `points` are the model's positions, `scale` its unit scale; the vertex normals are
-/// read from `surfels`, and returned. Each vertex gathers over its own corners ([`corners_by_vertex`]), in
+/// With `colored` (a model with colours), fits the splats' colours to the blend
+/// ([`fit_colors`]). `points` are the model's positions, `scale` its unit scale; the
+/// vertex normals are read from `surfels`, and returned. Each vertex gathers over its own corners ([`corners_by_vertex`]), in
 /// parallel, and everything it needs is its own: one pass, with no per-vertex
 /// temporaries (on the Lucy-size model they were 1.7 GB of fresh pages to fault in).
 pub fn ring_shapes(
@@ -213,6 +214,7 @@ pub fn ring_shapes(
     scale: f32,
     triangles: &[[u32; 3]],
     surfels: &mut [Surfel],
+    colored: bool,
 ) -> Vec<Vec3> {
     let s = scale as f64;
     let p = |i: u32| points[i as usize].as_dvec3() * s;
@@ -246,7 +248,50 @@ pub fn ring_shapes(
                 None => surfel.shape = SplatShape::circle(surfel.normal),
             },
         );
+    if colored {
+        fit_colors(
+            s,
+            &|v| ring(v).map(move |(_, next, previous)| [v as u32, next, previous]),
+            surfels,
+        );
+    }
     normals
+}
+
+/// Moves each splat's colour by [`COLOR_STEPS`] of [`color_step`] (see `field.rs`), its
+/// triangles listed by `ring` (vertex first); the mesh's colours are the surfels'
+/// colours on entry. `s` is the unit scale.
+fn fit_colors<I>(s: f64, ring: &(impl Fn(usize) -> I + Sync), surfels: &mut [Surfel])
+where
+    I: Iterator<Item = [u32; 3]>,
+{
+    let rgb = |c: [u8; 4]| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64);
+    let mesh: Vec<DVec3> = surfels.iter().map(|q| rgb(q.color)).collect();
+    let footprints: Vec<Option<Footprint>> =
+        surfels.par_iter().map(|q| Footprint::of(q, s)).collect();
+    let mut current = mesh.clone();
+    for _ in 0..COLOR_STEPS {
+        current = (0..surfels.len())
+            .into_par_iter()
+            .with_min_len(1 << 12)
+            .map(|v| {
+                let corner = |w: u32| {
+                    let (w, q) = (w as usize, &surfels[w as usize]);
+                    (
+                        q.position.as_dvec3() * s,
+                        footprints[w],
+                        mesh[w],
+                        current[w],
+                    )
+                };
+                color_step(ring(v).map(|t| t.map(corner))).unwrap_or(current[v])
+            })
+            .collect();
+    }
+    for (surfel, c) in surfels.iter_mut().zip(current) {
+        let [r, g, b] = c.to_array().map(|x| x.round().clamp(0.0, 255.0) as u8);
+        surfel.color = [r, g, b, surfel.color[3]];
+    }
 }
 
 /// Vertex v's one-ring ellipse (see the module doc): its major semi-axis (unit-scaled)
@@ -341,7 +386,7 @@ mod tests {
                 ..Surfel::zeroed()
             })
             .collect();
-        ring_shapes(points, 1.0, triangles, &mut surfels);
+        ring_shapes(points, 1.0, triangles, &mut surfels, false);
         for (i, s) in surfels.iter().enumerate() {
             let (x, y) = ((i % 4) as f64, (i / 4) as f64);
             let border = x == 0.0 || x == 3.0 || y == 0.0 || y == 3.0;

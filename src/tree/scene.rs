@@ -17,8 +17,8 @@ use super::spt_file::{SptFile, is_spt};
 use super::{NodeRecord, SequentialList, TreeMeta, build_list};
 use crate::io::model::read_model;
 use crate::io::{Geometry, PointAttributes};
-use crate::surfel::leaf_surfels;
 use crate::surfel::shape::SplatShape;
+use crate::surfel::{DEFAULT_COLOR, leaf_surfels};
 
 /// The mesh a model came from, for the reference pass: per-vertex position (relative to
 /// the same origin as the tree), unit normal (the leaf surfel's) and colour.
@@ -167,7 +167,11 @@ pub fn build_from_geometry(
     let mesh = (keep_mesh && !geometry.triangles.is_empty()).then(|| MeshData {
         positions: leaves.surfels.iter().map(|s| s.position).collect(),
         normals,
-        colors: leaves.surfels.iter().map(|s| s.color).collect(),
+        // The file's colours: the surfels' are fitted to pass 2's blend.
+        colors: geometry
+            .colors
+            .take()
+            .unwrap_or_else(|| vec![DEFAULT_COLOR; leaves.surfels.len()]),
         // The geometry is dropped next: its triangles move, they are not copied.
         triangles: std::mem::take(&mut geometry.triangles),
     });
