@@ -24,13 +24,13 @@
 //!
 //! Colours have no gradient to fit: one per splat. What pass 2 shows at a point is the
 //! kernel-weighted mean of the colours of the splats there, which flattens the mesh's
-//! linear ramps into steps a splat wide. [`color_step`] moves each colour by one damped
+//! linear ramps into steps a splat wide. [`color_step`] moves each colour by a damped
 //! Jacobi step of the least squares of that blend against the mesh's colours, the
 //! blend at a point of a triangle modelled by the splats of the triangle's three
 //! vertices (those of the next vertices out changed nothing measurable). Knot, 8 views:
-//! 0.0510 → 0.0479; 2 views, 0.0505 with the vertex colours, each colour the mean of
-//! the mesh's over its ellipse 0.0509, one undamped step 0.0480, two steps damped by
-//! [`COLOR_DAMPING`] 0.0473, four 0.0473.
+//! 0.0510 → 0.0481. On 2 views (scratch builds), against 0.0505 with the vertex
+//! colours: each colour the mean of the mesh's over its ellipse 0.0509, one undamped
+//! step 0.0480, two steps damped by [`COLOR_DAMPING`] 0.0473, four 0.0473.
 //!
 //! The normal also orients the splat's plane: it tilts by |c|, well under a degree on
 //! scanned meshes, and its ellipse still covers the ring (the covering radius bounds
