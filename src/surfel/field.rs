@@ -82,7 +82,7 @@ pub struct FieldFit {
     /// Σ w d, Σ w t.
     d: DVec2,
     t: DVec2,
-    /// Σ w d dᵀ and Σ w d tᵀ as [`Fit`] holds them, uncentred.
+    /// Σ w d dᵀ and Σ w d tᵀ as [`Fit`] holds them (weighted, uncentred).
     sums: Fit,
 }
 
@@ -93,7 +93,13 @@ impl FieldFit {
         self.weight += w;
         self.d += w * d;
         self.t += w * t;
-        self.sums.add(d * w.sqrt(), t * w.sqrt());
+        let (m, r) = (&mut self.sums.moments, &mut self.sums.rhs);
+        m[0] += w * d.x * d.x;
+        m[1] += w * d.x * d.y;
+        m[2] += w * d.y * d.y;
+        r[0] += w * d.x * t.x;
+        r[1] += w * (d.y * t.x + d.x * t.y);
+        r[2] += w * d.y * t.y;
     }
 
     /// ((a, b, c), (c₁, c₂)), or None when no point weighs anything.
@@ -136,19 +142,34 @@ pub fn fit_field(
     let inv_ratio2 = 1.0 / (shape.ratio * shape.ratio);
     let mut fit = FieldFit::default();
     for corners in triangles {
-        let area = 0.5
-            * (corners[1].0 - corners[0].0)
-                .cross(corners[2].0 - corners[0].0)
-                .length();
-        for l in LATTICE {
-            let x = l[0] * corners[0].0 + l[1] * corners[1].0 + l[2] * corners[2].0 - at;
-            let xy = DVec2::new(x.dot(u), x.dot(v)) / r;
+        let [(a, na), (b, nb), (c, nc)] = corners;
+        let area = 0.5 * (b - a).cross(c - a).length();
+        // Plane coordinates and tangential normal components are linear in the
+        // barycentric coordinates; the interpolated normal's length is √(λᵀ Gram λ).
+        let plane = corners.map(|(p, _)| DVec2::new((p - at).dot(u), (p - at).dot(v)) / r);
+        let tangential = corners.map(|(_, n)| DVec2::new(n.dot(u), n.dot(v)));
+        let gram = [
+            na.dot(na),
+            nb.dot(nb),
+            nc.dot(nc),
+            na.dot(nb),
+            na.dot(nc),
+            nb.dot(nc),
+        ];
+        for [l0, l1, l2] in LATTICE {
+            let xy = l0 * plane[0] + l1 * plane[1] + l2 * plane[2];
             if xy.x * xy.x + xy.y * xy.y * inv_ratio2 >= 1.0 {
                 continue; // beyond the splat's rim
             }
-            let n = (l[0] * corners[0].1 + l[1] * corners[1].1 + l[2] * corners[2].1)
-                .normalize_or(normal);
-            fit.add(xy, DVec2::new(n.dot(u), n.dot(v)), area);
+            let length2 = l0 * l0 * gram[0]
+                + l1 * l1 * gram[1]
+                + l2 * l2 * gram[2]
+                + 2.0 * (l0 * l1 * gram[3] + l0 * l2 * gram[4] + l1 * l2 * gram[5]);
+            if length2 <= 0.0 {
+                continue; // opposite normals cancel
+            }
+            let t = (l0 * tangential[0] + l1 * tangential[1] + l2 * tangential[2]) / length2.sqrt();
+            fit.add(xy, t, area);
         }
     }
     let (gradient, offset) = fit.solve()?;
