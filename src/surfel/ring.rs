@@ -12,7 +12,9 @@
 //!   the longest edge otherwise) around the vertex; R = max ρ is the major semi-axis.
 //!   For a round one-ring this is exactly the circle rule. Neighbours whose ellipses
 //!   differ cover a triangle only approximately; the render tests measure holes.
-//! * the normal field G is the least-squares fit of Δn ≈ G d, times R;
+//! * the normal field G is the least-squares fit of Δn ≈ G d, times R; it orients the
+//!   ellipse's axes only: the splat's drawn field (its normal and G) is then fitted to
+//!   the triangles' interpolated normals over the ellipse (`field.rs`);
 //! * on the mesh's border the ellipse is clipped. Where the ring has one border edge
 //!   out and one in, to the wedge of its fan ([`border_fan`], [`Clip::Wedge`]). Else
 //!   by a line: in a triangle (i, j, k) vertex i has out-neighbour j and in-neighbour
@@ -202,13 +204,14 @@ fn corners_by_vertex(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<usize>
 }
 
 /// Replaces the radius of every vertex that a triangle holds by the major semi-axis of
-/// its one-ring ellipse and sets its shape (see the module doc); other vertices get a
-/// circle; sets the normal of each ellipse to its shading field's ([`fit_field`]).
-/// With `colored` (a model with colours), fits the splats' colours to the blend
-/// ([`fit_colors`]). `points` are the model's positions, `scale` its unit scale; the
-/// vertex normals are read from `surfels`, and returned. Each vertex gathers over its own corners ([`corners_by_vertex`]), in
-/// parallel, and everything it needs is its own: one pass, with no per-vertex
-/// temporaries (on the Lucy-size model they were 1.7 GB of fresh pages to fault in).
+/// its one-ring ellipse and sets its shape (see the module doc) and its normal, that of
+/// its shading field ([`fit_field`]); other vertices get a circle. With `colored` (a
+/// model with colours), fits the splats' colours to the blend ([`fit_colors`]).
+/// `points` are the model's positions, `scale` its unit scale; the vertex normals are
+/// read from `surfels`, and returned. Each vertex gathers over its own corners
+/// ([`corners_by_vertex`]), in parallel, and everything it needs is its own: one pass,
+/// with no per-vertex temporaries (on the Lucy-size model they were 1.7 GB of fresh
+/// pages to fault in).
 pub fn ring_shapes(
     points: &[Vec3],
     scale: f32,
