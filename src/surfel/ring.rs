@@ -12,9 +12,9 @@
 //!   the longest edge otherwise) around the vertex; R = max ρ is the major semi-axis.
 //!   For a round one-ring this is exactly the circle rule. Neighbours whose ellipses
 //!   differ cover a triangle only approximately; the render tests measure holes.
-//! * the normal field G is the least-squares fit of Δn ≈ G d, times R; it orients the
-//!   ellipse's axes only: the splat's drawn field (its normal and G) is then fitted to
-//!   the triangles' interpolated normals over the ellipse (`field.rs`);
+//! * the normal field G is the least-squares fit of Δn ≈ G d, times R, where the
+//!   ring spans no area for `field.rs`; elsewhere the drawn field (the splat's normal
+//!   and G) is fitted to the triangles' interpolated normals over the ellipse;
 //! * on the mesh's border the ellipse is clipped. Where the ring has one border edge
 //!   out and one in, to the wedge of its fan ([`border_fan`], [`Clip::Wedge`]). Else
 //!   by a line: in a triangle (i, j, k) vertex i has out-neighbour j and in-neighbour
