@@ -35,10 +35,9 @@ struct Frame {
     cull_back_faces: u32,
     lod_on: u32,
     lod_frozen: u32,
-    // Splat radius scale (rendered radius / stored radius), and padding (elevation_range
-    // is 8-byte aligned).
-    radius_scale: f32,
-    radius_pad: f32,
+    // Padding: elevation_range is 8-byte aligned.
+    pad_a: f32,
+    pad_b: f32,
     // Lowest and highest node centre height along elevation_up, relative to the model
     // origin (MODE_ELEVATION).
     elevation_range: vec2<f32>,
@@ -212,7 +211,7 @@ fn view_disk(n: Node) -> ViewDisk {
     let world = n.position + frame.model_offset;
     let center = (frame.view * vec4<f32>(world, 1.0)).xyz;
     let normal = normalize((frame.view * vec4<f32>(n.normal, 0.0)).xyz);
-    return ViewDisk(center, normal, n.radius * frame.radius_scale);
+    return ViewDisk(center, normal, n.radius);
 }
 
 // The per-splat culling of both strategies (vertex stage, or compute compaction): the

@@ -201,8 +201,8 @@ impl Camera {
     }
 
     /// What the GPU's frustum test sees, relative to the model's origin, for an image of
-    /// `aspect` (width / height) with splats scaled by `radius_scale`.
-    pub fn view_cone(&self, meta: &TreeMeta, aspect: f64, radius_scale: f64) -> ViewCone {
+    /// `aspect` (width / height).
+    pub fn view_cone(&self, meta: &TreeMeta, aspect: f64) -> ViewCone {
         let (right, up, forward) = self.axes();
         let tan_y = (self.fov_y * 0.5).tan();
         ViewCone {
@@ -212,7 +212,6 @@ impl Camera {
             forward,
             tan_half_fov: [tan_y * aspect, tan_y],
             near: self.near_plane(meta),
-            radius_scale,
         }
     }
 

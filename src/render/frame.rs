@@ -33,8 +33,8 @@ pub(super) struct FrameUniform {
     pub cull_back_faces: u32,
     pub lod_on: u32,
     pub lod_frozen: u32,
-    pub radius_scale: f32,
-    pub radius_pad: f32,
+    pub pad_a: f32,
+    pub pad_b: f32,
     pub elevation_range: [f32; 2],
     pub lod_eye: [f32; 3],
     pub edl_radius_px: f32,
@@ -134,8 +134,8 @@ impl FrameUniform {
             cull_back_faces: settings.cull_back_faces as u32,
             lod_on: (lod_eps > 0.0) as u32,
             lod_frozen: settings.lod_eye.is_some() as u32,
-            radius_scale: settings.radius_scale,
-            radius_pad: 0.0,
+            pad_a: 0.0,
+            pad_b: 0.0,
             elevation_range,
             lod_eye: settings
                 .lod_eye

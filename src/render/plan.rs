@@ -141,7 +141,7 @@ pub(super) fn plan(
     let meta = scene.meta();
     let lod_eye = settings.lod_eye.unwrap_or(camera.eye) - DVec3::from(meta.origin);
     let aspect = width as f64 / height.max(1) as f64;
-    let cone = camera.view_cone(meta, aspect, settings.radius_scale as f64);
+    let cone = camera.view_cone(meta, aspect);
     let (lod_eps, ranges, wanted) = fitting_eps(scene, (lod_eye, &cone), wanted_eps, gpu);
     let mut wanted_slices: Vec<usize> = wanted.iter().flat_map(|r| gpu.slices_of(r)).collect();
     wanted_slices.dedup();

@@ -55,8 +55,6 @@ pub struct Settings {
     pub light: Vec3,
     /// Background colour, sRGB 0–1.
     pub background: [f32; 3],
-    /// Rendered radius / stored radius: more overlap blends more smoothly.
-    pub radius_scale: f32,
     pub culling: Culling,
     /// The eye the level of detail is chosen for (file coordinates) when it is frozen
     /// while the camera moves; None: the camera's own eye.
@@ -77,7 +75,6 @@ impl Default for Settings {
             cull_back_faces: false,
             light: Vec3::new(0.4, 0.6, 1.0),
             background: [1.0, 1.0, 1.0],
-            radius_scale: 1.0,
             culling: Culling::Compute,
             lod_eye: None,
             edl_strength: 1.0,

@@ -58,8 +58,6 @@ pub struct ViewCone {
     pub forward: DVec3,
     pub tan_half_fov: [f64; 2],
     pub near: f64,
-    /// Splats are drawn this many times their stored radius.
-    pub radius_scale: f64,
 }
 
 impl ViewCone {
@@ -75,11 +73,11 @@ impl ViewCone {
     }
 
     /// Whether any splat of `chunk` may be seen: the sphere around its box of centres,
-    /// grown by its largest (scaled) radius.
+    /// grown by its largest radius.
     pub fn sees_chunk(&self, chunk: &Chunk) -> bool {
         let lo = Vec3::from(chunk.centre_min).as_dvec3();
         let hi = Vec3::from(chunk.centre_max).as_dvec3();
-        let r = 0.5 * (hi - lo).length() + chunk.radius_max as f64 * self.radius_scale.max(1.0);
+        let r = 0.5 * (hi - lo).length() + chunk.radius_max as f64;
         self.sees_sphere(0.5 * (lo + hi), r)
     }
 }
