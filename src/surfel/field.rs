@@ -40,7 +40,6 @@
 use glam::{DVec2, DVec3};
 
 use super::Surfel;
-
 use super::shape::{Fit, Shape};
 
 /// The splat kernel of pass 2 (WGSL `kernel`, which takes its k from here): a Gaussian
