@@ -12,6 +12,16 @@ struct SplatShape {
     ratio_a: u32,    // minor / major semi-axis, a: two f16
     b_c: u32,        // b, c: two f16
     clip: u32,       // a line or a wedge, see is_clipped and clip_vector
+    color_a: u32,    // the colour field: cx (r, g, b), cy r as snorm8
+    color_b: u32,    // cy g, b as snorm8; their shared scale, f16, in the high half
+}
+
+// The colour field's cx and cy (RGB change over one major radius along u and v).
+fn color_field(packed: SplatShape) -> array<vec3<f32>, 2> {
+    let a = unpack4x8snorm(packed.color_a);
+    let b = unpack4x8snorm(packed.color_b);
+    let scale = unpack2x16float(packed.color_b).y;
+    return array<vec3<f32>, 2>(a.xyz * scale, vec3<f32>(a.w, b.x, b.y) * scale);
 }
 
 // Whether a packed clip (src/surfel/clip.rs) cuts anything: a wedge (its tag sets the

@@ -68,6 +68,10 @@ struct SplatVarying {
     @location(8) @interpolate(flat) clip_cut: vec4<f32>,
     // How far pass 1 pushes the splat back (view units), before the footprint term
     @location(9) @interpolate(flat) push: f32,
+    // The colour field (the node's own colours only): RGB change over one major radius
+    // along u and v
+    @location(10) @interpolate(flat) color_dx: vec3<f32>,
+    @location(11) @interpolate(flat) color_dy: vec3<f32>,
 }
 
 // Whether the pipeline's fragments draw the prefilter's band around each splat's
@@ -194,6 +198,11 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     out.normal = normal;
     out.tangent_u = u;
     out.color = splat_color(node, index);
+    if COLOR_SOURCE == COLOR_NODE {
+        let field = color_field(packed);
+        out.color_dx = field[0];
+        out.color_dy = field[1];
+    }
     out.extra = vec4<f32>(r, center_px, ratio);
     out.gradient = shape.gradient;
     let covariance = screen_covariance(center, r * u, ratio * r * v);
@@ -314,6 +323,8 @@ struct Hit {
     normal: vec3<f32>,
     // Whether the patch itself (not only the prefilter) covers the pixel centre.
     centre_inside: bool,
+    // Plane coordinates of the hit in major radii, held within the rim.
+    xy: vec2<f32>,
 }
 
 // dᵀ Q d for a conic Q = (Q11, Q12, Q22).
@@ -343,7 +354,7 @@ fn hit(in: SplatVarying) -> Hit {
     let g = in.gradient;
     let v = cross(in.normal, in.tangent_u);
     let n = in.normal + in.tangent_u * (g.x * xy.x + g.y * xy.y) + v * (g.y * xy.x + g.z * xy.y);
-    return Hit(rho2, depth, normalize(n), h.object2 <= 1.0);
+    return Hit(rho2, depth, normalize(n), h.object2 <= 1.0, xy);
 }
 
 // Beyond the rim (of the patch, or of the prefilter's band), or where the weight is too
@@ -384,12 +395,13 @@ struct Attributes {
 }
 
 // Splat kernel: a Gaussian of the splat-space distance, shifted and rescaled to reach 0
-// at the rim (ρ = 1) so that where a splat ends the blend has no step. Its k comes from
-// Rust (`surfel::field::kernel`, which the builder's colour fit models this blend with).
+// at the rim (ρ = 1) so that where a splat ends the blend has no step.
 fn kernel(rho2: f32) -> f32 {
     let rim = exp(-KERNEL_SHARPNESS);
     return max(exp(-KERNEL_SHARPNESS * rho2) - rim, 0.0) / (1.0 - rim);
 }
+
+const KERNEL_SHARPNESS: f32 = 2.5;
 
 // What a fragment seen from behind weighs against front ones, on a model whose normals
 // face outward. Where only such fragments reach a pixel the weight cancels out in pass 3;
@@ -460,7 +472,8 @@ fn blended(in: SplatVarying, h: Hit, weight: f32, coverage: vec4<f32>) -> Attrib
     let n = select(h.normal, -h.normal, back);
     w *= select(1.0, BACK_WEIGHT, back && frame.oriented_normals != 0u);
     var out: Attributes;
-    out.color = vec4<f32>(in.color.rgb * w, w);
+    let color = clamp(in.color.rgb + in.color_dx * h.xy.x + in.color_dy * h.xy.y, vec3<f32>(0.0), vec3<f32>(1.0));
+    out.color = vec4<f32>(color * w, w);
     out.normal = vec4<f32>(n * w, h.depth * w);
     out.coverage = coverage;
     out.depth = depth_of(h.depth);

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use spt::io::atomic::{temporary_path, write_atomically};
 use spt::io::ply::read_ply;
 use spt::surfel::leaf_surfels;
+use spt::surfel::shape::SplatShape;
 use spt::tree::select::PrefixIndex;
 use spt::tree::spt_file::{SptError, SptFile, write_spt, write_to};
 use spt::tree::{NodeRecord, SequentialList, build_sequential_list};
@@ -212,14 +213,17 @@ fn version_2_files_read_as_files_without_attributes() {
     // the chunk table, the δ suffix maxima and the block heads (2 bytes each per block
     // of 64 nodes).
     let n = list.nodes.len();
-    let size = 256 + n * (32 + 4 + 16);
     let blocks: usize = list
         .chunks
         .iter()
         .map(|c| (c.count as usize).div_ceil(64))
         .sum();
-    assert_eq!(bytes.len(), size + list.chunks.len() * 48 + 4 * blocks);
-    // Version 2: no attributes section, no chunk table.
+    let tail = list.chunks.len() * 48 + 4 * blocks;
+    assert_eq!(bytes.len(), 256 + n * (32 + 4 + 24) + tail);
+    // Version 2: 16-byte shapes, no attributes section, no chunk table.
+    let mut bytes = narrowed(&bytes);
+    let size = 256 + n * (32 + 4 + 16);
+    assert_eq!(bytes.len(), size + tail);
     bytes.truncate(size);
     bytes[8..12].copy_from_slice(&2u32.to_le_bytes());
     bytes[160..168].copy_from_slice(&(size as u64).to_le_bytes());
@@ -230,11 +234,19 @@ fn version_2_files_read_as_files_without_attributes() {
     std::fs::write(&path, &bytes).unwrap();
     let file = SptFile::open(&path).unwrap();
     assert_eq!(file.version, 2);
-    // Read as one chunk over the whole list.
+    // Read as one chunk over the whole list, the shapes with a zero colour field.
     let back = file.to_list();
+    let without_color: Vec<SplatShape> = list
+        .shapes
+        .iter()
+        .map(|s| SplatShape {
+            color: [0; 2],
+            ..*s
+        })
+        .collect();
     assert_eq!(
         (back.nodes, back.shapes, back.parents),
-        (list.nodes, list.shapes, list.parents)
+        (list.nodes, without_color, list.parents)
     );
     assert_eq!(back.chunks.len(), 1);
     assert_eq!(back.chunks[0].count as usize, n);
@@ -258,6 +270,26 @@ fn lidar_attributes_survive_the_file() {
     assert_eq!(file.to_list(), list);
 }
 
+/// `bytes` (a version 7 image) as version 6 wrote it: 16-byte shapes, without their
+/// colour field, the sections after them moved up.
+fn narrowed(bytes: &[u8]) -> Vec<u8> {
+    let u64_at = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());
+    let (n, shapes_at) = (u64_at(32) as usize, u64_at(176) as usize);
+    let mut old = bytes[..shapes_at].to_vec();
+    for k in 0..n {
+        old.extend_from_slice(&bytes[shapes_at + 24 * k..][..16]);
+    }
+    old.extend_from_slice(&bytes[shapes_at + 24 * n..]);
+    // File size, then the offsets of the attributes, the chunk table and the suffixes.
+    for at in [160, 188, 204, 224] {
+        old[at..at + 8].copy_from_slice(&(u64_at(at) - 8 * n as u64).to_le_bytes());
+    }
+    old[184..188].copy_from_slice(&16u32.to_le_bytes());
+    old[8..12].copy_from_slice(&6u32.to_le_bytes());
+    assert!(spt::tree::spt_file::reseal(&mut old));
+    old
+}
+
 /// `bytes` (a version 6 image) cut to `end` and marked `version` (its header's block
 /// fields zeroed before version 5), resealed and written to `name` in `dir`.
 fn older(bytes: &[u8], (version, end): (u32, usize), dir: &Path, name: &str) -> PathBuf {
@@ -279,28 +311,36 @@ fn older_files_build_the_index_version_6_files_store_it() {
     let mut bytes = Vec::new();
     write_to(&mut bytes, &list).unwrap();
     let dir = common::temp_dir();
-    let path = dir.path().join("v6.spt");
+    let path = dir.path().join("v7.spt");
     std::fs::write(&path, &bytes).unwrap();
     let built = PrefixIndex::new(&list.meta, &list.chunks, &list.nodes);
     // Streaming opens read the stored index, the same as the one built from the nodes.
     let (file, stored) = SptFile::open_for_streaming(&path).unwrap();
-    assert_eq!(file.version, 6);
+    assert_eq!(file.version, 7);
+    assert_eq!(stored, built);
+    // Version 6: 16-byte shapes, read with a zero colour field; the same index.
+    let v6 = narrowed(&bytes);
+    let path = dir.path().join("v6.spt");
+    std::fs::write(&path, &v6).unwrap();
+    let (file, stored) = SptFile::open_for_streaming(&path).unwrap();
+    assert_eq!((file.version, file.shapes().len()), (6, list.nodes.len()));
     assert_eq!(stored, built);
     // Version 5: the same file without the block heads; version 4 without the δ suffix
     // maxima either. What they lack is built.
     let blocks = built.block_heads().len();
     let table_end = 256 + list.nodes.len() * 52 + list.chunks.len() * 48;
-    let v5 = older(&bytes, (5, table_end + 2 * blocks), dir.path(), "v5.spt");
+    let v5 = older(&v6, (5, table_end + 2 * blocks), dir.path(), "v5.spt");
     let file = SptFile::open(&v5).unwrap();
     assert_eq!((file.version, file.block_heads()), (5, None));
     assert_eq!(file.delta_suffix(), Some(built.delta_suffix()));
     assert_eq!(file.prefix_index().unwrap(), built);
-    let v4 = older(&bytes, (4, table_end), dir.path(), "v4.spt");
+    let v4 = older(&v6, (4, table_end), dir.path(), "v4.spt");
     let file = SptFile::open(&v4).unwrap();
     assert_eq!((file.version, file.delta_suffix()), (4, None));
     assert_eq!(file.prefix_index().unwrap(), built);
     // A stored maximum below a node's δ, or a head below a block's parent error, would
     // cut prefixes short: the full check refuses them, naming the file.
+    let table_end = table_end + 8 * list.nodes.len(); // in the version 7 image
     for (at, name, what) in [
         (table_end, "bad_suffix.spt", "suffix"),
         (table_end + 2 * blocks, "bad_head.spt", "heads"),

@@ -12,7 +12,7 @@
 //! broken shader fails `cargo test` without a GPU.
 
 use super::settings::Mode;
-use crate::tree::record::{KERNEL_SHARPNESS, NO_CLIP, WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
+use crate::tree::record::{NO_CLIP, WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
 
 /// Threads per workgroup of the compute passes (`@workgroup_size(WORKGROUP_SIZE)`).
 pub const WORKGROUP_SIZE: u32 = 256;
@@ -76,8 +76,7 @@ pub fn constants_wgsl() -> String {
          const WEDGE_MARGIN: f32 = {WEDGE_MARGIN:?};\n\
          const WEDGE_ANGLE_BITS: u32 = {WEDGE_ANGLE_BITS}u;\n\
          const WEDGE_TAG: u32 = {WEDGE_TAG}u;\n\
-         const NO_CLIP: u32 = {NO_CLIP}u;\n\
-         const KERNEL_SHARPNESS: f32 = {KERNEL_SHARPNESS:?};\n"
+         const NO_CLIP: u32 = {NO_CLIP}u;\n"
     );
     let values = [
         ("ALL_SPLATS", SplatClass::All as u32),

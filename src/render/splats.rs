@@ -4,7 +4,7 @@
 //! node: every node of the prefix, culled in the vertex stage ("direct"), or the
 //! survivors that `cull.rs` compacted, drawn indirectly ("compacted"). WGSL:
 //! `shaders/splat.wgsl`. The splat passes read each drawn node's record (32 bytes) and
-//! shape (16 bytes, [`SplatShape`]); the cull pass reads each tested node's record and
+//! shape (24 bytes, [`SplatShape`]); the cull pass reads each tested node's record and
 //! each survivor's shape, to sort it into one of its two lists.
 
 use std::sync::OnceLock;

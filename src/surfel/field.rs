@@ -22,15 +22,13 @@
 //! 0.0510, 0.0167, 0.0186 (the mesh at 1×: 0.0235, 0.0091, 0.0128). Lattices of degree
 //! 2 and 6 changed the figures by under 3 %.
 //!
-//! Colours have no gradient to fit: one per splat. What pass 2 shows at a point is the
-//! kernel-weighted mean of the colours of the splats there, which flattens the mesh's
-//! linear ramps into steps a splat wide. [`color_step`] moves each colour by a damped
-//! Jacobi step of the least squares of that blend against the mesh's colours, the
-//! blend at a point of a triangle modelled by the splats of the triangle's three
-//! vertices (those of the next vertices out changed nothing measurable). Knot, 8 views:
-//! 0.0510 → 0.0481. On 2 views (scratch builds), against 0.0505 with the vertex
-//! colours: each colour the mean of the mesh's over its ellipse 0.0509, one undamped
-//! step 0.0480, two steps damped by [`COLOR_DAMPING`] 0.0473, four 0.0473.
+//! Colours get a field the same way ([`fit_color_field`]): colour ≈ c₀ + cₓ x + c_y y
+//! fitted to the mesh's interpolated colours over the same points; the splat's colour
+//! becomes c₀. One colour per splat had flattened the mesh's ramps into steps a splat
+//! wide, which pass 2's blend of constant colours cannot undo. Knot, 8 views: 0.0510
+//! with the vertex colours; 0.0481 with the colours moved by two damped Jacobi steps of
+//! the least squares of the modelled blend (no field, tried and replaced); 0.0421 with
+//! the fields (those steps on top of the fields: 0.0429 on 2 views, against 0.0411).
 //!
 //! The normal also orients the splat's plane: it tilts by |c|, well under a degree on
 //! scanned meshes, and its ellipse still covers the ring (the covering radius bounds
@@ -39,20 +37,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::Surfel;
 use super::shape::{Fit, Shape};
-
-/// The splat kernel of pass 2 (WGSL `kernel`, which takes its k from here): a Gaussian
-/// of ρ² shifted and rescaled to reach 0 at the rim, (e^(−k ρ²) − e^(−k)) / (1 − e^(−k)),
-/// 0 beyond it.
-pub fn kernel(rho2: f64) -> f64 {
-    let k = KERNEL_SHARPNESS as f64;
-    let rim = (-k).exp();
-    (((-k * rho2).exp() - rim) / (1.0 - rim)).max(0.0)
-}
-
-/// The kernel's k.
-pub const KERNEL_SHARPNESS: f32 = 2.5;
 
 /// Barycentric points of the fit in each triangle, vertex first: the degree-3 lattice
 /// (i/3, j/3, k/3), i + j + k = 3.
@@ -184,77 +169,52 @@ pub fn fit_field(
     ))
 }
 
-/// Damping of the colour steps: a Jacobi step on coupled unknowns overshoots where
-/// neighbours move together (one undamped step: 0.0480 on the knot, 2 views; two at
-/// 0.7: 0.0473).
-pub const COLOR_DAMPING: f64 = 0.7;
-
-/// Colour steps run one after another (more changed nothing measurable).
-pub const COLOR_STEPS: usize = 2;
-
-/// A splat's footprint, as the colour step weighs points by pass 2's kernel.
-#[derive(Clone, Copy)]
-pub struct Footprint {
-    centre: DVec3,
-    u: DVec3,
-    v: DVec3,
-    /// 1 / r and 1 / (r · ratio): plane coordinates in radii of each axis.
-    inv_radii: DVec2,
-}
-
-impl Footprint {
-    /// The splat of `surfel`, positions scaled by `scale`; None without an area.
-    pub fn of(surfel: &Surfel, scale: f64) -> Option<Footprint> {
-        let r = surfel.radius as f64 * scale;
-        let normal = surfel.normal.as_dvec3();
-        let shape = surfel.shape.unpack(normal);
-        (r > 0.0).then(|| Footprint {
-            centre: surfel.position.as_dvec3() * scale,
-            u: shape.axis,
-            v: shape.minor_axis(normal),
-            inv_radii: DVec2::new(1.0 / r, 1.0 / (r * shape.ratio)),
-        })
-    }
-
-    /// The kernel's weight at `x` (the point's offset projected on the splat's plane).
-    pub fn weight(&self, x: DVec3) -> f64 {
-        let d = x - self.centre;
-        let q = DVec2::new(d.dot(self.u), d.dot(self.v)) * self.inv_radii;
-        kernel(q.length_squared())
-    }
-}
-
-/// One corner of a triangle for [`color_step`]: its position, its splat, the mesh's
-/// colour there and the splat's current colour (RGB, 0–255).
-pub type ColorCorner = (DVec3, Option<Footprint>, DVec3, DVec3);
-
-/// The colour of the splat at the first corner of each of `triangles` after one damped
-/// Jacobi step: its current colour plus [`COLOR_DAMPING`] × Σ ŵ (C − B) / Σ ŵ², over the
-/// lattice points of its triangles (each weighing its triangle's area), where C is the
-/// mesh's colour, B the blend of the three splats' current colours and ŵ the splat's
-/// share of that blend. None where its splat weighs nothing.
-pub fn color_step(triangles: impl Iterator<Item = [ColorCorner; 3]>) -> Option<DVec3> {
-    let (mut step, mut norm, mut current) = (DVec3::ZERO, 0.0, None);
-    for corners in triangles {
-        current = Some(corners[0].3);
-        let [a, b, c] = corners.map(|c| c.0);
+/// Fits the colour field of the splat at `at` (major radius `r`, shape `shape`, normal
+/// `normal`) over `triangles`, each as its three (position, RGB 0–1) with the splat's
+/// vertex first, as [`fit_field`] fits the normals: [`color_field`] of the lattice
+/// points inside the ellipse, each weighing its triangle's area.
+pub fn fit_color_field(
+    (at, normal): (DVec3, DVec3),
+    (r, shape): (f64, &Shape),
+    triangles: impl Iterator<Item = [(DVec3, DVec3); 3]>,
+) -> Option<(DVec3, [DVec3; 2])> {
+    let (u, v) = (shape.axis, shape.minor_axis(normal));
+    let inv_ratio2 = 1.0 / (shape.ratio * shape.ratio);
+    let points = triangles.flat_map(move |corners| {
+        let [(a, ca), (b, cb), (c, cc)] = corners;
         let area = 0.5 * (b - a).cross(c - a).length();
-        for l in LATTICE {
-            let x = l[0] * a + l[1] * b + l[2] * c;
-            let w = corners.map(|c| c.1.map_or(0.0, |f| f.weight(x)));
-            let total = w[0] + w[1] + w[2];
-            if w[0] <= 0.0 {
-                continue;
-            }
-            let mesh = l[0] * corners[0].2 + l[1] * corners[1].2 + l[2] * corners[2].2;
-            let blend = (w[0] * corners[0].3 + w[1] * corners[1].3 + w[2] * corners[2].3) / total;
-            let share = w[0] / total;
-            step += area * share * (mesh - blend);
-            norm += area * share * share;
-        }
+        let plane = corners.map(|(p, _)| DVec2::new((p - at).dot(u), (p - at).dot(v)) / r);
+        LATTICE.into_iter().filter_map(move |[l0, l1, l2]| {
+            let xy = l0 * plane[0] + l1 * plane[1] + l2 * plane[2];
+            (xy.x * xy.x + xy.y * xy.y * inv_ratio2 < 1.0)
+                .then(|| (xy, l0 * ca + l1 * cb + l2 * cc, area))
+        })
+    });
+    color_field(points)
+}
+
+/// The least squares of colour ≈ c₀ + cₓ x + c_y y over `points`, each (plane
+/// coordinates in major radii, RGB, weight): (c₀, [cₓ, c_y]), or None where the points
+/// do not span the plane.
+pub fn color_field(
+    points: impl Iterator<Item = (DVec2, DVec3, f64)>,
+) -> Option<(DVec3, [DVec3; 2])> {
+    // Σ w (1, x, y)ᵀ (1, x, y) and Σ w (1, x, y) colourᵀ.
+    let (mut m, mut rhs) = (glam::DMat3::ZERO, glam::DMat3::ZERO);
+    for (xy, colour, w) in points {
+        let basis = DVec3::new(1.0, xy.x, xy.y) * w;
+        m += glam::DMat3::from_cols(basis, basis * xy.x, basis * xy.y);
+        rhs += glam::DMat3::from_cols(basis * colour.x, basis * colour.y, basis * colour.z);
     }
-    let current = current?;
-    (norm > 0.0).then(|| current + COLOR_DAMPING * step / norm)
+    let det = m.determinant();
+    if det.abs() <= 1e-12 * m.x_axis.x.powi(3) || !det.is_finite() {
+        return None;
+    }
+    // Column k of the solution holds (c₀, cₓ, c_y) of channel k.
+    let sol = m.inverse() * rhs;
+    let channel = |row: usize| DVec3::new(sol.x_axis[row], sol.y_axis[row], sol.z_axis[row]);
+    let (c0, cx, cy) = (channel(0), channel(1), channel(2));
+    (c0.is_finite() && cx.is_finite() && cy.is_finite()).then_some((c0, [cx, cy]))
 }
 
 #[cfg(test)]
@@ -322,45 +282,5 @@ mod tests {
             tilted > 0.0 && tilted < 0.6 * vertex,
             "{tilted} rad against {vertex}"
         );
-    }
-}
-
-#[cfg(test)]
-mod color_tests {
-    use super::*;
-
-    /// The hexagonal fan of unit edges around the origin, each corner with a round
-    /// splat of radius 1 and the colour `color` of its position, as [`color_step`]
-    /// takes it (the current colours those of the mesh).
-    fn fan(color: impl Fn(DVec3) -> f64) -> Vec<[ColorCorner; 3]> {
-        let corner = |p: DVec3| {
-            let splat = Footprint {
-                centre: p,
-                u: DVec3::X,
-                v: DVec3::Y,
-                inv_radii: DVec2::ONE,
-            };
-            let c = DVec3::splat(color(p));
-            (p, Some(splat), c, c)
-        };
-        let at = |k: usize| DVec2::from_angle(k as f64 * std::f64::consts::FRAC_PI_3).extend(0.0);
-        (0..6)
-            .map(|k| [corner(DVec3::ZERO), corner(at(k)), corner(at(k + 1))])
-            .collect()
-    }
-
-    #[test]
-    fn a_ramp_keeps_its_colour_and_a_peak_is_sharpened() {
-        let ramp = color_step(fan(|p| 100.0 + 50.0 * p.x).into_iter()).unwrap();
-        assert!(
-            (ramp - DVec3::splat(100.0)).abs().max_element() < 1e-6,
-            "{ramp}"
-        );
-        // A bright vertex among dark ones: the blend near it mixes in its neighbours, so
-        // its splat must be brighter than the vertex for the blend to reach the mesh's.
-        let peak = color_step(fan(|p| if p == DVec3::ZERO { 200.0 } else { 100.0 }).into_iter());
-        let peak = peak.unwrap().x;
-        assert!(peak > 200.0 && peak < 300.0, "{peak}");
-        assert!(color_step(std::iter::empty()).is_none());
     }
 }

@@ -30,7 +30,7 @@ use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::Surfel;
-use super::field::{COLOR_STEPS, Footprint, color_step, fit_field};
+use super::field::{fit_color_field, fit_field};
 use super::mesh::{RADIUS_MARGIN, triangle_terms};
 use super::shape::{Clip, Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
 
@@ -63,6 +63,7 @@ fn oriented(normal: DVec3, fit: &Fit) -> Option<Shape> {
         ratio: (l2 / l1).sqrt().clamp(MIN_RATIO, 1.0),
         gradient: rotate_gradient(fit.gradient(), dir),
         clip: None,
+        color: [DVec3::ZERO; 2],
     })
 }
 
@@ -206,7 +207,7 @@ fn corners_by_vertex(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<usize>
 /// Replaces the radius of every vertex that a triangle holds by the major semi-axis of
 /// its one-ring ellipse and sets its shape (see the module doc) and its normal, that of
 /// its shading field ([`fit_field`]); other vertices get a circle. With `colored` (a
-/// model with colours), fits the splats' colours to the blend ([`fit_colors`]).
+/// model with colours), also its colour field ([`fit_color_field`]).
 /// `points` are the model's positions, `scale` its unit scale; the vertex normals are
 /// read from `surfels`, and returned. Each vertex gathers over its own corners
 /// ([`corners_by_vertex`]), in parallel, and everything it needs is its own: one pass,
@@ -223,6 +224,12 @@ pub fn ring_shapes(
     let p = |i: u32| points[i as usize].as_dvec3() * s;
     let normals: Vec<Vec3> = surfels.iter().map(|q| q.normal).collect();
     let n = |i: u32| normals[i as usize].as_dvec3();
+    let colors: Vec<DVec3> = if colored {
+        let rgb = |c: [u8; 4]| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 255.0;
+        surfels.iter().map(|q| rgb(q.color)).collect()
+    } else {
+        Vec::new()
+    };
     assert!(triangles.len() < (u32::MAX / 3) as usize, "corners fit u32");
     let (start, corners) = corners_by_vertex(points.len(), triangles);
     // Vertex v's corners as (triangle, its next vertex, its previous vertex).
@@ -244,6 +251,21 @@ pub fn ring_shapes(
                         ring(v).map(|(_, next, previous)| [at(v as u32), at(next), at(previous)]);
                     let (normal, shape) = fit_field(at(v as u32), (r, &shape), triangles)
                         .unwrap_or((n(v as u32), shape));
+                    let mut shape = shape;
+                    if colored {
+                        let at = |w: u32| (p(w), colors[w as usize]);
+                        let triangles = ring(v)
+                            .map(|(_, next, previous)| [at(v as u32), at(next), at(previous)]);
+                        if let Some((c0, field)) =
+                            fit_color_field((p(v as u32), normal), (r, &shape), triangles)
+                        {
+                            let [r, g, b] = (c0 * 255.0)
+                                .to_array()
+                                .map(|x| x.round().clamp(0.0, 255.0) as u8);
+                            surfel.color = [r, g, b, surfel.color[3]];
+                            shape.color = field;
+                        }
+                    }
                     surfel.radius = (r / s) as f32;
                     surfel.normal = normal.as_vec3();
                     surfel.shape = shape.pack();
@@ -251,50 +273,7 @@ pub fn ring_shapes(
                 None => surfel.shape = SplatShape::circle(surfel.normal),
             },
         );
-    if colored {
-        fit_colors(
-            s,
-            &|v| ring(v).map(move |(_, next, previous)| [v as u32, next, previous]),
-            surfels,
-        );
-    }
     normals
-}
-
-/// Moves each splat's colour by [`COLOR_STEPS`] of [`color_step`] (see `field.rs`), its
-/// triangles listed by `ring` (vertex first); the mesh's colours are the surfels'
-/// colours on entry. `s` is the unit scale.
-fn fit_colors<I>(s: f64, ring: &(impl Fn(usize) -> I + Sync), surfels: &mut [Surfel])
-where
-    I: Iterator<Item = [u32; 3]>,
-{
-    let rgb = |c: [u8; 4]| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64);
-    let mesh: Vec<DVec3> = surfels.iter().map(|q| rgb(q.color)).collect();
-    let footprints: Vec<Option<Footprint>> =
-        surfels.par_iter().map(|q| Footprint::of(q, s)).collect();
-    let mut current = mesh.clone();
-    for _ in 0..COLOR_STEPS {
-        current = (0..surfels.len())
-            .into_par_iter()
-            .with_min_len(1 << 12)
-            .map(|v| {
-                let corner = |w: u32| {
-                    let (w, q) = (w as usize, &surfels[w as usize]);
-                    (
-                        q.position.as_dvec3() * s,
-                        footprints[w],
-                        mesh[w],
-                        current[w],
-                    )
-                };
-                color_step(ring(v).map(|t| t.map(corner))).unwrap_or(current[v])
-            })
-            .collect();
-    }
-    for (surfel, c) in surfels.iter_mut().zip(current) {
-        let [r, g, b] = c.to_array().map(|x| x.round().clamp(0.0, 255.0) as u8);
-        surfel.color = [r, g, b, surfel.color[3]];
-    }
 }
 
 /// Vertex v's one-ring ellipse (see the module doc): its major semi-axis (unit-scaled)

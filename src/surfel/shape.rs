@@ -12,12 +12,18 @@
 //! G is the change of the normal over one radius R along u and v: the (negated) shape
 //! operator of the surface times R, dimensionless, symmetric as a shape operator is.
 //!
+//! A mesh splat may carry a linear colour field the same way: colour + cₓ x + c_y y,
+//! with cₓ, c_y the change of the RGB colour (0–1) over one radius along u and v
+//! (`field.rs` fits them to the triangles' interpolated colours; zero elsewhere).
+//!
 //! A splat on the mesh's border may also carry a [`Clip`] (a line or its fan's wedge,
 //! `clip.rs`), so that it ends at the border instead of spilling past it.
 //!
-//! Stored as [`SplatShape`], 16 bytes: u octahedral in two snorm16 (≤ 3·10⁻⁵ rad off,
+//! Stored as [`SplatShape`], 24 bytes: u octahedral in two snorm16 (≤ 3·10⁻⁵ rad off,
 //! re-orthogonalised to n when drawn), the ratio and a, b, c as f16 (relative error
-//! ≤ 2⁻¹¹; |G| is clamped to [`MAX_GRADIENT`]), the clip in one u32 (`clip.rs`).
+//! ≤ 2⁻¹¹; |G| is clamped to [`MAX_GRADIENT`]), the clip in one u32 (`clip.rs`), and
+//! the colour field in two: its six components as snorm8 times a shared f16 scale
+//! (their largest magnitude; error ≤ scale / 254).
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec2, DVec3, Vec3};
@@ -44,9 +50,12 @@ pub struct SplatShape {
     pub gradient: [u16; 3],
     /// The clip, packed by [`Clip::pack`].
     pub clip: u32,
+    /// The colour field: cₓ (r, g, b) and c_y r as snorm8 in the first word; c_y g, b
+    /// as snorm8 in the low half of the second, the f16 scale in its high half.
+    pub color: [u32; 2],
 }
 
-const _: () = assert!(std::mem::size_of::<SplatShape>() == 16);
+const _: () = assert!(std::mem::size_of::<SplatShape>() == 24);
 
 /// A splat's shape, unpacked.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -57,6 +66,8 @@ pub struct Shape {
     /// a, b, c of G.
     pub gradient: [f64; 3],
     pub clip: Option<Clip>,
+    /// cₓ and c_y, the colour's change (RGB, 0–1) over one radius along u and v.
+    pub color: [DVec3; 2],
 }
 
 impl Shape {
@@ -67,6 +78,7 @@ impl Shape {
             ratio: 1.0,
             gradient: [0.0; 3],
             clip: None,
+            color: [DVec3::ZERO; 2],
         }
     }
 
@@ -102,8 +114,38 @@ impl Shape {
                 .gradient
                 .map(|g| h(g.clamp(-MAX_GRADIENT, MAX_GRADIENT))),
             clip: Clip::pack(self.clip),
+            color: pack_color(self.color),
         }
     }
+}
+
+/// The colour field's words (see [`SplatShape::color`]).
+fn pack_color([x, y]: [DVec3; 2]) -> [u32; 2] {
+    let values = [x.x, x.y, x.z, y.x, y.y, y.z];
+    let scale = f16::from_f64(values.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+    let s = scale.to_f64();
+    let q = |v: f64| {
+        let n = if s > 0.0 {
+            (v / s * 127.0).round().clamp(-127.0, 127.0)
+        } else {
+            0.0
+        };
+        (n as i8) as u8 as u32
+    };
+    [
+        q(values[0]) | q(values[1]) << 8 | q(values[2]) << 16 | q(values[3]) << 24,
+        q(values[4]) | q(values[5]) << 8 | (scale.to_bits() as u32) << 16,
+    ]
+}
+
+/// Inverse of [`pack_color`].
+fn unpack_color(words: [u32; 2]) -> [DVec3; 2] {
+    let s = f16::from_bits((words[1] >> 16) as u16).to_f64();
+    let v = |w: u32, k: u32| ((w >> (8 * k)) as u8 as i8) as f64 / 127.0 * s;
+    [
+        DVec3::new(v(words[0], 0), v(words[0], 1), v(words[0], 2)),
+        DVec3::new(v(words[0], 3), v(words[1], 0), v(words[1], 1)),
+    ]
 }
 
 impl SplatShape {
@@ -119,6 +161,7 @@ impl SplatShape {
             ratio: f(self.ratio),
             gradient: self.gradient.map(f),
             clip: Clip::unpack(self.clip),
+            color: unpack_color(self.color),
         }
     }
 
@@ -267,8 +310,16 @@ mod tests {
                 normal: DVec2::from_angle(2.0),
                 offset: -0.3,
             }),
+            color: [DVec3::new(0.2, -0.05, 0.0), DVec3::new(-0.1, 0.4, 0.01)],
         };
         let back = shape.pack().unpack(n);
+        for (a, b) in back.color.iter().zip(shape.color) {
+            // snorm8 of the largest component, 0.4: 0.4 / 254 at most.
+            assert!(
+                (*a - b).abs().max_element() <= 0.4 / 254.0 + 1e-6,
+                "{a} against {b}"
+            );
+        }
         assert!(back.axis.dot(shape.axis) > 1.0 - 1e-8);
         assert!(back.axis.dot(n).abs() < 1e-12);
         assert!((back.ratio - 0.4).abs() < 1e-3);

@@ -79,6 +79,8 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
         gradient: rotate_gradient(fit.gradient(), dir),
         // Children's clip lines are not merged: an inner node's ellipse holds them whole.
         clip: None,
+        // An inner node's colour is its children's mean, constant over its ellipse.
+        color: [DVec3::ZERO; 2],
     };
     let minor = shape.minor_axis(parent.n);
     let grow = 1.0 / (std::f64::consts::PI / RIM_SAMPLES as f64).cos();
@@ -118,6 +120,7 @@ mod tests {
                 ratio,
                 gradient: [0.0; 3],
                 clip: None,
+                color: [DVec3::ZERO; 2],
             },
         }
     }

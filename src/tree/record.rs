@@ -11,8 +11,6 @@ use glam::Vec3;
 /// The second stream of a node: its ellipse and normal field (read by the splat passes).
 pub use crate::io::PointAttributes;
 pub use crate::surfel::clip::{NO_CLIP, WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
-/// The splat kernel's k: the builder fits colours to the blend that pass 2 draws.
-pub use crate::surfel::field::KERNEL_SHARPNESS;
 pub use crate::surfel::octahedral::{oct_decode, oct_encode};
 pub use crate::surfel::shape::SplatShape;
 use half::f16;

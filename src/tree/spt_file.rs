@@ -3,8 +3,9 @@
 //! ```text
 //! offset  size  field (little-endian)
 //!      0     8  magic "spt-tree"
-//!      8     4  format version (6; versions 5, 4, 3 and 2 read as well: version 5
-//!                 had no block heads, version 4 no δ suffix section either,
+//!      8     4  format version (7; versions 6, 5, 4, 3 and 2 read as well: version 6
+//!                 had 16-byte shapes, without the colour field, read with a zero
+//!                 one; version 5 had no block heads, version 4 no δ suffix section either,
 //!                 versions 3 and 2 no chunk table (their
 //!                 list is one chunk), version 2 no attributes section; version 1,
 //!                 refused, no shapes section)
@@ -22,8 +23,8 @@
 //!    152     8  offset of the parent indices (u32 per node, u32::MAX for the root)
 //!    160     8  file size
 //!    168     8  checksum: XXH3-64 of the header (this field zeroed) and all sections
-//!    176     8  offset of the splat shapes (16 bytes per node, after the parents)
-//!    184     4  splat shape size (16)
+//!    176     8  offset of the splat shapes (24 bytes per node, after the parents)
+//!    184     4  splat shape size (24; 16 before version 7)
 //!    188     8  offset of the LiDAR attributes (4 bytes per node, after the shapes;
 //!                 an empty section when flag 4 is clear)
 //!    196     4  attribute size (4)
@@ -62,12 +63,23 @@ use crate::io::{Bounds, PointAttributes};
 use crate::surfel::shape::SplatShape;
 
 pub const MAGIC: &[u8; 8] = b"spt-tree";
-pub const VERSION: u32 = 6;
+pub const VERSION: u32 = 7;
 /// The oldest version read: version 2 files are version 3 files without attributes.
 pub const OLDEST_READ: u32 = 2;
 pub const HEADER_BYTES: usize = 256;
 const RECORD_BYTES: usize = std::mem::size_of::<NodeRecord>();
 const SHAPE_BYTES: usize = std::mem::size_of::<SplatShape>();
+/// A splat shape before version 7: [`SplatShape`] without its colour field.
+const SHAPE_BYTES_BEFORE_7: usize = 16;
+
+/// The size of a splat shape in a file of format `version`.
+fn shape_bytes(version: u32) -> usize {
+    if version >= 7 {
+        SHAPE_BYTES
+    } else {
+        SHAPE_BYTES_BEFORE_7
+    }
+}
 const ATTRIBUTE_BYTES: usize = std::mem::size_of::<PointAttributes>();
 const CHUNK_BYTES: usize = std::mem::size_of::<Chunk>();
 const CHECKSUM_AT: usize = 168;
@@ -276,7 +288,7 @@ fn sections(b: &[u8], version: u32) -> Result<Sections, String> {
     if nodes_at != HEADER_BYTES as u64
         || Some(parents_at) != after(nodes_at, node_count, RECORD_BYTES)
         || Some(shapes_at) != after(parents_at, node_count, 4)
-        || Some(attributes_at) != after(shapes_at, node_count, SHAPE_BYTES)
+        || Some(attributes_at) != after(shapes_at, node_count, shape_bytes(version))
         || attribute_bytes as usize != ATTRIBUTE_BYTES
         || (version == 2 && has_attributes)
         || Some(chunks_at) != attributes_end
@@ -328,6 +340,19 @@ fn meta_of(b: &[u8]) -> TreeMeta {
     }
 }
 
+/// Shapes of [`SHAPE_BYTES_BEFORE_7`] bytes (`bytes`, whole ones) as [`SplatShape`]s: the
+/// same fields, first, and a zero colour field.
+fn widen(bytes: &[u8]) -> Vec<SplatShape> {
+    bytes
+        .chunks_exact(SHAPE_BYTES_BEFORE_7)
+        .map(|old| {
+            let mut shape = <SplatShape as bytemuck::Zeroable>::zeroed();
+            bytemuck::bytes_of_mut(&mut shape)[..SHAPE_BYTES_BEFORE_7].copy_from_slice(old);
+            shape
+        })
+        .collect()
+}
+
 /// An `.spt` file, memory-mapped: the node records are read in place.
 pub struct SptFile {
     pub path: PathBuf,
@@ -342,6 +367,8 @@ pub struct SptFile {
     chunks_at: usize,
     suffix_at: usize,
     suffix_count: usize,
+    /// The shapes of a file before version 7, each given a zero colour field.
+    widened: Option<Vec<SplatShape>>,
     /// The chunk table (read from the file; before version 4, the whole list as one chunk).
     chunks: Vec<Chunk>,
 }
@@ -468,7 +495,7 @@ impl SptFile {
         if version == 0
             || u32_at(b, 12) as usize != HEADER_BYTES
             || u32_at(b, 140) as usize != RECORD_BYTES
-            || u32_at(b, 184) as usize != SHAPE_BYTES
+            || u32_at(b, 184) as usize != shape_bytes(version)
         {
             return Err(bad(format!(
                 "version {version}, header size {}, record size {}, shape size {}",
@@ -516,6 +543,8 @@ impl SptFile {
             suffix_at: s.suffix_at as usize,
             suffix_count: s.suffix_count as usize,
             chunks,
+            widened: (version < 7)
+                .then(|| widen(&b[s.shapes_at as usize..s.attributes_at as usize])),
             map,
         })
     }
@@ -544,9 +573,12 @@ impl SptFile {
         bytemuck::cast_slice(&self.map[self.parents_at..self.shapes_at])
     }
 
-    /// Each node's ellipse and normal field, in list order.
+    /// Each node's ellipse, normal and colour fields, in list order.
     pub fn shapes(&self) -> &[SplatShape] {
-        bytemuck::cast_slice(&self.map[self.shapes_at..self.attributes_at])
+        match &self.widened {
+            Some(shapes) => shapes,
+            None => bytemuck::cast_slice(&self.map[self.shapes_at..self.attributes_at]),
+        }
     }
 
     /// Each node's LiDAR attributes, in list order (empty when the model has none).
