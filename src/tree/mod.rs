@@ -22,7 +22,7 @@ pub mod select;
 pub mod spt_file;
 pub mod validate;
 
-use glam::{DVec2, DVec3, Vec3};
+use glam::{DVec3, Vec3};
 use half::f16;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -31,7 +31,6 @@ use crate::io::{Bounds, PointAttributes};
 use crate::surfel::LeafSurfels;
 use crate::surfel::Surfel;
 use crate::surfel::cloud::Orientation;
-use crate::surfel::field::color_field;
 use crate::surfel::shape::{Shape, SplatShape};
 use chunks::Chunk;
 use errors::{Disk, node_error, parent_disk};
@@ -195,8 +194,7 @@ fn internal_record(
             shape: shapes[c as usize].unpack(d.n),
         };
     }
-    let (mut shape, major) = parent_shape(&disk, &children[..k]);
-    shape.color = children_color_field(&disk, (&shape, major), disks, colors);
+    let (shape, major) = parent_shape(&disk, &children[..k]);
     let disk = Disk {
         r: disk.r.max(major),
         ..disk
@@ -208,25 +206,6 @@ fn internal_record(
     let e = node_error(&disk, disks);
     rec.error = encode_up(e, scale).max(children_max);
     (rec, shape.pack())
-}
-
-/// An inner node's colour field: [`color_field`] of its children's colours at their
-/// centres, in its ellipse's frame (zero where they do not span the plane). Its colour
-/// stays its children's mean.
-fn children_color_field(
-    parent: &Disk,
-    (shape, major): (&Shape, f64),
-    disks: &[Disk],
-    colors: &[[u8; 4]],
-) -> [DVec3; 2] {
-    let (u, v) = (shape.axis, shape.minor_axis(parent.n));
-    let points = disks.iter().zip(colors).map(|(d, c)| {
-        let offset = d.p - parent.p;
-        let xy = DVec2::new(offset.dot(u), offset.dot(v)) / major;
-        let rgb = DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 255.0;
-        (xy, rgb, 1.0)
-    });
-    color_field(points).map_or([DVec3::ZERO; 2], |(_, field)| field)
 }
 
 /// The attributes of an internal node from its children's, each weighed by its splat's
