@@ -77,13 +77,7 @@ impl FieldFit {
         self.weight += w;
         self.d += w * d;
         self.t += w * t;
-        let (m, r) = (&mut self.sums.moments, &mut self.sums.rhs);
-        m[0] += w * d.x * d.x;
-        m[1] += w * d.x * d.y;
-        m[2] += w * d.y * d.y;
-        r[0] += w * d.x * t.x;
-        r[1] += w * (d.y * t.x + d.x * t.y);
-        r[2] += w * d.y * t.y;
+        self.sums.add_weighted(d, t, w);
     }
 
     /// ((a, b, c), (c₁, c₂)), or None when no point weighs anything.
@@ -123,14 +117,11 @@ pub fn fit_field(
     triangles: impl Iterator<Item = [(DVec3, DVec3); 3]>,
 ) -> Option<(DVec3, Shape)> {
     let (u, v) = (shape.axis, shape.minor_axis(normal));
-    let inv_ratio2 = 1.0 / (shape.ratio * shape.ratio);
     let mut fit = FieldFit::default();
     for corners in triangles {
-        let [(a, na), (b, nb), (c, nc)] = corners;
-        let area = 0.5 * (b - a).cross(c - a).length();
-        // Plane coordinates and tangential normal components are linear in the
-        // barycentric coordinates; the interpolated normal's length is √(λᵀ Gram λ).
-        let plane = corners.map(|(p, _)| DVec2::new((p - at).dot(u), (p - at).dot(v)) / r);
+        let [(_, na), (_, nb), (_, nc)] = corners;
+        // Tangential normal components are linear in the barycentric coordinates; the
+        // interpolated normal's length is √(λᵀ Gram λ).
         let tangential = corners.map(|(_, n)| DVec2::new(n.dot(u), n.dot(v)));
         let gram = [
             na.dot(na),
@@ -140,11 +131,7 @@ pub fn fit_field(
             na.dot(nc),
             nb.dot(nc),
         ];
-        for [l0, l1, l2] in LATTICE {
-            let xy = l0 * plane[0] + l1 * plane[1] + l2 * plane[2];
-            if xy.x * xy.x + xy.y * xy.y * inv_ratio2 >= 1.0 {
-                continue; // beyond the splat's rim
-            }
+        for ([l0, l1, l2], xy, area) in covered_lattice((at, r, shape, v), corners.map(|c| c.0)) {
             let length2 = l0 * l0 * gram[0]
                 + l1 * l1 * gram[1]
                 + l2 * l2 * gram[2]
@@ -178,27 +165,38 @@ pub fn fit_color_field(
     (r, shape): (f64, &Shape),
     triangles: impl Iterator<Item = [(DVec3, DVec3); 3]>,
 ) -> Option<(DVec3, [DVec3; 2])> {
-    let (u, v) = (shape.axis, shape.minor_axis(normal));
-    let inv_ratio2 = 1.0 / (shape.ratio * shape.ratio);
+    let v = shape.minor_axis(normal);
     let points = triangles.flat_map(move |corners| {
-        let [(a, ca), (b, cb), (c, cc)] = corners;
-        let area = 0.5 * (b - a).cross(c - a).length();
-        let plane = corners.map(|(p, _)| DVec2::new((p - at).dot(u), (p - at).dot(v)) / r);
-        LATTICE.into_iter().filter_map(move |[l0, l1, l2]| {
-            let xy = l0 * plane[0] + l1 * plane[1] + l2 * plane[2];
-            (xy.x * xy.x + xy.y * xy.y * inv_ratio2 < 1.0)
-                .then(|| (xy, l0 * ca + l1 * cb + l2 * cc, area))
-        })
+        let [(_, ca), (_, cb), (_, cc)] = corners;
+        covered_lattice((at, r, shape, v), corners.map(|c| c.0))
+            .map(move |([l0, l1, l2], xy, area)| (xy, l0 * ca + l1 * cb + l2 * cc, area))
     });
     color_field(points)
+}
+
+/// The points of [`LATTICE`] in the triangle `corners` that the splat at `at` (major
+/// radius `r`, `shape`, minor axis `v`) covers: (barycentric coordinates, plane
+/// coordinates in major radii, the triangle's area as their weight). Plane coordinates
+/// are linear in the barycentric ones, so only the corners are projected.
+fn covered_lattice(
+    (at, r, shape, v): (DVec3, f64, &Shape, DVec3),
+    corners: [DVec3; 3],
+) -> impl Iterator<Item = ([f64; 3], DVec2, f64)> + use<> {
+    let [a, b, c] = corners;
+    let area = 0.5 * (b - a).cross(c - a).length();
+    let u = shape.axis;
+    let plane = corners.map(|p| DVec2::new((p - at).dot(u), (p - at).dot(v)) / r);
+    let inv_ratio2 = 1.0 / (shape.ratio * shape.ratio);
+    LATTICE.into_iter().filter_map(move |l| {
+        let xy = l[0] * plane[0] + l[1] * plane[1] + l[2] * plane[2];
+        (xy.x * xy.x + xy.y * xy.y * inv_ratio2 < 1.0).then_some((l, xy, area))
+    })
 }
 
 /// The least squares of colour ≈ c₀ + cₓ x + c_y y over `points`, each (plane
 /// coordinates in major radii, RGB, weight): (c₀, [cₓ, c_y]), or None where the points
 /// do not span the plane.
-pub fn color_field(
-    points: impl Iterator<Item = (DVec2, DVec3, f64)>,
-) -> Option<(DVec3, [DVec3; 2])> {
+fn color_field(points: impl Iterator<Item = (DVec2, DVec3, f64)>) -> Option<(DVec3, [DVec3; 2])> {
     // Σ w (1, x, y)ᵀ (1, x, y) and Σ w (1, x, y) colourᵀ.
     let (mut m, mut rhs) = (glam::DMat3::ZERO, glam::DMat3::ZERO);
     for (xy, colour, w) in points {

@@ -184,12 +184,17 @@ pub struct Fit {
 
 impl Fit {
     pub fn add(&mut self, d: DVec2, dn: DVec2) {
-        self.moments[0] += d.x * d.x;
-        self.moments[1] += d.x * d.y;
-        self.moments[2] += d.y * d.y;
-        self.rhs[0] += d.x * dn.x;
-        self.rhs[1] += d.y * dn.x + d.x * dn.y;
-        self.rhs[2] += d.y * dn.y;
+        self.add_weighted(d, dn, 1.0);
+    }
+
+    /// [`Fit::add`] with weight `w`.
+    pub fn add_weighted(&mut self, d: DVec2, dn: DVec2, w: f64) {
+        self.moments[0] += w * d.x * d.x;
+        self.moments[1] += w * d.x * d.y;
+        self.moments[2] += w * d.y * d.y;
+        self.rhs[0] += w * d.x * dn.x;
+        self.rhs[1] += w * (d.y * dn.x + d.x * dn.y);
+        self.rhs[2] += w * d.y * dn.y;
     }
 
     pub fn merge(&mut self, other: &Fit) {
