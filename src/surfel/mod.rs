@@ -87,8 +87,8 @@ pub struct LeafSurfels {
     pub oriented_normals: bool,
     pub stats: SurfelStats,
     /// A mesh's vertex normals, which its triangles interpolate (the surfels' normals
-    /// are those of their shading fields, and their colours fitted to the blend,
-    /// [`field`]; the vertex colours are the file's); empty for a cloud.
+    /// and colours are the centres of their fitted normal and colour fields, [`field`];
+    /// the vertex colours are the file's); empty for a cloud.
     pub vertex_normals: Vec<Vec3>,
     /// Surfels (ascending indices) that [`LeafSurfels::drop_redundant`] leaves out of
     /// the tree: a mesh's redundant isolated vertices ([`isolated`]).
