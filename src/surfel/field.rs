@@ -196,7 +196,9 @@ fn covered_lattice(
 /// The least squares of colour ≈ c₀ + cₓ x + c_y y over `points`, each (plane
 /// coordinates in major radii, RGB, weight): (c₀, [cₓ, c_y]), or None where the points
 /// do not span the plane.
-fn color_field(points: impl Iterator<Item = (DVec2, DVec3, f64)>) -> Option<(DVec3, [DVec3; 2])> {
+pub fn color_field(
+    points: impl Iterator<Item = (DVec2, DVec3, f64)>,
+) -> Option<(DVec3, [DVec3; 2])> {
     // Σ w (1, x, y)ᵀ (1, x, y) and Σ w (1, x, y) colourᵀ.
     let (mut m, mut rhs) = (glam::DMat3::ZERO, glam::DMat3::ZERO);
     for (xy, colour, w) in points {

@@ -187,11 +187,18 @@ fn internal_record(
     let mut children = [Child {
         disk,
         shape: Shape::circle(disk.n),
+        color: DVec3::ZERO,
     }; MAX_CHILDREN];
-    for ((child, &c), d) in children.iter_mut().zip(node.children()).zip(disks) {
+    for (((child, &c), d), rgba) in children
+        .iter_mut()
+        .zip(node.children())
+        .zip(disks)
+        .zip(colors)
+    {
         *child = Child {
             disk: *d,
             shape: shapes[c as usize].unpack(d.n),
+            color: DVec3::new(rgba[0] as f64, rgba[1] as f64, rgba[2] as f64) / 255.0,
         };
     }
     let (shape, major) = parent_shape(&disk, &children[..k]);
