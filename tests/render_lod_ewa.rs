@@ -9,8 +9,8 @@ use spt::render::perceptual::{downsample as average_blocks, flip_mean};
 use spt::render::{Camera, Image, Mode, Scene, Settings};
 
 /// Largest FLIP of ε = 1 px over the leaves' FLIP at the far orbit (against the mesh
-/// supersampled 4×4).
-const LOD_FLIP_RATIO: f64 = 1.3;
+/// supersampled 4×4): issue 12's 10 % (measured 0.87–1.03 on these views).
+const LOD_FLIP_RATIO: f64 = 1.1;
 
 #[test]
 fn far_away_level_of_detail_draws_ten_times_fewer_splats_within_a_bounded_flip() {
@@ -51,9 +51,6 @@ fn far_away_level_of_detail_draws_ten_times_fewer_splats_within_a_bounded_flip()
             s0.selected, s1.selected, c0.psnr_db, c1.psnr_db
         );
         assert!(ratio >= 10.0, "view {k}: only {ratio:.1}× fewer splats");
-        // Issue 12 asks for 10 %; with the shaded, curved leaves of this revision the
-        // inner nodes reach 0.3–27 % (README, "Image error with FLIP and SSIM"): what
-        // holds today is asserted, the 10 % target stays open.
         assert!(
             f1 <= LOD_FLIP_RATIO * f0,
             "view {k}: FLIP {f1:.4} at ε = 1 px against {f0:.4} for the leaves"

@@ -45,6 +45,9 @@ struct Args {
     /// Render the reference from this mesh of the same surface instead of the model's.
     #[arg(long)]
     reference: Option<PathBuf>,
+    /// The level of detail's error bound, pixels, of the last column.
+    #[arg(long, default_value_t = 1.0)]
+    error_px: f64,
 }
 
 /// A model on the GPU.
@@ -82,12 +85,15 @@ fn main() -> anyhow::Result<()> {
         ewa: false,
         ..leaves
     };
-    let lod = Settings::default();
+    let lod = Settings {
+        error_px: args.error_px,
+        ..Settings::default()
+    };
     let mut configs = vec![
         ("mesh 1×".to_string(), mesh, &model),
         ("leaves".to_string(), leaves, &model),
         ("no EWA".to_string(), no_ewa, &model),
-        ("ε=1".to_string(), lod, &model),
+        (format!("ε={}", args.error_px), lod, &model),
     ];
     for (path, other) in args.mesh.iter().zip(&others) {
         let name = path.file_name().unwrap_or_default().to_string_lossy();
