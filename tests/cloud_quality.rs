@@ -8,7 +8,10 @@
 //! holes 0.08 %, worst view 0.13 %; terrain FLIP 0.257, holes 0.17 %, worst view 0.48 %;
 //! before the surfels of issue 13: 0.37 / 8.9 % and 0.26 / 1.0 %). Issue 13's hole
 //! bound (0.5 %) holds on every view of both, and is asserted on the worst; its FLIP
-//! target (0.12) is not reached.
+//! target (0.12) is not reached. Level of detail at ε = 1 px stays within
+//! [`MAX_LOD_COST`] of the leaves' FLIP (measured: kinect 1.10, terrain 1.03), so that
+//! work on the meshes' inner nodes cannot blur or blot a cloud's level of detail
+//! unnoticed.
 //! The display modes of clouds (EDL, elevation) are checked on the tile.
 
 mod common;
@@ -19,6 +22,8 @@ use spt::render::{Camera, Settings, settings::Mode};
 
 /// Issue 13's bound on the holes of every view: 0.5 % of the reference's covered pixels.
 const ISSUE_HOLE_BOUND: f64 = 0.005;
+/// Largest median FLIP at ε = 1 px over the leaves' median FLIP.
+const MAX_LOD_COST: f64 = 1.15;
 
 fn median(figures: &[ViewFigures], get: fn(&ViewFigures) -> f64) -> f64 {
     quantile(&mut figures.iter().map(get).collect::<Vec<_>>(), 0.5).unwrap()
@@ -30,21 +35,25 @@ fn check(file: &str, triangulation: Triangulation, max_flip: f64, max_holes: [f6
         return;
     };
     let models = CloudAndReference::open(&dir.join(file), triangulation).unwrap();
-    let figures = measure(
-        common::renderer(),
-        &models,
-        (4, 1.6, 512),
-        &Settings::leaves(),
-        &mut |_, _| {},
-    )
-    .unwrap();
+    let run = |settings: &Settings| {
+        measure(
+            common::renderer(),
+            &models,
+            (4, 1.6, 512),
+            settings,
+            &mut |_, _| {},
+        )
+        .unwrap()
+    };
+    let figures = run(&Settings::leaves());
     let flip = median(&figures, |f| f.splat_flip);
+    let lod_flip = median(&run(&Settings::default()), |f| f.splat_flip);
     let holes = median(&figures, |f| f.hole_rate);
     let worst = figures.iter().map(|f| f.hole_rate).fold(0.0, f64::max);
     let mesh = median(&figures, |f| f.mesh_flip);
     eprintln!(
-        "{file}: splat FLIP {flip:.4} (triangulation at 1x {mesh:.4}), holes {:.3} % \
-         (worst view {:.3} %)",
+        "{file}: splat FLIP {flip:.4} (triangulation at 1x {mesh:.4}; ε = 1 px {lod_flip:.4}), \
+         holes {:.3} % (worst view {:.3} %)",
         100.0 * holes,
         100.0 * worst
     );
@@ -53,6 +62,10 @@ fn check(file: &str, triangulation: Triangulation, max_flip: f64, max_holes: [f6
         "{file}: the reference's own aliasing {mesh}"
     );
     assert!(flip <= max_flip, "{file}: FLIP {flip} over {max_flip}");
+    assert!(
+        lod_flip <= MAX_LOD_COST * flip,
+        "{file}: FLIP {lod_flip} at ε = 1 px, {flip} for the leaves"
+    );
     assert!(
         holes <= max_holes[0],
         "{file}: holes {holes} over {max_holes:?}"

@@ -38,6 +38,9 @@ struct Args {
     /// Draw the splats without the EWA prefilter.
     #[arg(long)]
     no_ewa: bool,
+    /// Level of detail's error bound in pixels (0: leaves only).
+    #[arg(long, default_value_t = 0.0)]
+    error_px: f64,
     /// Write each view's images (splats, triangulation at 1×, reference) into DIR.
     #[arg(long)]
     images: Option<PathBuf>,
@@ -69,7 +72,9 @@ fn main() -> anyhow::Result<()> {
     };
     let settings = Settings {
         ewa: !args.no_ewa,
-        ..Settings::leaves()
+        lod: args.error_px > 0.0,
+        error_px: args.error_px,
+        ..Settings::default()
     };
     if let Some(dir) = &args.images {
         std::fs::create_dir_all(dir)?;
