@@ -1,5 +1,6 @@
 //! A face-less cloud's splats against a triangulation of the same points (issue 13):
-//! per view and as medians, FLIP and SSIM of the splats (leaves only), FLIP of the
+//! per view and as medians, FLIP and SSIM of the splats (leaves only, or at
+//! `--error-px E` with level of detail), FLIP of the
 //! triangulation at 1×, hole rate (see `spt::apps::cloud_quality`); for a sensor frame,
 //! FLIP of the same triangulation over the points moved within their depth step. With `--images DIR`,
 //! each view's splats, triangulation and reference as PNG. With `--bounds`, also the

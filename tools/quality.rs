@@ -14,7 +14,7 @@
 //!
 //! ```text
 //! cargo run --release --example quality -- data/torus_knot.ply [--views 8] [--crops DIR]
-//!     [--mesh OTHER.ply ...] [--reference DENSER.ply]
+//!     [--mesh OTHER.ply ...] [--reference DENSER.ply] [--distance RADII] [--error-px E]
 //! ```
 
 use std::path::PathBuf;
