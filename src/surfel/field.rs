@@ -193,6 +193,11 @@ fn covered_lattice(
     })
 }
 
+/// An 8-bit RGBA colour's RGB as the fields see colours: 0–1.
+pub fn unit_rgb(c: [u8; 4]) -> DVec3 {
+    DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 255.0
+}
+
 /// The least squares of colour ≈ c₀ + cₓ x + c_y y over `points`, each (plane
 /// coordinates in major radii, RGB, weight): (c₀, [cₓ, c_y]), or None where the points
 /// do not span the plane.

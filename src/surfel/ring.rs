@@ -30,7 +30,7 @@ use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::Surfel;
-use super::field::{fit_color_field, fit_field};
+use super::field::{fit_color_field, fit_field, unit_rgb};
 use super::mesh::{RADIUS_MARGIN, triangle_terms};
 use super::shape::{Clip, Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
 
@@ -225,8 +225,7 @@ pub fn ring_shapes(
     let normals: Vec<Vec3> = surfels.iter().map(|q| q.normal).collect();
     let n = |i: u32| normals[i as usize].as_dvec3();
     let colors: Vec<DVec3> = if colored {
-        let rgb = |c: [u8; 4]| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 255.0;
-        surfels.iter().map(|q| rgb(q.color)).collect()
+        surfels.iter().map(|q| unit_rgb(q.color)).collect()
     } else {
         Vec::new()
     };

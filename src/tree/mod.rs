@@ -31,6 +31,7 @@ use crate::io::{Bounds, PointAttributes};
 use crate::surfel::LeafSurfels;
 use crate::surfel::Surfel;
 use crate::surfel::cloud::Orientation;
+use crate::surfel::field::unit_rgb;
 use crate::surfel::shape::{Shape, SplatShape};
 use chunks::Chunk;
 use errors::{Disk, node_error, parent_disk};
@@ -198,7 +199,7 @@ fn internal_record(
         *child = Child {
             disk: *d,
             shape: shapes[c as usize].unpack(d.n),
-            color: DVec3::new(rgba[0] as f64, rgba[1] as f64, rgba[2] as f64) / 255.0,
+            color: unit_rgb(*rgba),
         };
     }
     let (shape, major) = parent_shape(&disk, &children[..k]);

@@ -4,18 +4,20 @@
 //! Each child contributes its centre (with its normal) and [`RIM_SAMPLES`] points of its
 //! ellipse's rim (with the normals of its field there), offsets taken in the parent's
 //! tangent frame; their [`Fit`] gives the parent's axes, ratio and normal field as for a
-//! mesh vertex's one-ring. The field is fitted to each sample's tangential normal
-//! components over its normal component (tan of its tilt), since pass 2 draws
-//! normalize(n + G d): an inner node seen from far spans tens of degrees of the
-//! surface's normals, where fitting their sine left it too flat. Far orbit (42 radii,
-//! 8 views, `--example quality --distance 42.44`), FLIP at ε = 1 px over leaves only:
-//! knot 1.11 → 1.04, bunny 1.27 → 1.28, dragon 1.26 → 1.25. The major semi-axis R is the smallest that holds every rim
+//! mesh vertex's one-ring. The major semi-axis R is the smallest that holds every rim
 //! sample pushed out by 1/cos(π/[`RIM_SAMPLES`]) from its child's centre: the polygon of
 //! the samples, so enlarged, holds the child's ellipse (in the child's own affine frame,
 //! and affine maps keep containment), and the parent's ellipse is convex. When that R
 //! exceeds the same growth of the radius r of the circle that reaches every child
 //! (`errors::parent_disk`), the node is that circle. The node's errors are computed for
 //! the circle of radius max(r, R), which holds the ellipse.
+//!
+//! The normal field is fitted to each sample's tangential normal components over its
+//! normal component (tan of its tilt), since pass 2 draws normalize(n + G d): an inner
+//! node seen from far spans tens of degrees of the surface's normals, where fitting
+//! their sine left it too flat. Far orbit (42 radii, 8 views, `--example quality
+//! --distance 42.44`), FLIP at ε = 1 px over leaves only: knot 1.11 → 1.04, bunny
+//! 1.27 → 1.28, dragon 1.26 → 1.25.
 //!
 //! Its colour field is fitted from the same samples: each child's colour plus its own
 //! field at its centre and rim points, in least squares with an intercept
@@ -122,30 +124,39 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
         major = parent.r;
     }
     shape.gradient = shape.gradient.map(|g| g * major);
-    shape.color = color_field(parent, (&shape, major), children);
+    shape.color = color_field(parent, (&shape, major), children, &rims);
     (shape, major)
 }
 
 /// The parent's colour field: the least squares ([`field::color_field`]) of its
-/// children's colours (each its colour plus its own field) at their centres and
-/// [`RIM_SAMPLES`] rim points, in the parent's ellipse frame (major radii), each child
-/// weighing its ellipse's area r² · ratio. Zero where the samples do not span the plane.
-fn color_field(parent: &Disk, (shape, major): (&Shape, f64), children: &[Child]) -> [DVec3; 2] {
+/// children's colours (each its colour plus its own field) at their centres and rim
+/// points (`rims`, as [`samples`] placed them), in the parent's ellipse frame (major
+/// radii), each child weighing its ellipse's area r² · ratio. Zero where the samples do
+/// not span the plane.
+fn color_field(
+    parent: &Disk,
+    (shape, major): (&Shape, f64),
+    children: &[Child],
+    rims: &[[(DVec3, DVec3); RIM_SAMPLES + 1]],
+) -> [DVec3; 2] {
     let (u, v) = (shape.axis, shape.minor_axis(parent.n));
-    let points = children.iter().flat_map(|child| {
+    let points = children.iter().zip(rims).flat_map(|(child, rim)| {
         let Child {
             disk,
             shape: own,
             color,
         } = child;
-        let minor = own.minor_axis(disk.n);
         let w = disk.r * disk.r * own.ratio;
-        let rim = DIRECTION_TABLE.iter().map(|&(c, s)| (c, s * own.ratio));
-        std::iter::once((0.0, 0.0)).chain(rim).map(move |(x, y)| {
-            let q = disk.p + (own.axis * x + minor * y) * disk.r - parent.p;
-            let xy = DVec2::new(q.dot(u), q.dot(v)) / major;
-            (xy, *color + own.color[0] * x + own.color[1] * y, w)
-        })
+        // The samples' coordinates in the child's own frame, in its radii.
+        let at = DIRECTION_TABLE.iter().map(|&(c, s)| (c, s * own.ratio));
+        std::iter::once((0.0, 0.0))
+            .chain(at)
+            .zip(rim)
+            .map(move |((x, y), (q, _))| {
+                let d = *q - parent.p;
+                let xy = DVec2::new(d.dot(u), d.dot(v)) / major;
+                (xy, *color + own.color[0] * x + own.color[1] * y, w)
+            })
     });
     field::color_field(points).map_or([DVec3::ZERO; 2], |(_, field)| field)
 }
