@@ -12,7 +12,7 @@ use spt::io::ply::read_ply;
 use spt::surfel::leaf_surfels;
 use spt::surfel::shape::SplatShape;
 use spt::tree::select::PrefixIndex;
-use spt::tree::spt_file::{SptError, SptFile, write_spt, write_to};
+use spt::tree::spt_file::{SptError, SptFile, file_bytes, write_spt, write_to};
 use spt::tree::{NodeRecord, SequentialList, build_sequential_list};
 
 fn default_list() -> SequentialList {
@@ -220,6 +220,11 @@ fn version_2_files_read_as_files_without_attributes() {
         .sum();
     let tail = list.chunks.len() * 48 + 4 * blocks;
     assert_eq!(bytes.len(), 256 + n * (32 + 4 + 24) + tail);
+    assert_eq!(
+        bytes.len() as u64,
+        file_bytes(&list),
+        "the size convert reports"
+    );
     // Version 2: 16-byte shapes, no attributes section, no chunk table.
     let mut bytes = narrowed(&bytes);
     let size = 256 + n * (32 + 4 + 16);

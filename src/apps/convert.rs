@@ -18,7 +18,7 @@ use crate::tree::NodeRecord;
 use crate::tree::record::{PointAttributes, SplatShape};
 use crate::tree::report::{Finished, Report, Step};
 use crate::tree::scene::build_from_file;
-use crate::tree::spt_file::{HEADER_BYTES, write_to};
+use crate::tree::spt_file::{file_bytes, write_to};
 
 /// A writer that reports the bytes it passes on to a stage.
 struct Counted<'a> {
@@ -129,7 +129,7 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
     let points = list.meta.leaf_count;
     let scale = list.meta.error_scale;
 
-    let bytes = (HEADER_BYTES + list.nodes.len() * (std::mem::size_of::<NodeRecord>() + 4)) as u64;
+    let bytes = file_bytes(&list);
     let stage = Stage::start("write", bytes, "bytes");
     write_atomically(output, |w| {
         write_to(

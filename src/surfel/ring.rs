@@ -187,19 +187,23 @@ fn covering_radius(
 /// Each vertex's corners, as compressed rows: vertex v's are `corners[start[v]..
 /// start[v + 1]]`, each 3 t + k for corner k of triangle t, in triangle order, so that a
 /// vertex gathers its terms in the order a pass over the triangles would add them.
-fn corners_by_vertex(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<usize>, Vec<u32>) {
-    let mut start = vec![0usize; vertex_count + 1];
+/// `start` first holds each row's end (the running count); the corners, placed last
+/// to first, each move their row's end down one, which leaves it at the row's start.
+fn corners_by_vertex(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; vertex_count + 1];
     for &v in triangles.iter().flatten() {
-        start[v as usize + 1] += 1;
+        start[v as usize] += 1;
     }
-    for v in 0..vertex_count {
-        start[v + 1] += start[v];
+    let mut total = 0;
+    for end in &mut start[..vertex_count] {
+        total += *end;
+        *end = total;
     }
-    let mut next = start.clone();
-    let mut corners = vec![0u32; start[vertex_count]];
-    for (c, &v) in triangles.iter().flatten().enumerate() {
-        corners[next[v as usize]] = c as u32;
-        next[v as usize] += 1;
+    start[vertex_count] = total;
+    let mut corners = vec![0u32; total as usize];
+    for (c, &v) in triangles.as_flattened().iter().enumerate().rev() {
+        start[v as usize] -= 1;
+        corners[start[v as usize] as usize] = c as u32;
     }
     (start, corners)
 }
@@ -233,10 +237,12 @@ pub fn ring_shapes(
     let (start, corners) = corners_by_vertex(points.len(), triangles);
     // Vertex v's corners as (triangle, its next vertex, its previous vertex).
     let ring = |v: usize| {
-        corners[start[v]..start[v + 1]].iter().map(|&c| {
-            let (t, k) = (&triangles[c as usize / 3], c as usize % 3);
-            (t, t[(k + 1) % 3], t[(k + 2) % 3])
-        })
+        corners[start[v] as usize..start[v + 1] as usize]
+            .iter()
+            .map(|&c| {
+                let (t, k) = (&triangles[c as usize / 3], c as usize % 3);
+                (t, t[(k + 1) % 3], t[(k + 2) % 3])
+            })
     };
     surfels
         .par_iter_mut()

@@ -139,6 +139,15 @@ fn color_field(
     children: &[Child],
     rims: &[[(DVec3, DVec3); RIM_SAMPLES + 1]],
 ) -> [DVec3; 2] {
+    // One colour and no field over every child (every node of a model without colours)
+    // is a constant: its least squares has no slope.
+    let first = children.first().map(|c| c.color);
+    if children
+        .iter()
+        .all(|c| Some(c.color) == first && c.shape.color == [DVec3::ZERO; 2])
+    {
+        return [DVec3::ZERO; 2];
+    }
     let (u, v) = (shape.axis, shape.minor_axis(parent.n));
     let points = children.iter().zip(rims).flat_map(|(child, rim)| {
         let Child {

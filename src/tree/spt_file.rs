@@ -232,6 +232,11 @@ pub fn write_to(w: &mut dyn Write, list: &SequentialList) -> std::io::Result<()>
     Ok(())
 }
 
+/// The size in bytes of `list` written as an `.spt` file (its header's file size).
+pub fn file_bytes(list: &SequentialList) -> u64 {
+    u64_at(&header_bytes(list, 0), 160)
+}
+
 /// Writes `list` to `path` atomically (temporary file, then rename).
 pub fn write_spt(path: &Path, list: &SequentialList) -> std::io::Result<()> {
     write_atomically(path, |w| write_to(w, list))
