@@ -242,9 +242,16 @@ fn held_keys_move_the_camera_and_frame_brings_the_model_back() {
 fn a_frame_time_target_coarsens_moving_frames_and_rest_brings_the_users_error_back() {
     let mut v = viewer_on(&common::default_model());
     let user_px = v.settings.error_px;
-    let start = Instant::now();
+    // The first frame also builds pipelines: untimed. The target is a third of the
+    // fastest of three resting frames, so that no frame at the user's ε can meet it.
     let (resting_drawn, _, _) = frame(&mut v);
-    let resting_ms = start.elapsed().as_secs_f64() * 1e3;
+    let resting_ms = (0..3)
+        .map(|_| {
+            let start = Instant::now();
+            frame(&mut v);
+            start.elapsed().as_secs_f64() * 1e3
+        })
+        .fold(f64::INFINITY, f64::min);
     v.pacer = Pacer::new(Some(resting_ms / 3.0));
     let mut moving_drawn = Vec::new();
     for _ in 0..12 {
