@@ -7,13 +7,16 @@ mod common;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use spt::io::PointAttributes;
 use spt::io::atomic::{temporary_path, write_atomically};
 use spt::io::ply::read_ply;
 use spt::surfel::leaf_surfels;
 use spt::surfel::shape::SplatShape;
+use spt::tree::report::Silent;
 use spt::tree::select::PrefixIndex;
 use spt::tree::spt_file::{SptError, SptFile, file_bytes, write_spt, write_to};
-use spt::tree::{NodeRecord, SequentialList, build_sequential_list};
+use spt::tree::spt_write::write_ordered;
+use spt::tree::{NodeRecord, SequentialList, build_ordered, build_sequential_list};
 
 fn default_list() -> SequentialList {
     build_sequential_list(leaf_surfels(
@@ -222,7 +225,7 @@ fn version_2_files_read_as_files_without_attributes() {
     assert_eq!(bytes.len(), 256 + n * (32 + 4 + 24) + tail);
     assert_eq!(
         bytes.len() as u64,
-        file_bytes(&list),
+        file_bytes(&list.meta, &list.chunks),
         "the size convert reports"
     );
     // Version 2: 16-byte shapes, no attributes section, no chunk table.
@@ -357,5 +360,51 @@ fn older_files_build_the_index_version_6_files_store_it() {
         std::fs::write(&corrupt, &bad).unwrap();
         let err = SptFile::open(&corrupt).err().expect("refused").to_string();
         assert!(err.contains(name) && err.contains(what), "{err}");
+    }
+}
+
+/// `spt convert` writes the list without sorting it in memory (`write_ordered`): the
+/// same bytes as the sorted list written whole, for a mesh with colours (the default
+/// model) and for a cloud with LiDAR attributes, in several slabs' worth of chunks.
+#[test]
+fn a_list_written_in_id_order_is_the_sorted_list_s_file() {
+    let mesh = read_ply(&common::default_model()).unwrap().geometry;
+    let grid: Vec<[f64; 3]> = (0..40_000)
+        .map(|i| {
+            let (x, y) = ((i % 200) as f64, (i / 200) as f64);
+            [x, y, (0.05 * x).sin() + (0.07 * y).cos()]
+        })
+        .collect();
+    let mut cloud = common::geometry_of(&grid);
+    cloud.attributes = Some(
+        (0..grid.len())
+            .map(|i| PointAttributes::new((i % 1000) as u16, 2 + (i % 3) as u8, 1, 1))
+            .collect(),
+    );
+    let dir = common::temp_dir();
+    for (name, geometry) in [("mesh", mesh), ("cloud", cloud)] {
+        let set = build_ordered(leaf_surfels(&geometry), &Silent);
+        let streamed = dir.path().join(format!("{name}.spt"));
+        let written = std::sync::atomic::AtomicU64::new(0);
+        write_ordered(&streamed, &set, &|n| {
+            written.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+        })
+        .unwrap();
+        let list = set.gather();
+        assert!(
+            list.chunks.len() > 1,
+            "{name}: {} chunks",
+            list.chunks.len()
+        );
+        let mut whole = Vec::new();
+        write_to(&mut whole, &list).unwrap();
+        let streamed = std::fs::read(&streamed).unwrap();
+        assert_eq!(
+            written.into_inner(),
+            streamed.len() as u64,
+            "{name}: progress"
+        );
+        assert_eq!(streamed.len(), whole.len(), "{name}");
+        assert!(streamed == whole, "{name}: the files differ");
     }
 }

@@ -1,7 +1,6 @@
 //! `spt convert IN.ply OUT.spt`: load, leaf surfels, tree, errors, sort, write, each
 //! with its progress and timing, then a summary.
 
-use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
 
@@ -13,29 +12,12 @@ use crate::apps::progress::Stage;
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::count;
 use crate::io::GeometryStats;
-use crate::io::atomic::write_atomically;
 use crate::tree::NodeRecord;
 use crate::tree::record::{PointAttributes, SplatShape};
 use crate::tree::report::{Finished, Report, Step};
-use crate::tree::scene::build_from_file;
-use crate::tree::spt_file::{file_bytes, write_to};
-
-/// A writer that reports the bytes it passes on to a stage.
-struct Counted<'a> {
-    inner: &'a mut dyn Write,
-    stage: &'a Stage,
-}
-
-impl Write for Counted<'_> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let n = self.inner.write(buf)?;
-        self.stage.advance(n as u64);
-        Ok(n)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.inner.flush()
-    }
-}
+use crate::tree::scene::ordered_from_file;
+use crate::tree::spt_file::file_bytes;
+use crate::tree::spt_write::write_ordered;
 
 fn rate(n: f64, seconds: f64) -> f64 {
     n / seconds.max(1e-9)
@@ -125,22 +107,14 @@ fn dropped(st: &GeometryStats) -> String {
 
 pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
     let start = Instant::now();
-    let (list, _) = build_from_file(input, false, &Steps::default())?;
-    let points = list.meta.leaf_count;
-    let scale = list.meta.error_scale;
+    let set = ordered_from_file(input, &Steps::default())?;
+    let points = set.meta.leaf_count;
+    let scale = set.meta.error_scale;
 
-    let bytes = file_bytes(&list);
+    let bytes = file_bytes(&set.meta, &set.chunks);
     let stage = Stage::start("write", bytes, "bytes");
-    write_atomically(output, |w| {
-        write_to(
-            &mut Counted {
-                inner: w,
-                stage: &stage,
-            },
-            &list,
-        )
-    })
-    .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", output.display()))?;
+    write_ordered(output, &set, &|n| stage.advance(n))
+        .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", output.display()))?;
     stage.finish(&format!(
         "{} ({:.1} MB, {:.0} MB/s)",
         output.display(),
@@ -149,8 +123,8 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
     ));
 
     // Smallest non-zero and largest node error, without a copy of the errors.
-    let (emin, emax) = list
-        .nodes
+    let (emin, emax) = set
+        .records
         .par_iter()
         .map(|r| r.error(scale))
         .filter(|e| *e > 0.0)
@@ -159,7 +133,7 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
     let total = start.elapsed().as_secs_f64();
     let record = std::mem::size_of::<NodeRecord>();
     let shape = std::mem::size_of::<SplatShape>();
-    let attributes = if list.meta.has_attributes {
+    let attributes = if set.meta.has_attributes {
         std::mem::size_of::<PointAttributes>()
     } else {
         0
@@ -167,10 +141,10 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
     println!(
         "{} nodes ({} leaves, {} internal), depth {}, {} bytes per node ({record} record + \
          4 parent index + {shape} shape{})",
-        count(list.meta.node_count),
-        count(list.meta.leaf_count),
-        count(list.meta.node_count - list.meta.leaf_count),
-        list.meta.depth,
+        count(set.meta.node_count),
+        count(set.meta.leaf_count),
+        count(set.meta.node_count - set.meta.leaf_count),
+        set.meta.depth,
         record + 4 + shape + attributes,
         if attributes > 0 {
             format!(" + {attributes} LiDAR attributes")

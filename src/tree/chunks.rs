@@ -103,16 +103,23 @@ impl Chunk {
         self.start as usize..self.start as usize + self.count as usize
     }
 
-    /// The chunks of consecutive `counts` of `nodes` (which they must sum to).
-    pub fn table(nodes: &[NodeRecord], counts: &[usize]) -> Vec<Chunk> {
-        let mut at = 0;
-        counts
+    /// The chunks of consecutive runs of `counts` list positions, each made from its
+    /// nodes as `nodes` gives them for its range of positions.
+    pub fn table_of(
+        counts: &[usize],
+        nodes: impl Fn(std::ops::Range<usize>) -> Vec<NodeRecord> + Sync,
+    ) -> Vec<Chunk> {
+        let starts: Vec<usize> = counts
             .iter()
-            .map(|&k| {
-                let c = Chunk::of(at, &nodes[at..at + k]);
-                at += k;
-                c
+            .scan(0, |at, &k| {
+                *at += k;
+                Some(*at - k)
             })
+            .collect();
+        starts
+            .par_iter()
+            .zip(counts)
+            .map(|(&at, &k)| Chunk::of(at, &nodes(at..at + k)))
             .collect()
     }
 }

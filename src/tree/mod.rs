@@ -20,6 +20,7 @@ pub mod report;
 pub mod scene;
 pub mod select;
 pub mod spt_file;
+pub mod spt_write;
 pub mod validate;
 
 use glam::{DVec3, Vec3};
@@ -461,6 +462,29 @@ pub fn sort_list(set: NodeSet) -> SequentialList {
 
 /// [`sort_list`] with subtrees of at most `max_nodes` nodes ([`chunks::cut`]).
 pub fn sort_list_chunked(set: NodeSet, max_nodes: usize) -> SequentialList {
+    order_list(set, max_nodes).gather()
+}
+
+/// A tree's nodes in id order with the order of its list (stage 3 before the nodes
+/// move): what [`OrderedSet::gather`] sorts in memory, and what
+/// [`spt_file::write_ordered`] writes without ever holding the list sorted.
+pub struct OrderedSet {
+    pub meta: TreeMeta,
+    /// Records, shapes and attributes (empty when the model has none) in id order.
+    pub records: Vec<NodeRecord>,
+    pub shapes: Vec<SplatShape>,
+    pub attributes: Vec<PointAttributes>,
+    /// The node at each list position.
+    pub order: Vec<u32>,
+    /// Each node's parent as a list index, in list order (u32::MAX for the root).
+    pub parents: Vec<u32>,
+    /// The chunks, in list order.
+    pub chunks: Vec<Chunk>,
+}
+
+/// The order of `set`'s list: the tree cut into chunks of at most `max_nodes` nodes,
+/// each sorted by parent error descending (ties by id), and the chunk table.
+pub fn order_list(set: NodeSet, max_nodes: usize) -> OrderedSet {
     let NodeSet {
         hierarchy,
         records,
@@ -487,17 +511,6 @@ pub fn sort_list_chunked(set: NodeSet, max_nodes: usize) -> SequentialList {
     for (i, &id) in order.iter().enumerate() {
         position[id as usize] = i as u32;
     }
-    let nodes: Vec<NodeRecord> = order.par_iter().map(|&id| records[id as usize]).collect();
-    drop(records);
-    let shapes: Vec<SplatShape> = order.par_iter().map(|&id| shapes[id as usize]).collect();
-    let attributes: Vec<PointAttributes> = if attributes.is_empty() {
-        Vec::new()
-    } else {
-        order
-            .par_iter()
-            .map(|&id| attributes[id as usize])
-            .collect()
-    };
     let parents = order
         .par_iter()
         .map(|&id| match parent_ids[id as usize] {
@@ -505,19 +518,62 @@ pub fn sort_list_chunked(set: NodeSet, max_nodes: usize) -> SequentialList {
             p => position[p as usize],
         })
         .collect();
-    let chunks = Chunk::table(&nodes, &counts);
-    SequentialList {
+    let chunks = Chunk::table_of(&counts, |range| gather(&records, &order[range]));
+    OrderedSet {
         meta,
-        nodes,
+        records,
         shapes,
         attributes,
+        order,
         parents,
         chunks,
     }
 }
 
+/// `values` at `ids`, in that order.
+pub fn gather<T: Copy + Send + Sync>(values: &[T], ids: &[u32]) -> Vec<T> {
+    ids.par_iter().map(|&id| values[id as usize]).collect()
+}
+
+impl OrderedSet {
+    /// The list in memory: each array moved into list order, one at a time.
+    pub fn gather(self) -> SequentialList {
+        let OrderedSet {
+            meta,
+            records,
+            shapes,
+            attributes,
+            order,
+            parents,
+            chunks,
+        } = self;
+        let nodes = gather(&records, &order);
+        drop(records);
+        let shapes = gather(&shapes, &order);
+        let attributes = if attributes.is_empty() {
+            Vec::new()
+        } else {
+            gather(&attributes, &order)
+        };
+        SequentialList {
+            meta,
+            nodes,
+            shapes,
+            attributes,
+            parents,
+            chunks,
+        }
+    }
+}
+
 /// All three stages, each told to `report` as a [`Step`] with what it made.
-pub fn build_list(mut leaves: LeafSurfels, report: &dyn Report) -> SequentialList {
+pub fn build_list(leaves: LeafSurfels, report: &dyn Report) -> SequentialList {
+    build_ordered(leaves, report).gather()
+}
+
+/// All three stages, up to the list's order ([`order_list`]): its nodes not yet
+/// moved, for [`spt_write::write_ordered`].
+pub fn build_ordered(mut leaves: LeafSurfels, report: &dyn Report) -> OrderedSet {
     leaves.drop_redundant();
     let n = leaves.surfels.len() as u64;
     report.step(Step::Hierarchy, n);
@@ -531,11 +587,12 @@ pub fn build_list(mut leaves: LeafSurfels, report: &dyn Report) -> SequentialLis
     let set = build_records(leaves, hierarchy, report);
     report.finished(Finished::Errors(&set.meta));
     report.step(Step::Sort, 0);
-    let list = sort_list(set);
+    let max_nodes = chunks::chunk_nodes_for(set.records.len());
+    let ordered = order_list(set, max_nodes);
     report.finished(Finished::Sort {
-        nodes: list.nodes.len() as u64,
+        nodes: ordered.order.len() as u64,
     });
-    list
+    ordered
 }
 
 /// All three stages, silently.

@@ -14,11 +14,11 @@ use glam::Vec3;
 use super::report::{Finished, Report, Silent, Step};
 use super::select::PrefixIndex;
 use super::spt_file::{SptFile, is_spt};
-use super::{NodeRecord, SequentialList, TreeMeta, build_list};
-use crate::io::model::read_model;
+use super::{NodeRecord, OrderedSet, SequentialList, TreeMeta, build_list, build_ordered};
+use crate::io::model::{Model, read_model};
 use crate::io::{Geometry, PointAttributes};
 use crate::surfel::shape::SplatShape;
-use crate::surfel::{DEFAULT_COLOR, leaf_surfels};
+use crate::surfel::{DEFAULT_COLOR, LeafSurfels, leaf_surfels};
 
 /// The mesh a model came from, for the reference pass: per-vertex position (relative to
 /// the same origin as the tree), unit normal (the leaf surfel's) and colour.
@@ -146,10 +146,35 @@ pub fn build_from_file(
     keep_mesh: bool,
     report: &dyn Report,
 ) -> anyhow::Result<(SequentialList, Option<MeshData>)> {
+    let model = read_step(path, report)?;
+    Ok(build_from_geometry(model.geometry, keep_mesh, report))
+}
+
+/// Reads a model file (PLY, LAS or LAZ) and builds its tree up to the list's order
+/// ([`build_ordered`]), telling `report` each step: what `spt convert` writes with
+/// [`write_ordered`](super::spt_write::write_ordered), never sorting the list in memory.
+pub fn ordered_from_file(path: &Path, report: &dyn Report) -> anyhow::Result<OrderedSet> {
+    let model = read_step(path, report)?;
+    let mut leaves = surfels_step(&model.geometry, report);
+    drop(model);
+    leaves.vertex_normals = Vec::new();
+    Ok(build_ordered(leaves, report))
+}
+
+/// The read step: the model in `path`.
+fn read_step(path: &Path, report: &dyn Report) -> anyhow::Result<Model> {
     report.step(Step::Read, 0);
     let model = read_model(path)?;
     report.finished(Finished::Read(&model));
-    Ok(build_from_geometry(model.geometry, keep_mesh, report))
+    Ok(model)
+}
+
+/// The surfels step: the leaf surfels of `geometry`.
+fn surfels_step(geometry: &Geometry, report: &dyn Report) -> LeafSurfels {
+    report.step(Step::Surfels, 0);
+    let leaves = leaf_surfels(geometry);
+    report.finished(Finished::Surfels(&leaves));
+    leaves
 }
 
 /// Builds the sequential list of `geometry` (and with `keep_mesh`, the mesh of the
@@ -160,9 +185,7 @@ pub fn build_from_geometry(
     keep_mesh: bool,
     report: &dyn Report,
 ) -> (SequentialList, Option<MeshData>) {
-    report.step(Step::Surfels, 0);
-    let mut leaves = leaf_surfels(&geometry);
-    report.finished(Finished::Surfels(&leaves));
+    let mut leaves = surfels_step(&geometry, report);
     let normals = std::mem::take(&mut leaves.vertex_normals);
     let mesh = (keep_mesh && !geometry.triangles.is_empty()).then(|| MeshData {
         positions: leaves.surfels.iter().map(|s| s.position).collect(),

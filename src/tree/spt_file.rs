@@ -232,9 +232,10 @@ pub fn write_to(w: &mut dyn Write, list: &SequentialList) -> std::io::Result<()>
     Ok(())
 }
 
-/// The size in bytes of `list` written as an `.spt` file (its header's file size).
-pub fn file_bytes(list: &SequentialList) -> u64 {
-    u64_at(&header_bytes(list, 0), 160)
+/// The size in bytes of the `.spt` file of the tree `meta` describes, cut into
+/// `chunks` (its header's file size).
+pub fn file_bytes(meta: &TreeMeta, chunks: &[Chunk]) -> u64 {
+    u64_at(&header_for(meta, chunks, 0), 160)
 }
 
 /// Writes `list` to `path` atomically (temporary file, then rename).

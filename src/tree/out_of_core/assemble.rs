@@ -11,21 +11,20 @@
 //! header, known before, gets the checksum last.
 
 use std::fs::File;
-use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+use std::io::{Read, Seek, SeekFrom};
 
 use glam::Vec3;
-use xxhash_rust::xxh3::Xxh3;
 
 use super::job::{Model, Part};
 use super::order::{Layout, Piece};
 use super::spill::Split;
 use crate::io::PointAttributes;
-use crate::io::atomic::write_atomically_seekable;
 use crate::surfel::shape::SplatShape;
 use crate::tree::chunks::Chunk;
 use crate::tree::hierarchy::{Hierarchy, Internal};
 use crate::tree::select::BlockIndexBuilder;
-use crate::tree::spt_file::{CHECKSUM_OFFSET, header_for};
+use crate::tree::spt_file::header_for;
+use crate::tree::spt_write::{Hashed, write_hashed};
 use crate::tree::{NodeRecord, TreeMeta, attributes, build_above};
 
 /// The top tree in file order, and how each part joins it.
@@ -94,19 +93,6 @@ fn top_tree(split: &Split, parts: &[Part], model: &Model, oriented: bool) -> Top
         },
         parents: order.iter().map(|&id| parent_at(id)).collect(),
         roots: (0..j).map(|k| (set.records[k], parent_at(k))).collect(),
-    }
-}
-
-/// A writer that hashes what it writes.
-struct Hashed<'a> {
-    w: &'a mut BufWriter<File>,
-    hash: Xxh3,
-}
-
-impl Hashed<'_> {
-    fn put(&mut self, bytes: &[u8]) -> std::io::Result<()> {
-        self.hash.update(bytes);
-        self.w.write_all(bytes)
     }
 }
 
@@ -189,23 +175,9 @@ pub fn write_file(
     let meta = meta(model, parts, &top, oriented);
     let layout = layout(parts, &top, &part_tables(parts, model.has_attributes)?);
     let chunks = chunk_table(&layout, &top);
-    write_atomically_seekable(path, |w| {
-        let header = header_for(&meta, &chunks, 0);
-        let mut out = Hashed {
-            w,
-            hash: Xxh3::new(),
-        };
-        out.put(&header)?;
-        write_sections(
-            &mut out,
-            (parts, &layout),
-            &top,
-            (&chunks, model.has_attributes),
-        )?;
-        let checksum = out.hash.digest();
-        w.seek(SeekFrom::Start(CHECKSUM_OFFSET))?;
-        w.write_all(&checksum.to_le_bytes())?;
-        Ok(())
+    let header = header_for(&meta, &chunks, 0);
+    write_hashed(path, &header, &|_| {}, |out| {
+        write_sections(out, (parts, &layout), &top, (&chunks, model.has_attributes))
     })?;
     Ok(meta)
 }
