@@ -467,7 +467,7 @@ pub fn sort_list_chunked(set: NodeSet, max_nodes: usize) -> SequentialList {
 
 /// A tree's nodes in id order with the order of its list (stage 3 before the nodes
 /// move): what [`OrderedSet::gather`] sorts in memory, and what
-/// [`spt_file::write_ordered`] writes without ever holding the list sorted.
+/// [`spt_write::write_ordered`] writes without ever holding the list sorted.
 pub struct OrderedSet {
     pub meta: TreeMeta,
     /// Records, shapes and attributes (empty when the model has none) in id order.
