@@ -134,14 +134,12 @@ pub struct PrefixIndex {
 pub fn block_heads(chunks: &[Chunk], nodes: &[NodeRecord]) -> Vec<u16> {
     let per_chunk: Vec<Vec<u16>> = chunks
         .par_iter()
-        .map(|c| chunk_block_heads(&nodes[c.range()]))
+        .map(|c| {
+            let chunk = &nodes[c.range()];
+            chunk.chunks(BLOCK).map(|b| b[0].parent_error).collect()
+        })
         .collect();
     per_chunk.concat()
-}
-
-/// The parent error of the first node of each block of [`BLOCK`] nodes of one chunk.
-pub fn chunk_block_heads(nodes: &[NodeRecord]) -> Vec<u16> {
-    nodes.chunks(BLOCK).map(|b| b[0].parent_error).collect()
 }
 
 /// The suffix maxima of δ over the blocks of [`BLOCK`] nodes of one chunk, as the

@@ -13,10 +13,9 @@ use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::Path;
 
 use bytemuck::Pod;
-use rayon::prelude::*;
 use xxhash_rust::xxh3::Xxh3;
 
-use super::select::{chunk_block_heads, chunk_delta_suffix};
+use super::select::BlockIndexBuilder;
 use super::spt_file::{CHECKSUM_OFFSET, header_for};
 use super::{OrderedSet, gather};
 use crate::io::atomic::write_atomically_seekable;
@@ -64,17 +63,21 @@ pub fn write_hashed(
 const SLAB: usize = 1 << 20;
 
 /// Puts `values` in the order of `ids`, a slab at a time, each slab gathered while the
-/// one before it is written.
+/// one before it is written; `seen` is shown each slab as it is written.
 fn put_gathered<T: Pod + Send + Sync>(
     out: &mut Hashed,
     values: &[T],
     (ids, slab): (&[u32], usize),
+    mut seen: impl FnMut(&[T]) + Send,
 ) -> std::io::Result<()> {
     let mut slabs = ids.chunks(slab);
     let mut next = slabs.next().map(|ids| gather(values, ids));
     while let Some(slab) = next {
         let (written, following) = rayon::join(
-            || out.put(bytemuck::cast_slice(&slab)),
+            || {
+                seen(&slab);
+                out.put(bytemuck::cast_slice(&slab))
+            },
             || slabs.next().map(|ids| gather(values, ids)),
         );
         written?;
@@ -85,32 +88,28 @@ fn put_gathered<T: Pod + Send + Sync>(
 
 /// Writes `set`'s list as an `.spt` file at `path`, atomically: the same bytes as
 /// [`write_to`](super::spt_file::write_to) writes for `set.gather()`, without the
-/// sorted copy. `progress` hears the bytes written.
+/// sorted copy. `progress` hears the bytes written. The prefix search's blocks are
+/// made from the records as they go by ([`BlockIndexBuilder`]).
 pub fn write_ordered(
     path: &Path,
     set: &OrderedSet,
     progress: &(dyn Fn(u64) + Sync),
 ) -> std::io::Result<()> {
-    let per_chunk: Vec<(Vec<u16>, Vec<u16>)> = set
-        .chunks
-        .par_iter()
-        .map(|c| {
-            let nodes = gather(&set.records, &set.order[c.range()]);
-            (chunk_delta_suffix(&nodes), chunk_block_heads(&nodes))
-        })
-        .collect();
-    let (suffix, heads): (Vec<Vec<u16>>, Vec<Vec<u16>>) = per_chunk.into_iter().unzip();
     let header = header_for(&set.meta, &set.chunks, 0);
+    let mut blocks = BlockIndexBuilder::new(&set.chunks);
     write_hashed(path, &header, progress, |out| {
-        put_gathered(out, &set.records, (&set.order, SLAB))?;
+        put_gathered(out, &set.records, (&set.order, SLAB), |slab| {
+            blocks.feed(slab)
+        })?;
         out.put(bytemuck::cast_slice(&set.parents))?;
-        put_gathered(out, &set.shapes, (&set.order, SLAB))?;
+        put_gathered(out, &set.shapes, (&set.order, SLAB), |_| {})?;
         if !set.attributes.is_empty() {
-            put_gathered(out, &set.attributes, (&set.order, SLAB))?;
+            put_gathered(out, &set.attributes, (&set.order, SLAB), |_| {})?;
         }
         out.put(bytemuck::cast_slice(&set.chunks))?;
-        out.put(bytemuck::cast_slice(&suffix.concat()))?;
-        out.put(bytemuck::cast_slice(&heads.concat()))
+        let (suffix, heads) = blocks.finish();
+        out.put(bytemuck::cast_slice(&suffix))?;
+        out.put(bytemuck::cast_slice(&heads))
     })
 }
 
@@ -126,7 +125,7 @@ mod tests {
         let ids = [3u32, 1, 4, 1, 5, 9, 2, 6];
         let header = [0u8; 256];
         write_hashed(&path, &header, &|_| {}, |out| {
-            put_gathered(out, &values, (&ids, 3))
+            put_gathered(out, &values, (&ids, 3), |_| {})
         })
         .unwrap();
         let bytes = std::fs::read(&path).unwrap();
