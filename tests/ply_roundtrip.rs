@@ -4,7 +4,9 @@
 
 mod common;
 
-use spt::io::ply::{Encoding, FaceList, PlyLayout, PolyMesh, Scalar, read_ply, write_ply};
+use spt::io::ply::{
+    Encoding, FaceList, PlyLayout, PlyStream, PolyMesh, Scalar, read_ply, write_ply,
+};
 
 /// A wavy grid of 12 × 9 vertices whose coordinates are exact in f32 (so float and
 /// double files hold the same values), far from the origin, with colours, and faces
@@ -177,6 +179,7 @@ fn every_encoding_and_layout_reads_back_identical_geometry() {
             None => reference = Some(g),
             Some(r) => assert_eq!(&g, r, "{what}: differs from the first variant"),
         }
+        streamed_matches(&path, &m, &want_triangles, &what);
         // ply-rs-bw, an independent reader, agrees on the counts: the files are standard.
         let mut f = std::fs::File::open(&path).unwrap();
         let other = ply_rs_bw::parser::Parser::<ply_rs_bw::ply::DefaultElement>::new()
@@ -185,6 +188,27 @@ fn every_encoding_and_layout_reads_back_identical_geometry() {
         assert_eq!(other.payload["vertex"].len(), m.positions.len(), "{what}");
         assert_eq!(other.payload["face"].len(), m.faces.sizes.len(), "{what}");
     }
+}
+
+/// The file read a window at a time (windows of 7 rows, so that rows and polygons
+/// straddle them) gives the written positions and colours and the same triangles.
+fn streamed_matches(path: &std::path::Path, m: &PolyMesh, triangles: &[[u32; 3]], what: &str) {
+    let stream = PlyStream::open(path).unwrap().with_window(7);
+    assert_eq!(stream.vertex_count(), m.positions.len() as u64, "{what}");
+    let (mut xyz, mut colors, mut windows) = (Vec::new(), Vec::new(), 0);
+    stream
+        .vertices(|b| {
+            xyz.extend_from_slice(&b.xyz);
+            colors.extend(b.colors.iter().map(|c| [c[0], c[1], c[2]]));
+            windows += 1;
+        })
+        .unwrap();
+    assert_eq!(xyz, m.positions, "{what}: streamed positions");
+    assert_eq!(Some(&colors), m.colors.as_ref(), "{what}: streamed colours");
+    assert_eq!(windows, m.positions.len().div_ceil(7), "{what}: windows");
+    let mut streamed = Vec::new();
+    stream.triangles(|t| streamed.extend_from_slice(t)).unwrap();
+    assert_eq!(streamed, triangles, "{what}: streamed triangles");
 }
 
 #[test]

@@ -185,6 +185,26 @@ pub(crate) fn channel(v: f64, s: Scalar) -> u8 {
     }
 }
 
+/// Row `i`'s normal (fields [`VertexFields::NORMAL`]..+3) at unit length; zero where
+/// the file's is zero or not finite.
+#[inline]
+pub(crate) fn row_normal<R: VertexRows>(rows: &R, i: usize) -> Vec3 {
+    let k = VertexFields::NORMAL;
+    let v = DVec3::new(rows.get(i, k), rows.get(i, k + 1), rows.get(i, k + 2));
+    unit_vector(v).unwrap_or(Vec3::ZERO)
+}
+
+/// Row `i`'s colour as RGBA8 ([`channel`] per channel; alpha 255 when the file has none).
+#[inline]
+pub(crate) fn row_color<R: VertexRows>(rows: &R, fields: &VertexFields, i: usize) -> [u8; 4] {
+    let c0 = fields.color_start();
+    let mut c = [255u8; 4];
+    for (k, f) in fields.fields[c0..].iter().enumerate() {
+        c[k] = channel(rows.get(i, c0 + k), f.scalar);
+    }
+    c
+}
+
 const CHUNK: usize = 1 << 15;
 
 /// Builds the geometry from decoded vertex rows and faces.
@@ -218,26 +238,14 @@ pub(crate) fn assemble<R: VertexRows>(
         outliers: frame.outliers,
         ..GeometryStats::default()
     };
-    let normals = fields.has_normals.then(|| {
-        let k = VertexFields::NORMAL;
-        map_rows(&|i| {
-            let v = DVec3::new(rows.get(i, k), rows.get(i, k + 1), rows.get(i, k + 2));
-            unit_vector(v).unwrap_or(Vec3::ZERO)
-        })
-    });
+    let normals = fields
+        .has_normals
+        .then(|| map_rows(&|i| row_normal(rows, i)));
     if let Some(ns) = &normals {
         stats.normals_given_invalid = ns.par_iter().filter(|v| **v == Vec3::ZERO).count() as u64;
     }
     let colors = (fields.color_channels > 0).then(|| {
-        let c0 = fields.color_start();
-        let types: Vec<Scalar> = fields.fields[c0..].iter().map(|f| f.scalar).collect();
-        let color = |i: usize| {
-            let mut c = [255u8; 4];
-            for (k, s) in types.iter().enumerate() {
-                c[k] = channel(rows.get(i, c0 + k), *s);
-            }
-            c
-        };
+        let color = |i: usize| row_color(rows, fields, i);
         match kept_rows {
             None => (0..n)
                 .into_par_iter()

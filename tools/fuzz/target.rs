@@ -1,7 +1,8 @@
 //! One input through everything a reader feeds, with the invariants checked at every
 //! stage of a success:
 //!
-//! * PLY: read → [`Geometry::check`] → leaf surfels → [`LeafSurfels::check`] → tree →
+//! * PLY: read, and read a window at a time ([`PlyStream`]: the same rows and
+//!   triangles) → [`Geometry::check`] → leaf surfels → [`LeafSurfels::check`] → tree →
 //!   meta, node and structure checks → `.spt` written and reopened (which validates it
 //!   again) → the same list back → a prefix search from a few eyes.
 //! * LAS and LAZ: read, then as PLY from [`Geometry::check`] on.
@@ -18,7 +19,7 @@ use std::path::Path;
 use glam::DVec3;
 use spt::io::Geometry;
 use spt::io::las::read_las;
-use spt::io::ply::read_ply;
+use spt::io::ply::{PlyStream, read_ply};
 use spt::surfel::leaf_surfels;
 use spt::tree::select::PrefixIndex;
 use spt::tree::spt_file::{SptFile, write_to};
@@ -85,10 +86,38 @@ fn build(geometry: &Geometry, path: &Path) -> Result<Outcome, Outcome> {
 }
 
 fn ply(path: &Path) -> Result<Outcome, Outcome> {
+    let streamed = streamed(path);
     match read_ply(path) {
-        Ok(model) => build(&model.geometry, path),
+        Ok(model) => {
+            let (rows, triangles) =
+                streamed.map_err(violation("stream refuses what read_ply reads"))?;
+            if rows != model.stats.vertices_in_file {
+                return Err(violation("stream")(format!("{rows} vertex rows")));
+            }
+            // With no vertex dropped, the triangles are the file's, in its order.
+            if model.geometry.rows.is_none() && triangles != model.geometry.triangles {
+                return Err(violation("stream")("other triangles".to_owned()));
+            }
+            build(&model.geometry, path)
+        }
         Err(_) => Ok(Outcome::Refused),
     }
+}
+
+/// The file read a window at a time (windows of 5 rows): its vertex rows and triangles.
+fn streamed(path: &Path) -> Result<(u64, Vec<[u32; 3]>), String> {
+    let stream = PlyStream::open(path)
+        .map_err(|e| e.to_string())?
+        .with_window(5);
+    let mut rows = 0;
+    stream
+        .vertices(|b| rows += b.xyz.len() as u64)
+        .map_err(|e| e.to_string())?;
+    let mut triangles = Vec::new();
+    stream
+        .triangles(|t| triangles.extend_from_slice(t))
+        .map_err(|e| e.to_string())?;
+    Ok((rows, triangles))
 }
 
 fn las(path: &Path) -> Result<Outcome, Outcome> {

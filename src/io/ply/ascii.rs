@@ -7,11 +7,11 @@ use super::fields::{ColumnRows, Plan};
 use super::header::{Element, Header, PropertyKind};
 use super::scalar::Scalar;
 
-struct Tokens<'a> {
-    data: &'a [u8],
-    pos: usize,
+pub(super) struct Tokens<'a> {
+    pub(super) data: &'a [u8],
+    pub(super) pos: usize,
     /// Line of the last token returned, counted from 1 in the whole file.
-    line: usize,
+    pub(super) line: usize,
 }
 
 impl<'a> Tokens<'a> {
@@ -66,7 +66,7 @@ impl<'a> Tokens<'a> {
     }
 
     /// Reads one row; calls `visit(property, values)` with the row's values of each property.
-    fn row(
+    pub(super) fn row(
         &mut self,
         e: &Element,
         row: u64,

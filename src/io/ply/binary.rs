@@ -26,7 +26,7 @@ pub struct Decoded<'a> {
     pub faces: Option<Faces>,
 }
 
-fn truncated(e: &Element, row: u64) -> Problem {
+pub(super) fn truncated(e: &Element, row: u64) -> Problem {
     Problem::row(
         &e.name,
         row,
@@ -39,7 +39,7 @@ fn truncated(e: &Element, row: u64) -> Problem {
 
 /// Walks one row of `e` starting at `pos`; calls `visit(property, bytes, list_len)` for
 /// each property (`list_len` is `None` for scalars) and returns the position after it.
-fn walk_row(
+pub(super) fn walk_row(
     data: &[u8],
     mut pos: usize,
     e: &Element,

@@ -12,6 +12,7 @@ pub(crate) mod faces;
 pub(crate) mod fields;
 pub mod header;
 pub mod scalar;
+pub mod stream;
 pub mod write;
 
 use std::path::Path;
@@ -20,6 +21,7 @@ use std::time::{Duration, Instant};
 pub use error::{Location, PlyError};
 pub use header::{Element, Encoding, Header, Property, PropertyKind};
 pub use scalar::Scalar;
+pub use stream::{PlyStream, VertexBatch};
 pub use write::{FaceList, PlyLayout, PolyMesh, write_ply};
 
 use crate::io::geometry::{Geometry, GeometryStats, assemble};
