@@ -72,10 +72,11 @@ enum Command {
     /// Builds the sequential point tree of a PLY, LAS or LAZ model and writes it as an .spt file,
     /// which opens instantly (memory-mapped). Shows each stage (load, surfels, tree,
     /// errors, sort, write) with its time, then a summary. The output is written to a
-    /// temporary file and renamed: a failed convert never leaves a partial file. A LAS
-    /// or LAZ file too large for the memory budget is built out of core: scanned,
-    /// split into jobs spilled to disk beside the output, each job built alone, then
-    /// joined and streamed into the file.
+    /// temporary file and renamed: a failed convert never leaves a partial file. A model
+    /// too large for the memory budget (a LAS, LAZ or PLY cloud, or a PLY mesh) is
+    /// built out of core: read in passes, split into jobs spilled to disk beside the
+    /// output (each with the points or triangles around its border), each job built
+    /// alone, then joined and streamed into the file.
     Convert {
         /// The model: a PLY, LAS or LAZ file.
         input: PathBuf,
@@ -84,7 +85,7 @@ enum Command {
         /// Memory budget in MiB (default: half of the machine's memory).
         #[arg(long, value_name = "MIB")]
         memory: Option<u64>,
-        /// Build a LAS or LAZ file out of core even when it would fit in memory.
+        /// Build out of core even when the model would fit in memory.
         #[arg(long)]
         out_of_core: bool,
     },

@@ -77,3 +77,69 @@ fn leaf_colors(list: &spt::tree::SequentialList) -> Vec<[u8; 4]> {
     colors.sort_unstable();
     colors
 }
+
+/// Each leaf's record and shape, keyed by its position's bits.
+fn leaves_by_position(
+    list: &spt::tree::SequentialList,
+) -> std::collections::HashMap<[u32; 3], (spt::tree::NodeRecord, spt::surfel::shape::SplatShape)> {
+    let mut parent = vec![false; list.nodes.len()];
+    for &p in list.parents.iter().filter(|&&p| p != u32::MAX) {
+        parent[p as usize] = true;
+    }
+    (0..list.nodes.len())
+        .filter(|&i| !parent[i])
+        .map(|i| (list.nodes[i].position, (list.nodes[i], list.shapes[i])))
+        .collect()
+}
+
+#[test]
+fn a_mesh_built_in_jobs_has_the_in_memory_build_s_leaves() {
+    let dir = common::temp_dir();
+    let input = common::default_model();
+    let output = dir.path().join("knot.spt");
+    let options = Options {
+        job_points: 4000,
+        spill_buffers: 1 << 20,
+        temp_dir: dir.path().to_owned(),
+    };
+    let built = build_file(&input, &output, &options, &Quiet).unwrap();
+    assert!(built.jobs >= 12, "{} jobs", built.jobs);
+    let list = SptFile::open(&output).unwrap().to_list();
+    check_structure(&list.meta, &list.nodes, &list.parents, &list.chunks).unwrap();
+    common::assert_tree_invariants(&list, "mesh out of core");
+    let view = TreeView::new(&list.meta, &list.nodes, &list.chunks);
+    let views = random_views(&list.meta, 200, 1.0, 100.0, 5);
+    let stats = check_views(&view, &list.parents, &views);
+    assert_eq!((stats.holes, stats.past_prefix), (0, 0), "{stats:?}");
+    assert!(list.meta.oriented_normals);
+    let memory = spt::tree::scene::Scene::open(&input).unwrap();
+    let memory_list = match &memory.tree {
+        spt::tree::scene::TreeSource::Memory(l) => l.clone(),
+        spt::tree::scene::TreeSource::File(f) => f.to_list(),
+    };
+    // Every vertex's surfel is the one the whole mesh gives it: its one-ring and its
+    // neighbours' normals crossed the jobs' borders.
+    let (ours, theirs) = (leaves_by_position(&list), leaves_by_position(&memory_list));
+    assert_eq!(ours.len(), theirs.len());
+    let (mut same_shape, mut worst_normal) = (0, 1.0f32);
+    for (at, (r, shape)) in &ours {
+        let (m, memory_shape) = theirs.get(at).expect("the same vertex positions");
+        let (a, b) = (f32::from_bits(r.radius), f32::from_bits(m.radius));
+        assert!(
+            (a - b).abs() <= 1e-5 * b,
+            "radius at {at:?}: {a} against {b}"
+        );
+        assert_eq!(r.color, m.color);
+        let dot = spt::surfel::octahedral::oct_decode(r.normal)
+            .dot(spt::surfel::octahedral::oct_decode(m.normal));
+        worst_normal = worst_normal.min(dot);
+        same_shape += (shape == memory_shape) as usize;
+    }
+    let share = same_shape as f64 / ours.len() as f64;
+    eprintln!(
+        "{} jobs: worst normal cos {worst_normal}, {:.4} of the shapes bit-identical",
+        built.jobs, share
+    );
+    assert!(worst_normal > 0.9999, "{worst_normal}");
+    assert!(share > 0.999, "{share}");
+}

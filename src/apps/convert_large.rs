@@ -1,4 +1,4 @@
-//! `spt convert` of a LAS or LAZ file out of core ([`crate::tree::out_of_core`]): when
+//! `spt convert` of a model file out of core ([`crate::tree::out_of_core`]): when
 //! the in-memory build would not fit the memory budget (`--memory`, by default half of
 //! the machine's memory), or when asked (`--out-of-core`). A progress bar per stage over
 //! the points, then each stage's time and points/s, and the summary.
@@ -10,12 +10,15 @@ use std::time::Instant;
 use crate::apps::progress::Stage;
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::count;
-use crate::io::las::LasBatches;
+use crate::io::stream::ModelStream;
 use crate::tree::out_of_core::{BYTES_PER_JOB_POINT, Options, Progress, build_file};
 
 /// Bytes per point the in-memory build takes at its peak on a cloud (measured: 14 M
 /// points, 3.5 GiB).
 const IN_MEMORY_BYTES_PER_POINT: u64 = 270;
+/// Bytes per vertex the in-memory build takes at its peak on a mesh (measured: the
+/// Lucy-size mesh, 14 M vertices, 1.80 GiB).
+const IN_MEMORY_BYTES_PER_VERTEX: u64 = 140;
 
 /// Half of the machine's memory (from /proc/meminfo), or 4 GiB where unknown.
 pub fn default_memory() -> u64 {
@@ -27,23 +30,17 @@ pub fn default_memory() -> u64 {
     total.map_or(4 << 30, |t| t / 2)
 }
 
-/// Whether `input` is a LAS or LAZ file that should be built out of core within
-/// `memory` bytes.
+/// Whether `input` should be built out of core within `memory` bytes: when asked, or
+/// when the in-memory build would not fit (from the header's count alone: the file
+/// may be larger than memory).
 pub fn wanted(input: &Path, memory: u64, forced: bool) -> anyhow::Result<bool> {
-    // The magic alone: the file may be larger than memory.
-    let mut magic = [0u8; 4];
-    let read =
-        std::fs::File::open(input).and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic));
-    if read.is_err() || !crate::io::las::is_las(&magic) {
-        anyhow::ensure!(
-            !forced,
-            "{}: --out-of-core reads LAS and LAZ files",
-            input.display()
-        );
-        return Ok(false);
-    }
-    let points = LasBatches::open(input)?.point_count();
-    Ok(forced || points.saturating_mul(IN_MEMORY_BYTES_PER_POINT) > memory)
+    let stream = ModelStream::open(input)?;
+    let per_point = if stream.has_faces() {
+        IN_MEMORY_BYTES_PER_VERTEX
+    } else {
+        IN_MEMORY_BYTES_PER_POINT
+    };
+    Ok(forced || stream.point_count().saturating_mul(per_point) > memory)
 }
 
 /// Shows each stage of the build as a progress bar over its points, then its time and

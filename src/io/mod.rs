@@ -1,5 +1,6 @@
 //! Model files in: PLY reading and writing, LAS and LAZ reading ([`model::read_model`]
-//! takes any of them), and the rebased [`Geometry`] they produce.
+//! takes any of them; [`stream::ModelStream`] reads any of them a batch at a time), and
+//! the rebased [`Geometry`] they produce.
 //! This layer imports no other module of the crate (`.spt` files, which hold trees,
 //! live in [`crate::tree::spt_file`]).
 
@@ -10,6 +11,7 @@ pub mod las;
 pub mod model;
 pub mod ply;
 pub mod rebase;
+pub mod stream;
 pub mod torus_knot;
 pub mod triangulate;
 

@@ -132,19 +132,57 @@ enum Source {
     NoFaces,
 }
 
+/// Which way a mesh's normals turn ([`orient_outward`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outward {
+    /// By the vote of its own vertices.
+    Vote,
+    /// As decided for the whole model (a piece of it, [`crate::tree::out_of_core`]):
+    /// negated when true.
+    Turn(bool),
+}
+
 /// Normals and radii of the vertices of a mesh, written into `surfels` (one per
-/// vertex). `scale` is the model's unit scale ([`super::unit_scale`]); `given` the
-/// file's normals, `colored` whether it has colours (the surfels' on entry). Returns the
-/// isolated vertices that are redundant ([`super::isolated`]), ascending, and the vertex
-/// normals (the surfels' are their shading fields', `super::field`).
+/// vertex), then their ellipses and shading fields. `scale` is the model's unit scale
+/// ([`super::unit_scale`]); `given` the file's normals, `colored` whether it has
+/// colours (the surfels' on entry). Returns the isolated vertices that are redundant
+/// ([`super::isolated`]), ascending, and the vertex normals (the surfels' are their
+/// shading fields', `super::field`).
 pub fn vertex_disks(
     points: &[Vec3],
     scale: f32,
     triangles: &[[u32; 3]],
-    (given, colored): (Option<&[Vec3]>, bool),
+    (given, colored, outward): (Option<&[Vec3]>, bool, Outward),
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
 ) -> (Vec<u32>, Vec<Vec3>) {
+    let isolated = face_disks(points, scale, triangles, given, surfels, stats);
+    stats.turned_outward = match outward {
+        Outward::Vote => orient_outward(points, surfels),
+        Outward::Turn(turn) => {
+            if turn {
+                surfels.par_iter_mut().for_each(|s| s.normal = -s.normal);
+            }
+            turn
+        }
+    };
+    let normals = super::ring::ring_shapes(points, scale, triangles, surfels, colored);
+    let redundant = super::isolated::redundant(points, scale, &isolated, surfels);
+    stats.redundant_vertices = redundant.len() as u64;
+    (redundant, normals)
+}
+
+/// Normals and radii of the vertices of a mesh from their faces (and from their
+/// neighbours for those without usable faces), not yet oriented; returns the isolated
+/// vertices (no triangle reaches them).
+pub fn face_disks(
+    points: &[Vec3],
+    scale: f32,
+    triangles: &[[u32; 3]],
+    given: Option<&[Vec3]>,
+    surfels: &mut [Surfel],
+    stats: &mut SurfelStats,
+) -> Vec<u32> {
     let s = scale as f64;
     let runs = if triangles.len() < 1 << 16 { 1 } else { RUNS };
     let per_run = triangles.len().div_ceil(runs).max(1);
@@ -215,11 +253,7 @@ pub fn vertex_disks(
         surfels,
         stats,
     );
-    stats.turned_outward = orient_outward(points, surfels);
-    let normals = super::ring::ring_shapes(points, scale, triangles, surfels, colored);
-    let redundant = super::isolated::redundant(points, scale, &isolated, surfels);
-    stats.redundant_vertices = redundant.len() as u64;
-    (redundant, normals)
+    isolated
 }
 
 /// Gives each vertex of `cancelled` (whose face normals cancel) the normal of its
@@ -269,17 +303,27 @@ fn largest_face_normals(
 pub fn orient_outward(points: &[Vec3], surfels: &mut [Surfel]) -> bool {
     let n = points.len().max(1) as f64;
     let c = points.par_iter().map(|p| p.as_dvec3()).sum::<DVec3>() / n;
-    let (flux, spread) = points
+    if !faces_inward(outward_flux(points, surfels, c)) {
+        return false;
+    }
+    surfels.par_iter_mut().for_each(|s| s.normal = -s.normal);
+    true
+}
+
+/// The sums (Σ r² (p − c)·n, Σ r² |p − c|) of [`orient_outward`]'s vote over `surfels`
+/// (at `points`), about the model's mean vertex `c`: sums of pieces add up.
+pub fn outward_flux(points: &[Vec3], surfels: &[Surfel], c: DVec3) -> (f64, f64) {
+    points
         .par_iter()
         .zip(surfels.par_iter())
         .map(|(p, s)| {
             let (r, d) = (s.radius as f64, p.as_dvec3() - c);
             (r * r * d.dot(s.normal.as_dvec3()), r * r * d.length())
         })
-        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-    if flux >= -INWARD * spread {
-        return false;
-    }
-    surfels.par_iter_mut().for_each(|s| s.normal = -s.normal);
-    true
+        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+}
+
+/// Whether the vote's sums `(flux, spread)` say the normals face inward.
+pub fn faces_inward((flux, spread): (f64, f64)) -> bool {
+    flux < -INWARD * spread
 }

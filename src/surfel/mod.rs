@@ -165,31 +165,62 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
     leaf_surfels_of(g, g.positions.len())
 }
 
+pub use mesh::Outward;
+
 /// The leaf surfels of the first `own` points of a point cloud (no triangles), whose
 /// neighbourhoods see all of its points: a piece of a larger cloud followed by the
 /// points around it (its halo, [`crate::tree::out_of_core`]). The halo's own surfels
 /// are not made.
 pub fn leaf_surfels_of(g: &Geometry, own: usize) -> LeafSurfels {
-    let mut leaves = leaf_surfels_among(g, own);
+    let mut leaves = leaf_surfels_among(g, own, Outward::Vote);
     leaves.surfels.truncate(own);
     leaves
 }
 
-fn leaf_surfels_among(g: &Geometry, own: usize) -> LeafSurfels {
+/// The leaf surfels of the first `own` vertices of a piece of a mesh, whose one-rings
+/// and their vertices' one-rings are all among its triangles (the rest of its vertices
+/// and triangles are its halo, [`crate::tree::out_of_core`]), with the whole model's
+/// orientation `outward`. Only the own vertices' surfels, redundant vertices and vertex
+/// normals are kept.
+pub fn mesh_surfels_of(g: &Geometry, own: usize, outward: Outward) -> LeafSurfels {
+    let mut leaves = leaf_surfels_among(g, own, outward);
+    leaves.surfels.truncate(own);
+    leaves.vertex_normals.truncate(own);
+    leaves.redundant.retain(|&v| (v as usize) < own);
+    leaves
+}
+
+/// The sums of a mesh's orientation vote ([`mesh::outward_flux`]) over the first `own`
+/// vertices of a piece of it (as [`mesh_surfels_of`] takes it), about the model's mean
+/// vertex `c`: the pieces' sums add up to the whole model's vote.
+pub fn mesh_flux_of(g: &Geometry, own: usize, c: DVec3) -> (f64, f64) {
+    let mut surfels = initial_surfels(g);
+    let given = g.normals.as_deref();
+    let scale = model_scale(g);
+    let mut stats = SurfelStats::default();
+    mesh::face_disks(
+        &g.positions,
+        scale,
+        &g.triangles,
+        given,
+        &mut surfels,
+        &mut stats,
+    );
+    mesh::outward_flux(&g.positions[..own], &surfels[..own], c)
+}
+
+/// The unit scale of `g` ([`unit_scale`] of its core's extent and its reach).
+fn model_scale(g: &Geometry) -> f32 {
     let reach = (DVec3::from(g.bounds.min) - g.origin)
         .abs()
         .max((DVec3::from(g.bounds.max) - g.origin).abs())
         .max_element();
-    let scale = unit_scale(g.core.extent().max_element(), reach);
-    let given = g.normals.as_deref();
-    let mut stats = SurfelStats {
-        given_normals: given.map_or(0, |n| {
-            n.par_iter().filter(|v| **v != Vec3::ZERO).count() as u64
-        }),
-        ..SurfelStats::default()
-    };
-    let mut surfels: Vec<Surfel> = g
-        .positions
+    unit_scale(g.core.extent().max_element(), reach)
+}
+
+/// A surfel per vertex with its position, colour and attributes, not yet sized.
+fn initial_surfels(g: &Geometry) -> Vec<Surfel> {
+    g.positions
         .par_iter()
         .enumerate()
         .map(|(i, &position)| Surfel {
@@ -203,7 +234,19 @@ fn leaf_surfels_among(g: &Geometry, own: usize) -> LeafSurfels {
                 .as_ref()
                 .map_or_else(PointAttributes::default, |a| a[i]),
         })
-        .collect();
+        .collect()
+}
+
+fn leaf_surfels_among(g: &Geometry, own: usize, outward: Outward) -> LeafSurfels {
+    let scale = model_scale(g);
+    let given = g.normals.as_deref();
+    let mut stats = SurfelStats {
+        given_normals: given.map_or(0, |n| {
+            n.par_iter().filter(|v| **v != Vec3::ZERO).count() as u64
+        }),
+        ..SurfelStats::default()
+    };
+    let mut surfels = initial_surfels(g);
     let (mut redundant, mut vertex_normals) = (Vec::new(), Vec::new());
     let oriented = if g.triangles.is_empty() {
         let all: Vec<u32> = (0..own as u32).collect();
@@ -223,7 +266,7 @@ fn leaf_surfels_among(g: &Geometry, own: usize) -> LeafSurfels {
             &g.positions,
             scale,
             &g.triangles,
-            (given, g.colors.is_some()),
+            (given, g.colors.is_some(), outward),
             &mut surfels,
             &mut stats,
         );

@@ -9,28 +9,7 @@ use las::{PointData, PointDataBuilder, Reader};
 
 use super::{BATCH, LAZ_BATCH, LasError, fill_contained, open_checked};
 use crate::io::PointAttributes;
-use crate::io::geometry::channel;
-use crate::io::ply::scalar::Scalar;
-
-/// One batch of points.
-#[derive(Debug, Default, Clone)]
-pub struct PointBatch {
-    pub xyz: Vec<[f64; 3]>,
-    /// 16-bit channels; empty when the file has no colours.
-    pub rgb: Vec<[u16; 3]>,
-    pub attributes: Vec<PointAttributes>,
-}
-
-impl PointBatch {
-    /// Point `i`'s colour as RGBA8, converted as the whole-file reader converts it
-    /// ([`crate::io::geometry`]'s channels: 8-bit values as they are, 16-bit ones
-    /// over 257); `None` when the file has no colours.
-    pub fn color(&self, i: usize, eight_bit: bool) -> Option<[u8; 4]> {
-        let scalar = if eight_bit { Scalar::U8 } else { Scalar::U16 };
-        let c = self.rgb.get(i)?.map(|v| channel(f64::from(v), scalar));
-        Some([c[0], c[1], c[2], 255])
-    }
-}
+use crate::io::stream::PointBatch;
 
 /// A LAS or LAZ file open for reading in batches.
 pub struct LasBatches {
@@ -68,9 +47,7 @@ impl LasBatches {
 
     /// Reads the next batch into `out` (cleared first); false once every point is read.
     pub fn next_batch(&mut self, out: &mut PointBatch) -> Result<bool, LasError> {
-        out.xyz.clear();
-        out.rgb.clear();
-        out.attributes.clear();
+        out.clear();
         if self.read >= self.expected {
             return Ok(false);
         }

@@ -26,7 +26,7 @@ mod checks;
 use super::geometry::{Geometry, GeometryStats, PointAttributes, assemble};
 use super::ply::fields::{Field, VertexFields, VertexRows};
 use super::ply::scalar::Scalar;
-pub use batches::{LasBatches, PointBatch};
+pub use batches::LasBatches;
 pub use checks::MAX_CHUNK_BYTES;
 use checks::{check_layout, check_laz};
 

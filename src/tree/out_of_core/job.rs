@@ -14,8 +14,8 @@ use glam::{DVec3, Vec3};
 
 use super::spill::{SpillPoint, read_spill};
 use crate::io::{Bounds, Geometry, PointAttributes};
-use crate::surfel::leaf_surfels_of;
 use crate::surfel::shape::SplatShape;
+use crate::surfel::{LeafSurfels, leaf_surfels_of};
 use crate::tree::chunks::Chunk;
 use crate::tree::report::Silent;
 use crate::tree::{
@@ -32,6 +32,8 @@ pub struct Model {
     pub bounds: Bounds,
     pub error_scale: f32,
     pub has_colors: bool,
+    /// Whether the file gives normals (a mesh's: a cloud's are estimated again).
+    pub has_normals: bool,
     pub has_attributes: bool,
     /// Nodes per subtree chunk ([`crate::tree::chunks::chunk_nodes_for`] of the whole
     /// model, so that chunks do not depend on how it was split into jobs).
@@ -98,8 +100,19 @@ pub fn build(model: &Model, (own, halo): (&Path, &Path), part: &Path) -> anyhow:
     };
     let own_count = own_points.len();
     drop((own_points, halo_points));
-    let mut leaves = leaf_surfels_of(&g, own_count);
+    let leaves = leaf_surfels_of(&g, own_count);
     drop(g);
+    build_leaves(model, leaves, intensities, part)
+}
+
+/// Builds the tree of a job's leaf surfels into `part`.
+pub fn build_leaves(
+    model: &Model,
+    mut leaves: LeafSurfels,
+    intensities: Vec<PointAttributes>,
+    part: &Path,
+) -> anyhow::Result<Part> {
+    leaves.drop_redundant();
     let leaf_count = leaves.surfels.len() as u64;
     let oriented = leaves.oriented_normals;
     let hierarchy = build_hierarchy(&mut leaves, &Silent);

@@ -1,6 +1,7 @@
-//! Out-of-core builds (DESIGN.md §5, "Chunks"): a point cloud larger than memory turned
-//! into an `.spt` file while holding only a bounded part of it, in passes over the
-//! input (LAS or LAZ):
+//! Out-of-core builds (DESIGN.md §5, "Chunks"): a model larger than memory turned into
+//! an `.spt` file while holding only a bounded part of it, in passes over the input (a
+//! LAS, LAZ or PLY cloud, or a PLY mesh, read a batch at a time by
+//! [`ModelStream`]):
 //!
 //! ```text
 //! scan ─► count per grid cell ─► split into jobs ─► spill to job files ─► build each job ─► top tree, file
@@ -11,6 +12,10 @@
 //! A job holds at most N points (from the memory budget, [`Options::job_points`]) and
 //! the points of its halo: those of the neighbouring cells within a quarter cell of
 //! its border, so that the neighbourhoods of its points near the border see past it.
+//! A mesh's jobs get, instead of a halo by distance, exactly the triangles and
+//! vertices their surfels read (the two-ring around their border, [`mesh_spill`]),
+//! and the model's orientation is voted over every job before any is built
+//! ([`mesh_job`]).
 //! Each job is built alone from its files ([`job::build`]) into a part file and
 //! dropped; the jobs' roots are joined by the top tree of their split, and the file is
 //! streamed from the parts ([`assemble`]). Selection needs nothing more: the nodes of
@@ -24,9 +29,17 @@
 //! (one writer per input split, files concatenated per job), a map stage would run
 //! [`job::build`] per job, and a single reducer would run [`assemble::write_file`]
 //! over the parts it collects: the only step that sees every part, and it streams them.
+//! A mesh adds one step between the map stages: the vote's two sums from each job
+//! ([`mesh_job::flux`]), added up by the driver, which passes the orientation to the
+//! build stage.
+//!
+//! Given normals are kept for a mesh's vertices; a cloud's normals are estimated by
+//! its jobs, whatever the file gives.
 
 pub mod assemble;
 pub mod job;
+pub mod mesh_job;
+pub mod mesh_spill;
 pub mod order;
 pub mod spill;
 
@@ -34,6 +47,7 @@ use std::path::Path;
 
 use glam::{DVec3, IVec3};
 
+use crate::io::stream::ModelStream;
 use crate::tree::TreeMeta;
 use job::{Model, Part};
 use spill::{GRID, Grid};
@@ -80,58 +94,53 @@ pub trait Progress: Sync {
     fn advance(&self, points: u64);
 }
 
-/// Builds the `.spt` file of the LAS or LAZ file `input` at `output` within `options`.
+/// Builds the `.spt` file of the model `input` (a LAS, LAZ or PLY cloud, or a PLY
+/// mesh) at `output` within `options`.
 pub fn build_file(
     input: &Path,
     output: &Path,
     options: &Options,
     progress: &dyn Progress,
 ) -> anyhow::Result<Built> {
+    let stream = ModelStream::open(input)?;
     progress.stage("scan", 0);
-    let scan = spill::scan(input)?;
+    let scan = spill::scan(&stream, input)?;
     progress.stage("count", scan.count);
     let grid = Grid::over(&scan.bounds);
-    let counts = spill::count_cells(input, &grid)?;
+    let counts = spill::count_cells(&stream, &grid)?;
     let mut jobs = Vec::new();
     let whole = (IVec3::ZERO, IVec3::splat(GRID));
     let split = spill::split(&counts, &grid, whole, options.job_points, &mut jobs);
-    let table = spill::cell_jobs(&jobs);
     let dir = tempfile::Builder::new()
         .prefix("spt-build-")
         .tempdir_in(&options.temp_dir)?;
-    progress.stage("spill", scan.count);
     let lo = DVec3::from(scan.bounds.min);
     let origin = (lo + DVec3::from(scan.bounds.max)) * 0.5;
-    let buffer = (options.spill_buffers / (2 * jobs.len() as u64)).clamp(1 << 12, 1 << 20) as usize;
-    let files = spill::spill(
-        input,
-        (&grid, &table, jobs.len()),
-        (origin, scan.eight_bit),
-        dir.path(),
-        buffer,
-        |n| progress.advance(n),
-    )?;
     let model = Model {
         origin,
         bounds: scan.bounds,
         error_scale: (DVec3::from(scan.bounds.max) - lo).max_element().max(1e-30) as f32,
         has_colors: scan.has_color,
-        has_attributes: true,
-        // A cloud's tree has about 1.5 nodes per point.
+        has_normals: stream.has_faces() && stream.has_normals(),
+        has_attributes: stream.has_attributes(),
+        // A tree has about 1.5 nodes per point.
         chunk_nodes: crate::tree::chunks::chunk_nodes_for((scan.count + scan.count / 2) as usize),
     };
-    progress.stage("build", scan.count);
-    let mut parts: Vec<Part> = Vec::with_capacity(jobs.len());
-    for (j, job) in jobs.iter().enumerate() {
-        if job.points == 0 {
-            continue;
-        }
-        let part = dir.path().join(format!("job{j}.part"));
-        parts.push(job::build(&model, (&files.own[j], &files.halo[j]), &part)?);
-        std::fs::remove_file(&files.own[j])?;
-        std::fs::remove_file(&files.halo[j])?;
-        progress.advance(job.points);
-    }
+    let run = Run {
+        stream: &stream,
+        scan: &scan,
+        grid: &grid,
+        jobs: &jobs,
+        model: &model,
+        dir: dir.path(),
+        options,
+        progress,
+    };
+    let parts = if stream.has_faces() {
+        run.mesh_parts()?
+    } else {
+        run.cloud_parts()?
+    };
     progress.stage("write", 0);
     let split = drop_empty(split, &jobs);
     let meta = assemble::write_file(output, &model, (&split, &parts))?;
@@ -139,6 +148,107 @@ pub fn build_file(
         meta,
         jobs: parts.len(),
     })
+}
+
+/// What the stages after the split share.
+struct Run<'a> {
+    stream: &'a ModelStream,
+    scan: &'a spill::Scan,
+    grid: &'a Grid,
+    jobs: &'a [spill::JobBox],
+    model: &'a Model,
+    dir: &'a Path,
+    options: &'a Options,
+    progress: &'a dyn Progress,
+}
+
+impl Run<'_> {
+    /// Write buffers for `files` files per job.
+    fn buffer(&self, files: u64) -> usize {
+        let per = self.options.spill_buffers / (files * self.jobs.len() as u64);
+        per.clamp(1 << 12, 1 << 20) as usize
+    }
+
+    fn part_path(&self, j: usize) -> std::path::PathBuf {
+        self.dir.join(format!("job{j}.part"))
+    }
+
+    /// A cloud's spill and jobs: its points with their halos.
+    fn cloud_parts(&self) -> anyhow::Result<Vec<Part>> {
+        self.progress.stage("spill", self.scan.count);
+        let table = spill::cell_jobs(self.jobs);
+        let files = spill::spill(
+            self.stream,
+            (self.grid, &table, self.jobs.len()),
+            (self.model.origin, self.scan.eight_bit),
+            self.dir,
+            self.buffer(2),
+            |n| self.progress.advance(n),
+        )?;
+        self.progress.stage("build", self.scan.count);
+        let mut parts: Vec<Part> = Vec::with_capacity(self.jobs.len());
+        for (j, job) in self.jobs.iter().enumerate() {
+            if job.points == 0 {
+                continue;
+            }
+            let (own, halo) = (&files.own[j], &files.halo[j]);
+            parts.push(job::build(self.model, (own, halo), &self.part_path(j))?);
+            std::fs::remove_file(own)?;
+            std::fs::remove_file(halo)?;
+            self.progress.advance(job.points);
+        }
+        Ok(parts)
+    }
+
+    /// A mesh's spill and jobs: its vertices with the triangles and vertices their
+    /// surfels read, the orientation vote over every job, then each job's build.
+    fn mesh_parts(&self) -> anyhow::Result<Vec<Part>> {
+        anyhow::ensure!(
+            self.jobs.len() < mesh_spill::NO_JOB as usize,
+            "{} jobs: a mesh is split into fewer than {}; raise --memory",
+            self.jobs.len(),
+            mesh_spill::NO_JOB
+        );
+        self.progress.stage("jobs", self.scan.count);
+        let own = mesh_spill::own_jobs(self.stream, self.grid, &spill::cell_jobs(self.jobs))?;
+        self.progress.advance(own.len() as u64);
+        self.progress.stage("spill", self.scan.count);
+        let files = mesh_spill::spill(
+            self.stream,
+            &own,
+            (self.model.origin, self.jobs.len()),
+            self.dir,
+            self.buffer(3),
+            |n| self.progress.advance(n),
+        )?;
+        drop(own);
+        let live = || self.jobs.iter().enumerate().filter(|(_, j)| j.points > 0);
+        let of = |j: usize| (&*files.own[j], &*files.halo[j], &*files.triangles[j]);
+        self.progress.stage("vote", self.scan.count);
+        let c = self.scan.mean - self.model.origin;
+        let mut vote = (0.0, 0.0);
+        for (j, job) in live() {
+            let (flux, spread) = mesh_job::flux(self.model, of(j), c)?;
+            vote = (vote.0 + flux, vote.1 + spread);
+            self.progress.advance(job.points);
+        }
+        let turn = crate::surfel::mesh::faces_inward(vote);
+        self.progress.stage("build", self.scan.count);
+        let mut parts: Vec<Part> = Vec::with_capacity(self.jobs.len());
+        for (j, job) in live() {
+            parts.push(mesh_job::build(
+                self.model,
+                of(j),
+                turn,
+                &self.part_path(j),
+            )?);
+            for f in [of(j).0, of(j).1, of(j).2] {
+                std::fs::remove_file(f)?;
+            }
+            self.progress.advance(job.points);
+        }
+        Ok(parts)
+    }
 }
 
 /// The split without its empty jobs, the rest renumbered in order.

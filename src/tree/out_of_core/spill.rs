@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, IVec3};
 
-use crate::io::las::{LasBatches, PointBatch};
+use crate::io::stream::{ModelStream, PointBatch};
 use crate::io::{Bounds, PointAttributes};
 
 /// Cells per axis of the counting grid.
@@ -36,6 +36,8 @@ pub struct SpillPoint {
 pub struct Scan {
     pub count: u64,
     pub bounds: Bounds,
+    /// The mean of the finite points.
+    pub mean: DVec3,
     pub has_color: bool,
     /// No colour channel exceeds 255: LAS colours are taken as 8-bit.
     pub eight_bit: bool,
@@ -49,22 +51,14 @@ fn finite(b: &PointBatch) -> impl Iterator<Item = DVec3> + '_ {
         .filter(|p| p.is_finite())
 }
 
-/// Calls `f` on every batch of the file.
-pub fn for_each_batch(path: &Path, mut f: impl FnMut(&PointBatch)) -> anyhow::Result<()> {
-    let mut reader = LasBatches::open(path)?;
-    let mut batch = PointBatch::default();
-    while reader.next_batch(&mut batch)? {
-        f(&batch);
-    }
-    Ok(())
-}
-
 /// Pass 1: bounds of the finite points, their count, colours.
-pub fn scan(path: &Path) -> anyhow::Result<Scan> {
+pub fn scan(input: &ModelStream, path: &Path) -> anyhow::Result<Scan> {
     let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
     let (mut count, mut eight_bit, mut has_color) = (0u64, true, false);
-    for_each_batch(path, |b| {
+    let mut sum = DVec3::ZERO;
+    input.points(|b| {
         for p in finite(b) {
+            sum += p;
             lo = lo.min(p);
             hi = hi.max(p);
             count += 1;
@@ -79,6 +73,7 @@ pub fn scan(path: &Path) -> anyhow::Result<Scan> {
     );
     Ok(Scan {
         count,
+        mean: sum / count as f64,
         bounds: Bounds {
             min: lo.to_array(),
             max: hi.to_array(),
@@ -136,9 +131,9 @@ pub enum Split {
 }
 
 /// Pass 2: points per cell.
-pub fn count_cells(path: &Path, grid: &Grid) -> anyhow::Result<Vec<u64>> {
+pub fn count_cells(input: &ModelStream, grid: &Grid) -> anyhow::Result<Vec<u64>> {
     let mut counts = vec![0u64; (GRID * GRID * GRID) as usize];
-    for_each_batch(path, |b| {
+    input.points(|b| {
         for p in finite(b) {
             counts[Grid::index(grid.locate(p).0)] += 1;
         }
@@ -252,7 +247,7 @@ fn halo_jobs(table: &[u32], (cell, frac): (IVec3, DVec3), job: u32, out: &mut Ve
 /// Pass 3: every finite point to its job's file and to the halo files of the jobs
 /// around it, relative to `origin`, colours as 8-bit RGBA.
 pub fn spill(
-    path: &Path,
+    input: &ModelStream,
     (grid, table, job_count): (&Grid, &[u32], usize),
     (origin, eight_bit): (DVec3, bool),
     dir: &Path,
@@ -274,7 +269,7 @@ pub fn spill(
     let mut halo: Vec<BufWriter<File>> = files.halo.iter().map(open).collect::<Result<_, _>>()?;
     let mut failed: Option<std::io::Error> = None;
     let mut around = Vec::new();
-    for_each_batch(path, |b| {
+    input.points(|b| {
         for (i, p) in b.xyz.iter().enumerate() {
             let p = DVec3::from(*p);
             if !p.is_finite() {
@@ -286,7 +281,7 @@ pub fn spill(
             let point = SpillPoint {
                 position: (p - origin).as_vec3().to_array(),
                 color,
-                attributes: b.attributes[i],
+                attributes: b.attributes(i),
             };
             let located = grid.locate(p);
             let job = table[Grid::index(located.0)];
@@ -313,15 +308,20 @@ pub fn spill(
 
 /// The points of a spill file, read straight into their vector.
 pub fn read_spill(path: &Path) -> anyhow::Result<Vec<SpillPoint>> {
+    read_records(path)
+}
+
+/// The records of a spill file of `T`s, read straight into their vector.
+pub fn read_records<T: Pod>(path: &Path) -> anyhow::Result<Vec<T>> {
     let mut file = File::open(path)?;
     let bytes = file.metadata()?.len() as usize;
-    let size = std::mem::size_of::<SpillPoint>();
+    let size = std::mem::size_of::<T>();
     anyhow::ensure!(
         bytes.is_multiple_of(size),
         "{}: a spill file of {bytes} bytes",
         path.display()
     );
-    let mut points = vec![SpillPoint::zeroed(); bytes / size];
-    std::io::Read::read_exact(&mut file, bytemuck::cast_slice_mut(&mut points))?;
-    Ok(points)
+    let mut records = vec![T::zeroed(); bytes / size];
+    std::io::Read::read_exact(&mut file, bytemuck::cast_slice_mut(&mut records))?;
+    Ok(records)
 }

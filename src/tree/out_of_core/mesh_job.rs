@@ -1,0 +1,80 @@
+//! One job of a mesh's out-of-core build: its vertices, their halo and the triangles
+//! its surfels read ([`super::mesh_spill`]) in, its subtree out, in two runs.
+//!
+//! A mesh's normals turn outward by a vote of all its vertices
+//! ([`crate::surfel::mesh::orient_outward`]), and a vertex's ellipse and shading field
+//! are fitted to its oriented normals. So the jobs are read twice: first each adds its
+//! own vertices' terms of the vote ([`flux`]), then, the model's orientation decided,
+//! each is built ([`build`]) as a cloud's job is: leaf surfels of its own vertices,
+//! tree with the model's error scale, chunks, part file.
+
+use std::path::Path;
+
+use glam::{DVec3, Vec3};
+
+use super::job::{Model, Part, build_leaves};
+use super::mesh_spill::MeshVertex;
+use super::spill::read_records;
+use crate::io::Geometry;
+use crate::surfel::{Outward, mesh_flux_of, mesh_surfels_of};
+
+/// A job's spill files: own vertices, halo vertices, triangles.
+pub type Files<'a> = (&'a Path, &'a Path, &'a Path);
+
+/// The geometry of a job (its own vertices first, then its halo, triangles in those
+/// indices) and its count of own vertices.
+fn geometry(model: &Model, (own, halo, triangles): Files) -> anyhow::Result<(Geometry, usize)> {
+    let own_vertices: Vec<MeshVertex> = read_records(own)?;
+    let halo_vertices: Vec<MeshVertex> = read_records(halo)?;
+    let mut tris: Vec<[u32; 3]> = read_records(triangles)?;
+    let n = own_vertices.len();
+    // Both files hold their vertices in file order: a binary search maps an index.
+    let local = |v: u32| -> Option<u32> {
+        let at = |list: &[MeshVertex]| list.binary_search_by_key(&v, |m| m.index).ok();
+        at(&own_vertices)
+            .or_else(|| at(&halo_vertices).map(|k| n + k))
+            .map(|k| k as u32)
+    };
+    for t in &mut tris {
+        for v in t.iter_mut() {
+            *v = local(*v).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "{}: triangle vertex {v} is in neither vertex file of its job",
+                    triangles.display()
+                )
+            })?;
+        }
+    }
+    let all = || own_vertices.iter().chain(&halo_vertices);
+    let g = Geometry {
+        origin: model.origin,
+        bounds: model.bounds,
+        core: model.bounds,
+        positions: all().map(|m| Vec3::from(m.position)).collect(),
+        normals: model
+            .has_normals
+            .then(|| all().map(|m| Vec3::from(m.normal)).collect()),
+        colors: model.has_colors.then(|| all().map(|m| m.color).collect()),
+        triangles: tris,
+        rows: None,
+        attributes: None,
+    };
+    Ok((g, n))
+}
+
+/// The job's own vertices' terms of the orientation vote, about the model's mean
+/// vertex `c` (relative to the origin).
+pub fn flux(model: &Model, files: Files, c: DVec3) -> anyhow::Result<(f64, f64)> {
+    let (g, own) = geometry(model, files)?;
+    Ok(mesh_flux_of(&g, own, c))
+}
+
+/// Builds the job into `part`, its normals negated when `turn`.
+pub fn build(model: &Model, files: Files, turn: bool, part: &Path) -> anyhow::Result<Part> {
+    let (g, own) = geometry(model, files)?;
+    anyhow::ensure!(own > 0, "{}: a job without vertices", files.0.display());
+    let mut leaves = mesh_surfels_of(&g, own, Outward::Turn(turn));
+    drop(g);
+    leaves.vertex_normals = Vec::new();
+    build_leaves(model, leaves, Vec::new(), part)
+}
