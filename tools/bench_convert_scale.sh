@@ -2,16 +2,21 @@
 # Conversion at scale (issue 15), against PotreeConverter 2 built from its public
 # source (tools/build_potree.sh): the Lucy-size mesh (14,028,800 vertices; spt reads the
 # PLY, Potree the same points as LAS, tools/ply_to_las.py) and a generated city tile of
-# 200 M points with colours (LAS, tools/gen_cloud.rs). Runs alternate spt and Potree on
-# one machine; wall time and peak resident memory from GNU time. Prints a Markdown table.
+# 200 M points with colours (LAS, tools/gen_cloud.rs). Lucy is converted in memory (the
+# default where it fits) and out of core (--out-of-core --memory LUCY_MEMORY_MIB, 1024
+# by default). Runs alternate spt and Potree on one machine; wall time and peak resident
+# memory from GNU time. Prints a Markdown table.
 #
 #   tools/bench_convert_scale.sh          # RUNS=3 on Lucy, 1 on the 200 M tile
 #   POINTS=50000000 tools/bench_convert_scale.sh   # a smaller tile
+#   CITY=0 tools/bench_convert_scale.sh   # Lucy only
 set -euo pipefail
 cd "$(dirname "$0")/.."
 runs=${RUNS:-3}
 points=${POINTS:-200000000}
 memory=${MEMORY_MIB:-4096}
+lucy_memory=${LUCY_MEMORY_MIB:-1024}
+city_wanted=${CITY:-1}
 cargo build --release --quiet --bin spt --example gen_model --example gen_cloud
 potree=$(tools/build_potree.sh)
 mkdir -p data/large
@@ -19,7 +24,7 @@ lucy=data/large/lucy_knot.ply
 city=data/large/city_$((points / 1000000))m.las
 [ -f "$lucy" ] || ./target/release/examples/gen_model --preset lucy
 [ -f "${lucy%.ply}.las" ] || python3 tools/ply_to_las.py "$lucy" "${lucy%.ply}.las"
-[ -f "$city" ] || ./target/release/examples/gen_cloud --points "$points" --out "$city"
+[ "$city_wanted" = 0 ] || [ -f "$city" ] || ./target/release/examples/gen_cloud --points "$points" --out "$city"
 logs=$(mktemp -d)
 # One timed run: "seconds peak_kib" appended to $logs/$1.
 timed() {
@@ -29,19 +34,24 @@ timed() {
 }
 for i in $(seq "$runs"); do
   timed spt_lucy ./target/release/spt convert "$lucy" "$logs/lucy.spt"
-  rm -rf "$logs/potree_lucy"
-  timed potree_lucy "$potree" "${lucy%.ply}.las" -o "$logs/potree_lucy"
+  timed spt_lucy_ooc ./target/release/spt convert "$lucy" "$logs/lucy.spt" --out-of-core --memory "$lucy_memory"
+  rm -rf "$logs/potree_out"
+  timed potree_lucy "$potree" "${lucy%.ply}.las" -o "$logs/potree_out"
 done
+cp "$logs/spt_lucy_ooc.out" "$logs/spt_lucy_ooc.stages"
+if [ "$city_wanted" != 0 ]; then
 timed spt_city ./target/release/spt convert "$city" "$logs/city.spt" --memory "$memory"
 cp "$logs/spt_city.out" "$logs/spt_city.stages"
 rm -f "$logs/city.spt"
 if [ -z "${SKIP_POTREE_CITY:-}" ]; then
-  timed potree_city "$potree" "$city" -o "$logs/potree_city"
-  rm -rf "$logs/potree_city"
+  rm -rf "$logs/potree_out"
+  timed potree_city "$potree" "$city" -o "$logs/potree_out"
 fi
-python3 - "$logs" "$points" <<'PY'
+fi
+rm -rf "$logs/potree_out" "$logs/lucy.spt"
+python3 - "$logs" "$points" "$lucy_memory" <<'PY'
 import sys, os, statistics, datetime
-logs, points = sys.argv[1], int(sys.argv[2])
+logs, points, lucy_memory = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 def runs(name):
     path = os.path.join(logs, name)
     if not os.path.exists(path):
@@ -53,12 +63,17 @@ mem = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
 print(f"{datetime.date.today()}, {os.cpu_count()} cores ({cpu}), {mem:.0f} GiB; median wall time, largest peak memory.\n")
 print("| model | points | spt convert | PotreeConverter 2 | time spt / Potree | memory spt / Potree |")
 print("| --- | --- | --- | --- | --- | --- |")
-for label, n, a, b in [("Lucy-size mesh", 14028800, "spt_lucy", "potree_lucy"), (f"city tile", points, "spt_city", "potree_city")]:
+for label, n, a, b in [("Lucy-size mesh, in memory", 14028800, "spt_lucy", "potree_lucy"), (f"Lucy-size mesh, out of core (--memory {lucy_memory})", 14028800, "spt_lucy_ooc", "potree_lucy"), (f"city tile", points, "spt_city", "potree_city")]:
     s, p = runs(a), runs(b)
+    if s is None:
+        continue
     cell = lambda r: "–" if r is None else f"{r[0]:.1f} s, {r[1]:.2f} GiB ({n / r[0] / 1e6:.2f} M points/s, {r[2]} run{'s' if r[2] > 1 else ''})"
     ratio = lambda k: "–" if p is None else f"{s[k] / p[k]:.2f}"
     print(f"| {label} | {n:,} | {cell(s)} | {cell(p)} | {ratio(0)} | {ratio(1)} |")
-print("\nspt's stages on the city tile:\n\n```")
-print(open(os.path.join(logs, "spt_city.stages")).read().strip())
-print("```")
+for name, what in [("spt_lucy_ooc", "the Lucy-size mesh out of core (last run)"), ("spt_city", "the city tile")]:
+    path = os.path.join(logs, name + ".stages")
+    if os.path.exists(path):
+        print(f"\nspt's stages on {what}:\n\n```")
+        print(open(path).read().strip())
+        print("```")
 PY

@@ -21,6 +21,46 @@ use crate::surfel::{Outward, mesh_flux_of, mesh_surfels_of};
 /// A job's spill files: own vertices, halo vertices, triangles.
 pub type Files<'a> = (&'a Path, &'a Path, &'a Path);
 
+/// Where each file index lies in a job's vertex file (whose indices ascend): a table
+/// over the span of its indices when they are dense enough (a mesh whose vertices are
+/// stored in spatial order), else a binary search.
+enum LocalIndex {
+    Table { first: u32, slots: Vec<u32> },
+    Search(Vec<u32>),
+}
+
+impl LocalIndex {
+    /// A table when the span is at most this many times the vertices.
+    const DENSE: u64 = 4;
+
+    fn of(vertices: &[MeshVertex]) -> LocalIndex {
+        let indices: Vec<u32> = vertices.iter().map(|m| m.index).collect();
+        let (Some(&first), Some(&last)) = (indices.first(), indices.last()) else {
+            return LocalIndex::Search(indices);
+        };
+        let span = u64::from(last - first) + 1;
+        if span > Self::DENSE * indices.len() as u64 {
+            return LocalIndex::Search(indices);
+        }
+        let mut slots = vec![u32::MAX; span as usize];
+        for (k, &v) in indices.iter().enumerate() {
+            slots[(v - first) as usize] = k as u32;
+        }
+        LocalIndex::Table { first, slots }
+    }
+
+    fn get(&self, v: u32) -> Option<u32> {
+        match self {
+            LocalIndex::Table { first, slots } => v
+                .checked_sub(*first)
+                .and_then(|k| slots.get(k as usize))
+                .copied()
+                .filter(|&k| k != u32::MAX),
+            LocalIndex::Search(indices) => indices.binary_search(&v).ok().map(|k| k as u32),
+        }
+    }
+}
+
 /// The geometry of a job (its own vertices first, then its halo, triangles in those
 /// indices) and its count of own vertices.
 fn geometry(model: &Model, (own, halo, triangles): Files) -> anyhow::Result<(Geometry, usize)> {
@@ -28,12 +68,12 @@ fn geometry(model: &Model, (own, halo, triangles): Files) -> anyhow::Result<(Geo
     let halo_vertices: Vec<MeshVertex> = read_records(halo)?;
     let mut tris: Vec<[u32; 3]> = read_records(triangles)?;
     let n = own_vertices.len();
-    // Both files hold their vertices in file order: a binary search maps an index.
+    let own_index = LocalIndex::of(&own_vertices);
+    let halo_index = LocalIndex::of(&halo_vertices);
     let local = |v: u32| -> Option<u32> {
-        let at = |list: &[MeshVertex]| list.binary_search_by_key(&v, |m| m.index).ok();
-        at(&own_vertices)
-            .or_else(|| at(&halo_vertices).map(|k| n + k))
-            .map(|k| k as u32)
+        own_index
+            .get(v)
+            .or_else(|| halo_index.get(v).map(|k| n as u32 + k))
     };
     for t in &mut tris {
         for v in t.iter_mut() {
