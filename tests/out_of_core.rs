@@ -143,3 +143,52 @@ fn a_mesh_built_in_jobs_has_the_in_memory_build_s_leaves() {
     assert!(worst_normal > 0.9999, "{worst_normal}");
     assert!(share > 0.999, "{share}");
 }
+
+#[test]
+fn a_ply_cloud_built_in_jobs_keeps_its_given_normals() {
+    use spt::io::ply::{Encoding, FaceList, PolyMesh};
+    // A wavy sheet with its exact normals, in file order row by row.
+    let n = 120;
+    let (mut positions, mut normals) = (Vec::new(), Vec::new());
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = (i as f64 * 0.1, j as f64 * 0.1);
+            let (fx, fy) = (0.3 * x.cos(), -0.2 * y.sin());
+            positions.push([x, y, 0.3 * x.sin() + 0.2 * y.cos()]);
+            let g = glam::DVec3::new(-fx, -fy, 1.0).normalize().as_vec3();
+            normals.push(g.to_array());
+        }
+    }
+    let cloud = PolyMesh {
+        positions,
+        normals: Some(normals),
+        colors: None,
+        faces: FaceList::default(),
+    };
+    let dir = common::temp_dir();
+    let input = dir.path().join("sheet.ply");
+    common::write_standard(&input, &cloud, Encoding::BinaryLittleEndian);
+    let output = dir.path().join("sheet.spt");
+    let options = Options {
+        job_points: 2000,
+        spill_buffers: 1 << 20,
+        temp_dir: dir.path().to_owned(),
+    };
+    let built = build_file(&input, &output, &options, &Quiet).unwrap();
+    assert!(built.jobs >= 6, "{} jobs", built.jobs);
+    let list = SptFile::open(&output).unwrap().to_list();
+    assert!(list.meta.oriented_normals, "given normals are oriented");
+    let memory = spt::tree::scene::Scene::open(&input).unwrap();
+    let memory_list = match &memory.tree {
+        spt::tree::scene::TreeSource::Memory(l) => l.clone(),
+        spt::tree::scene::TreeSource::File(f) => f.to_list(),
+    };
+    let (ours, theirs) = (leaves_by_position(&list), leaves_by_position(&memory_list));
+    assert_eq!(ours.len(), n * n);
+    for (at, (r, _)) in &ours {
+        let (m, _) = theirs.get(at).expect("the same positions");
+        assert_eq!(r.normal, m.normal, "the file's normal at {at:?}");
+    }
+    // Only the file is left beside the input.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+}

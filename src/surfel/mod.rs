@@ -242,7 +242,7 @@ fn leaf_surfels_among(g: &Geometry, own: usize, outward: Outward) -> LeafSurfels
     let given = g.normals.as_deref();
     let mut stats = SurfelStats {
         given_normals: given.map_or(0, |n| {
-            n.par_iter().filter(|v| **v != Vec3::ZERO).count() as u64
+            n[..own].par_iter().filter(|v| **v != Vec3::ZERO).count() as u64
         }),
         ..SurfelStats::default()
     };

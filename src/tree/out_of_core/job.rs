@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
 
-use super::spill::{SpillPoint, read_spill};
+use super::spill::{JobFiles, SpillPoint, read_records, read_spill};
 use crate::io::{Bounds, Geometry, PointAttributes};
 use crate::surfel::shape::SplatShape;
 use crate::surfel::{LeafSurfels, leaf_surfels_of};
@@ -32,7 +32,7 @@ pub struct Model {
     pub bounds: Bounds,
     pub error_scale: f32,
     pub has_colors: bool,
-    /// Whether the file gives normals (a mesh's: a cloud's are estimated again).
+    /// Whether the file gives normals.
     pub has_normals: bool,
     pub has_attributes: bool,
     /// Nodes per subtree chunk ([`crate::tree::chunks::chunk_nodes_for`] of the whole
@@ -61,14 +61,19 @@ pub struct Part {
 }
 
 /// The geometry of a job: its own points first, then its halo.
-fn geometry(model: &Model, own: &[SpillPoint], halo: &[SpillPoint]) -> Geometry {
+fn geometry(
+    model: &Model,
+    own: &[SpillPoint],
+    halo: &[SpillPoint],
+    normals: Option<Vec<Vec3>>,
+) -> Geometry {
     let all = || own.iter().chain(halo);
     Geometry {
         origin: model.origin,
         bounds: model.bounds,
         core: model.bounds,
         positions: all().map(|p| Vec3::from(p.position)).collect(),
-        normals: None,
+        normals,
         colors: model.has_colors.then(|| all().map(|p| p.color).collect()),
         triangles: Vec::new(),
         rows: None,
@@ -78,8 +83,25 @@ fn geometry(model: &Model, own: &[SpillPoint], halo: &[SpillPoint]) -> Geometry 
     }
 }
 
-/// Builds the job of spill files `own` and `halo` into `part`.
-pub fn build(model: &Model, (own, halo): (&Path, &Path), part: &Path) -> anyhow::Result<Part> {
+/// The given normals of a job's own points and halo, in that order, when it has any.
+fn read_normals(files: JobFiles, points: usize) -> anyhow::Result<Option<Vec<Vec3>>> {
+    let Some((own, halo)) = files.normals else {
+        return Ok(None);
+    };
+    let mut normals: Vec<[f32; 3]> = read_records(own)?;
+    normals.extend(read_records::<[f32; 3]>(halo)?);
+    anyhow::ensure!(
+        normals.len() == points,
+        "{}: {} normals for {points} points",
+        own.display(),
+        normals.len()
+    );
+    Ok(Some(normals.into_iter().map(Vec3::from).collect()))
+}
+
+/// Builds the job of spill files `files` into `part`.
+pub fn build(model: &Model, files: JobFiles, part: &Path) -> anyhow::Result<Part> {
+    let (own, halo) = (files.own, files.halo);
     let own_points = read_spill(own)?;
     anyhow::ensure!(
         !own_points.is_empty(),
@@ -87,7 +109,8 @@ pub fn build(model: &Model, (own, halo): (&Path, &Path), part: &Path) -> anyhow:
         own.display()
     );
     let halo_points = read_spill(halo)?;
-    let g = geometry(model, &own_points, &halo_points);
+    let normals = read_normals(files, own_points.len() + halo_points.len())?;
+    let g = geometry(model, &own_points, &halo_points, normals);
     let step = (own_points.len() / INTENSITY_SAMPLE).max(1);
     let intensities: Vec<PointAttributes> = if model.has_attributes {
         own_points

@@ -33,8 +33,7 @@
 //! ([`mesh_job::flux`]), added up by the driver, which passes the orientation to the
 //! build stage.
 //!
-//! Given normals are kept for a mesh's vertices; a cloud's normals are estimated by
-//! its jobs, whatever the file gives.
+//! Normals that the file gives are kept, for a cloud's points as for a mesh's vertices.
 
 pub mod assemble;
 pub mod job;
@@ -121,7 +120,7 @@ pub fn build_file(
         bounds: scan.bounds,
         error_scale: (DVec3::from(scan.bounds.max) - lo).max_element().max(1e-30) as f32,
         has_colors: scan.has_color,
-        has_normals: stream.has_faces() && stream.has_normals(),
+        has_normals: stream.has_normals(),
         has_attributes: stream.has_attributes(),
         // A tree has about 1.5 nodes per point.
         chunk_nodes: crate::tree::chunks::chunk_nodes_for((scan.count + scan.count / 2) as usize),
@@ -191,10 +190,8 @@ impl Run<'_> {
             if job.points == 0 {
                 continue;
             }
-            let (own, halo) = (&files.own[j], &files.halo[j]);
-            parts.push(job::build(self.model, (own, halo), &self.part_path(j))?);
-            std::fs::remove_file(own)?;
-            std::fs::remove_file(halo)?;
+            parts.push(job::build(self.model, files.of(j), &self.part_path(j))?);
+            files.of(j).remove()?;
             self.progress.advance(job.points);
         }
         Ok(parts)

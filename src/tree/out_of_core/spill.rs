@@ -213,6 +213,44 @@ pub fn cell_jobs(jobs: &[JobBox]) -> Vec<u32> {
 pub struct SpillFiles {
     pub own: Vec<PathBuf>,
     pub halo: Vec<PathBuf>,
+    /// When the input gives normals: each point's, in the order of `own` and `halo`
+    /// (files of `[f32; 3]`), one file beside each.
+    pub normals: Option<(Vec<PathBuf>, Vec<PathBuf>)>,
+}
+
+impl SpillFiles {
+    /// Job `j`'s files: own, halo, and their normals' when there are.
+    pub fn of(&self, j: usize) -> JobFiles<'_> {
+        JobFiles {
+            own: &self.own[j],
+            halo: &self.halo[j],
+            normals: self.normals.as_ref().map(|(o, h)| (&*o[j], &*h[j])),
+        }
+    }
+}
+
+/// One job's spill files.
+#[derive(Debug, Clone, Copy)]
+pub struct JobFiles<'a> {
+    pub own: &'a Path,
+    pub halo: &'a Path,
+    pub normals: Option<(&'a Path, &'a Path)>,
+}
+
+impl JobFiles<'_> {
+    pub fn remove(&self) -> std::io::Result<()> {
+        let normals = self
+            .normals
+            .map_or([None, None], |(o, h)| [Some(o), Some(h)]);
+        for p in [Some(self.own), Some(self.halo)]
+            .into_iter()
+            .chain(normals)
+            .flatten()
+        {
+            std::fs::remove_file(p)?;
+        }
+        Ok(())
+    }
 }
 
 /// The jobs other than `job` whose cells lie within [`HALO`] of `p`'s cell faces.
@@ -254,19 +292,30 @@ pub fn spill(
     buffer_bytes: usize,
     mut progress: impl FnMut(u64),
 ) -> anyhow::Result<SpillFiles> {
+    let names = |kind: &str| -> Vec<PathBuf> {
+        (0..job_count)
+            .map(|j| dir.join(format!("job{j}.{kind}")))
+            .collect()
+    };
     let files = SpillFiles {
-        own: (0..job_count)
-            .map(|j| dir.join(format!("job{j}.own")))
-            .collect(),
-        halo: (0..job_count)
-            .map(|j| dir.join(format!("job{j}.halo")))
-            .collect(),
+        own: names("own"),
+        halo: names("halo"),
+        normals: input
+            .has_normals()
+            .then(|| (names("own_normals"), names("halo_normals"))),
     };
-    let open = |p: &PathBuf| -> std::io::Result<BufWriter<File>> {
-        Ok(BufWriter::with_capacity(buffer_bytes, File::create(p)?))
+    let open = |paths: &[PathBuf]| -> std::io::Result<Vec<BufWriter<File>>> {
+        paths
+            .iter()
+            .map(|p| Ok(BufWriter::with_capacity(buffer_bytes, File::create(p)?)))
+            .collect()
     };
-    let mut own: Vec<BufWriter<File>> = files.own.iter().map(open).collect::<Result<_, _>>()?;
-    let mut halo: Vec<BufWriter<File>> = files.halo.iter().map(open).collect::<Result<_, _>>()?;
+    let mut own = open(&files.own)?;
+    let mut halo = open(&files.halo)?;
+    let (mut own_n, mut halo_n) = match &files.normals {
+        Some((o, h)) => (open(o)?, open(h)?),
+        None => (Vec::new(), Vec::new()),
+    };
     let mut failed: Option<std::io::Error> = None;
     let mut around = Vec::new();
     input.points(|b| {
@@ -286,10 +335,18 @@ pub fn spill(
             let located = grid.locate(p);
             let job = table[Grid::index(located.0)];
             let bytes = bytemuck::bytes_of(&point);
-            let mut result = own[job as usize].write_all(bytes);
+            let normal = b.normals.get(i).map(bytemuck::bytes_of);
+            let write = |files: &mut [BufWriter<File>], normals: &mut [BufWriter<File>], j| {
+                let mut r = files[j as usize].write_all(bytes);
+                if let Some(n) = normal {
+                    r = r.and(normals[j as usize].write_all(n));
+                }
+                r
+            };
+            let mut result = write(&mut own, &mut own_n, job);
             halo_jobs(table, located, job, &mut around);
             for &other in &around {
-                result = result.and(halo[other as usize].write_all(bytes));
+                result = result.and(write(&mut halo, &mut halo_n, other));
             }
             if let Err(e) = result {
                 failed.get_or_insert(e);
@@ -300,7 +357,7 @@ pub fn spill(
     if let Some(e) = failed {
         return Err(e.into());
     }
-    for w in own.iter_mut().chain(halo.iter_mut()) {
+    for w in [own, halo, own_n, halo_n].iter_mut().flatten() {
         w.flush()?;
     }
     Ok(files)
