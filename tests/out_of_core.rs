@@ -78,6 +78,31 @@ fn leaf_colors(list: &spt::tree::SequentialList) -> Vec<[u8; 4]> {
     colors
 }
 
+/// `input` built out of core in jobs of at most `job_points`, in `dir`: the jobs and
+/// the file's list.
+fn build_in_jobs(
+    input: &std::path::Path,
+    job_points: u64,
+    dir: &std::path::Path,
+) -> (usize, spt::tree::SequentialList) {
+    let output = dir.join("built.spt");
+    let options = Options {
+        job_points,
+        spill_buffers: 1 << 20,
+        temp_dir: dir.to_owned(),
+    };
+    let built = build_file(input, &output, &options, &Quiet).unwrap();
+    (built.jobs, SptFile::open(&output).unwrap().to_list())
+}
+
+/// The in-memory build of `input`.
+fn in_memory_list(input: &std::path::Path) -> spt::tree::SequentialList {
+    match spt::tree::scene::Scene::open(input).unwrap().tree {
+        spt::tree::scene::TreeSource::Memory(l) => l,
+        spt::tree::scene::TreeSource::File(f) => f.to_list(),
+    }
+}
+
 /// Each leaf's record and shape, keyed by its position's bits.
 fn leaves_by_position(
     list: &spt::tree::SequentialList,
@@ -96,15 +121,8 @@ fn leaves_by_position(
 fn a_mesh_built_in_jobs_has_the_in_memory_build_s_leaves() {
     let dir = common::temp_dir();
     let input = common::default_model();
-    let output = dir.path().join("knot.spt");
-    let options = Options {
-        job_points: 4000,
-        spill_buffers: 1 << 20,
-        temp_dir: dir.path().to_owned(),
-    };
-    let built = build_file(&input, &output, &options, &Quiet).unwrap();
-    assert!(built.jobs >= 12, "{} jobs", built.jobs);
-    let list = SptFile::open(&output).unwrap().to_list();
+    let (jobs, list) = build_in_jobs(&input, 4000, dir.path());
+    assert!(jobs >= 12, "{jobs} jobs");
     check_structure(&list.meta, &list.nodes, &list.parents, &list.chunks).unwrap();
     common::assert_tree_invariants(&list, "mesh out of core");
     let view = TreeView::new(&list.meta, &list.nodes, &list.chunks);
@@ -112,11 +130,7 @@ fn a_mesh_built_in_jobs_has_the_in_memory_build_s_leaves() {
     let stats = check_views(&view, &list.parents, &views);
     assert_eq!((stats.holes, stats.past_prefix), (0, 0), "{stats:?}");
     assert!(list.meta.oriented_normals);
-    let memory = spt::tree::scene::Scene::open(&input).unwrap();
-    let memory_list = match &memory.tree {
-        spt::tree::scene::TreeSource::Memory(l) => l.clone(),
-        spt::tree::scene::TreeSource::File(f) => f.to_list(),
-    };
+    let memory_list = in_memory_list(&input);
     // Every vertex's surfel is the one the whole mesh gives it: its one-ring and its
     // neighbours' normals crossed the jobs' borders.
     let (ours, theirs) = (leaves_by_position(&list), leaves_by_position(&memory_list));
@@ -137,8 +151,7 @@ fn a_mesh_built_in_jobs_has_the_in_memory_build_s_leaves() {
     }
     let share = same_shape as f64 / ours.len() as f64;
     eprintln!(
-        "{} jobs: worst normal cos {worst_normal}, {:.4} of the shapes bit-identical",
-        built.jobs, share
+        "{jobs} jobs: worst normal cos {worst_normal}, {share:.4} of the shapes bit-identical"
     );
     assert!(worst_normal > 0.9999, "{worst_normal}");
     assert!(share > 0.999, "{share}");
@@ -168,21 +181,10 @@ fn a_ply_cloud_built_in_jobs_keeps_its_given_normals() {
     let dir = common::temp_dir();
     let input = dir.path().join("sheet.ply");
     common::write_standard(&input, &cloud, Encoding::BinaryLittleEndian);
-    let output = dir.path().join("sheet.spt");
-    let options = Options {
-        job_points: 2000,
-        spill_buffers: 1 << 20,
-        temp_dir: dir.path().to_owned(),
-    };
-    let built = build_file(&input, &output, &options, &Quiet).unwrap();
-    assert!(built.jobs >= 6, "{} jobs", built.jobs);
-    let list = SptFile::open(&output).unwrap().to_list();
+    let (jobs, list) = build_in_jobs(&input, 2000, dir.path());
+    assert!(jobs >= 6, "{jobs} jobs");
     assert!(list.meta.oriented_normals, "given normals are oriented");
-    let memory = spt::tree::scene::Scene::open(&input).unwrap();
-    let memory_list = match &memory.tree {
-        spt::tree::scene::TreeSource::Memory(l) => l.clone(),
-        spt::tree::scene::TreeSource::File(f) => f.to_list(),
-    };
+    let memory_list = in_memory_list(&input);
     let (ours, theirs) = (leaves_by_position(&list), leaves_by_position(&memory_list));
     assert_eq!(ours.len(), n * n);
     for (at, (r, _)) in &ours {

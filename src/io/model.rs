@@ -38,9 +38,9 @@ pub enum ModelError {
     Io { path: PathBuf, message: String },
 }
 
-/// Reads a PLY, LAS or LAZ file (LAS and LAZ start with `LASF`; anything else is read
-/// as PLY, whose reader says what is wrong with a file that is neither).
-pub fn read_model(path: &Path) -> Result<Model, ModelError> {
+/// Whether `path` is a LAS or LAZ file (it starts with `LASF`): the other files are
+/// read as PLY.
+pub fn is_las_file(path: &Path) -> Result<bool, ModelError> {
     let mut magic = [0u8; 4];
     let n = std::fs::File::open(path)
         .and_then(|mut f| f.read(&mut magic))
@@ -48,7 +48,13 @@ pub fn read_model(path: &Path) -> Result<Model, ModelError> {
             path: path.to_owned(),
             message: e.to_string(),
         })?;
-    if is_las(&magic[..n]) {
+    Ok(is_las(&magic[..n]))
+}
+
+/// Reads a PLY, LAS or LAZ file (LAS and LAZ start with `LASF`; anything else is read
+/// as PLY, whose reader says what is wrong with a file that is neither).
+pub fn read_model(path: &Path) -> Result<Model, ModelError> {
+    if is_las_file(path)? {
         let m = read_las(path)?;
         return Ok(Model {
             source: Source::Las(Box::new(m.summary)),

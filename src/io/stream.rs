@@ -3,15 +3,14 @@
 //! [`LasBatches`], PLY through [`PlyStream`] (its vertex rows as points, its faces as
 //! triangles).
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
 use super::PointAttributes;
 use super::geometry::channel;
-use super::las::{LasBatches, is_las};
-use super::model::ModelError;
+use super::las::LasBatches;
+use super::model::{ModelError, is_las_file};
 use super::ply::{PlyStream, Scalar};
 
 /// One batch of points, in file order.
@@ -60,14 +59,7 @@ pub enum ModelStream {
 impl ModelStream {
     /// Opens `path`: LAS and LAZ by their magic `LASF`, anything else as PLY.
     pub fn open(path: &Path) -> Result<ModelStream, ModelError> {
-        let mut magic = [0u8; 4];
-        let n = std::fs::File::open(path)
-            .and_then(|mut f| f.read(&mut magic))
-            .map_err(|e| ModelError::Io {
-                path: path.to_owned(),
-                message: e.to_string(),
-            })?;
-        Ok(if is_las(&magic[..n]) {
+        Ok(if is_las_file(path)? {
             let points = LasBatches::open(path)?.point_count();
             ModelStream::Las {
                 path: path.to_owned(),
