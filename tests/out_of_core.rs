@@ -194,3 +194,73 @@ fn a_ply_cloud_built_in_jobs_keeps_its_given_normals() {
     // Only the file is left beside the input.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
 }
+
+/// A UV sphere of `rings` × `sectors` around `centre`, its triangles wound outward or
+/// inward.
+fn sphere(mesh: &mut spt::io::ply::PolyMesh, centre: [f64; 3], radius: f64, outward: bool) {
+    let (rings, sectors) = (60u32, 120u32);
+    let base = mesh.positions.len() as u32;
+    mesh.positions
+        .push([centre[0], centre[1], centre[2] + radius]);
+    for r in 1..rings {
+        let theta = std::f64::consts::PI * r as f64 / rings as f64;
+        for k in 0..sectors {
+            let phi = std::f64::consts::TAU * k as f64 / sectors as f64;
+            let d = [
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            ];
+            mesh.positions
+                .push([0, 1, 2].map(|a| centre[a] + radius * d[a]));
+        }
+    }
+    mesh.positions
+        .push([centre[0], centre[1], centre[2] - radius]);
+    let at = |r: u32, k: u32| base + 1 + (r - 1) * sectors + k % sectors;
+    let (top, bottom) = (base, base + 1 + (rings - 1) * sectors);
+    let mut push = |t: [u32; 3]| {
+        let t = if outward { t } else { [t[0], t[2], t[1]] };
+        mesh.faces.push(&t);
+    };
+    for k in 0..sectors {
+        push([top, at(1, k), at(1, k + 1)]);
+        push([bottom, at(rings - 1, k + 1), at(rings - 1, k)]);
+        for r in 1..rings - 1 {
+            push([at(r, k), at(r + 1, k), at(r + 1, k + 1)]);
+            push([at(r, k), at(r + 1, k + 1), at(r, k + 1)]);
+        }
+    }
+}
+
+#[test]
+fn a_mesh_whose_first_job_votes_against_the_model_is_built_again_right() {
+    // A small sphere wound inward on the left, a large one wound outward on the right:
+    // the left half of the small one (the first job) votes to turn, the model not.
+    let mut mesh = spt::io::ply::PolyMesh::default();
+    sphere(&mut mesh, [-3.0, 0.0, 0.0], 1.0, false);
+    sphere(&mut mesh, [3.0, 0.0, 0.0], 2.0, true);
+    let dir = common::temp_dir();
+    let input = dir.path().join("spheres.ply");
+    common::write_standard(&input, &mesh, spt::io::ply::Encoding::BinaryLittleEndian);
+    let output = dir.path().join("spheres.spt");
+    let options = Options {
+        job_points: 3000,
+        spill_buffers: 1 << 20,
+        temp_dir: dir.path().to_owned(),
+    };
+    let built = build_file(&input, &output, &options, &Quiet).unwrap();
+    assert!(built.rebuilt, "the first job's guess was the model's vote");
+    let list = SptFile::open(&output).unwrap().to_list();
+    let (ours, theirs) = (
+        leaves_by_position(&list),
+        leaves_by_position(&in_memory_list(&input)),
+    );
+    assert_eq!(ours.len(), theirs.len());
+    for (at, (r, _)) in &ours {
+        let m = theirs[at].0;
+        let dot = spt::surfel::octahedral::oct_decode(r.normal)
+            .dot(spt::surfel::octahedral::oct_decode(m.normal));
+        assert!(dot > 0.999, "normal at {at:?}: cos {dot}");
+    }
+}

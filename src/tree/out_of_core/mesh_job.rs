@@ -3,10 +3,11 @@
 //!
 //! A mesh's normals turn outward by a vote of all its vertices
 //! ([`crate::surfel::mesh::orient_outward`]), and a vertex's ellipse and shading field
-//! are fitted to its oriented normals. So the jobs are read twice: first each adds its
-//! own vertices' terms of the vote ([`flux`]), then, the model's orientation decided,
-//! each is built ([`build`]) as a cloud's job is: leaf surfels of its own vertices,
-//! tree with the model's error scale, chunks, part file.
+//! are fitted to its oriented normals. So a job is built ([`build`]) with an
+//! orientation given (the first job's vote, [`flux`], as a guess), and returns its own
+//! vertices' terms of the vote with its part: if the model's vote disagrees with the
+//! guess, the jobs are built again. Otherwise a job is built as a cloud's is: leaf
+//! surfels of its own vertices, tree with the model's error scale, chunks, part file.
 
 use std::path::Path;
 
@@ -109,12 +110,19 @@ pub fn flux(model: &Model, files: Files, c: DVec3) -> anyhow::Result<(f64, f64)>
     Ok(mesh_flux_of(&g, own, c))
 }
 
-/// Builds the job into `part`, its normals negated when `turn`.
-pub fn build(model: &Model, files: Files, turn: bool, part: &Path) -> anyhow::Result<Part> {
+/// Builds the job into `part`, its normals negated when `turn`; returns its part and
+/// its terms of the orientation vote about `c` ([`flux`]).
+pub fn build(
+    model: &Model,
+    files: Files,
+    (turn, c): (bool, DVec3),
+    part: &Path,
+) -> anyhow::Result<(Part, (f64, f64))> {
     let (g, own) = geometry(model, files)?;
     anyhow::ensure!(own > 0, "{}: a job without vertices", files.0.display());
+    let vote = mesh_flux_of(&g, own, c);
     let mut leaves = mesh_surfels_of(&g, own, Outward::Turn(turn));
     drop(g);
     leaves.vertex_normals = Vec::new();
-    build_leaves(model, leaves, Vec::new(), part)
+    Ok((build_leaves(model, leaves, Vec::new(), part)?, vote))
 }

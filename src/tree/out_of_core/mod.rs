@@ -84,6 +84,9 @@ impl Options {
 pub struct Built {
     pub meta: TreeMeta,
     pub jobs: usize,
+    /// A mesh's jobs were built twice: the first job's guess of the orientation was
+    /// not the whole model's vote ([`mesh_job`]).
+    pub rebuilt: bool,
 }
 
 /// Hears how a build goes: a stage starts (with its total of points, 0 if unknown),
@@ -135,10 +138,10 @@ pub fn build_file(
         options,
         progress,
     };
-    let parts = if stream.has_faces() {
+    let (parts, rebuilt) = if stream.has_faces() {
         run.mesh_parts()?
     } else {
-        run.cloud_parts()?
+        (run.cloud_parts()?, false)
     };
     progress.stage("write", 0);
     let split = drop_empty(split, &jobs);
@@ -146,6 +149,7 @@ pub fn build_file(
     Ok(Built {
         meta,
         jobs: parts.len(),
+        rebuilt,
     })
 }
 
@@ -199,7 +203,8 @@ impl Run<'_> {
 
     /// A mesh's spill and jobs: its vertices with the triangles and vertices their
     /// surfels read, the orientation vote over every job, then each job's build.
-    fn mesh_parts(&self) -> anyhow::Result<Vec<Part>> {
+    /// Also says whether the jobs were built twice.
+    fn mesh_parts(&self) -> anyhow::Result<(Vec<Part>, bool)> {
         anyhow::ensure!(
             self.jobs.len() < mesh_spill::NO_JOB as usize,
             "{} jobs: a mesh is split into fewer than {}; raise --memory",
@@ -219,32 +224,49 @@ impl Run<'_> {
             |n| self.progress.advance(n),
         )?;
         drop(own);
-        let live = || self.jobs.iter().enumerate().filter(|(_, j)| j.points > 0);
         let of = |j: usize| (&*files.own[j], &*files.halo[j], &*files.triangles[j]);
-        self.progress.stage("vote", self.scan.count);
+        let live: Vec<usize> = (0..self.jobs.len())
+            .filter(|&j| self.jobs[j].points > 0)
+            .collect();
+        // The orientation is the whole model's vote, which needs every job's face
+        // normals. Rather than a pass of its own, the first job's vote is the guess that
+        // the jobs are built with, each adding its terms as it is built; in the rare
+        // case that the model's vote disagrees, they are built again.
         let c = self.scan.mean - self.model.origin;
-        let mut vote = (0.0, 0.0);
-        for (j, job) in live() {
-            let (flux, spread) = mesh_job::flux(self.model, of(j), c)?;
-            vote = (vote.0 + flux, vote.1 + spread);
-            self.progress.advance(job.points);
+        let first = mesh_job::flux(self.model, of(live[0]), c)?;
+        let guess = crate::surfel::mesh::faces_inward(first);
+        let mut built = self.build_mesh_jobs(&live, &of, (guess, c))?;
+        let rebuilt = crate::surfel::mesh::faces_inward(built.1) != guess;
+        if rebuilt {
+            built = self.build_mesh_jobs(&live, &of, (!guess, c))?;
         }
-        let turn = crate::surfel::mesh::faces_inward(vote);
-        self.progress.stage("build", self.scan.count);
-        let mut parts: Vec<Part> = Vec::with_capacity(self.jobs.len());
-        for (j, job) in live() {
-            parts.push(mesh_job::build(
-                self.model,
-                of(j),
-                turn,
-                &self.part_path(j),
-            )?);
+        for &j in &live {
             for f in [of(j).0, of(j).1, of(j).2] {
                 std::fs::remove_file(f)?;
             }
-            self.progress.advance(job.points);
         }
-        Ok(parts)
+        Ok((built.0, rebuilt))
+    }
+
+    /// Builds the mesh jobs `live` with their normals turned when `turn`; returns the
+    /// parts and the sums of the model's orientation vote about `c`.
+    fn build_mesh_jobs<'f>(
+        &self,
+        live: &[usize],
+        of: &dyn Fn(usize) -> mesh_job::Files<'f>,
+        (turn, c): (bool, DVec3),
+    ) -> anyhow::Result<(Vec<Part>, (f64, f64))> {
+        self.progress.stage("build", self.scan.count);
+        let mut parts: Vec<Part> = Vec::with_capacity(live.len());
+        let mut vote = (0.0, 0.0);
+        for &j in live {
+            let (part, (flux, spread)) =
+                mesh_job::build(self.model, of(j), (turn, c), &self.part_path(j))?;
+            parts.push(part);
+            vote = (vote.0 + flux, vote.1 + spread);
+            self.progress.advance(self.jobs[j].points);
+        }
+        Ok((parts, vote))
     }
 }
 
