@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
-use super::spill::Grid;
+use super::spill::{Grid, writers};
 use crate::io::stream::ModelStream;
 
 /// `own` of a vertex that belongs to no job (a non-finite one: its triangles are
@@ -141,14 +141,6 @@ fn ring_pairs(input: &ModelStream, own: &[u16]) -> anyhow::Result<Pairs> {
     })?;
     ring.compact();
     Ok(ring)
-}
-
-/// Opens one buffered writer per path.
-fn writers(paths: &[PathBuf], buffer: usize) -> std::io::Result<Vec<BufWriter<File>>> {
-    paths
-        .iter()
-        .map(|p| Ok(BufWriter::with_capacity(buffer, File::create(p)?)))
-        .collect()
 }
 
 /// Pass 2 over the triangles: each to the file of every job of S(t); the halo pairs.

@@ -304,12 +304,7 @@ pub fn spill(
             .has_normals()
             .then(|| (names("own_normals"), names("halo_normals"))),
     };
-    let open = |paths: &[PathBuf]| -> std::io::Result<Vec<BufWriter<File>>> {
-        paths
-            .iter()
-            .map(|p| Ok(BufWriter::with_capacity(buffer_bytes, File::create(p)?)))
-            .collect()
-    };
+    let open = |paths: &[PathBuf]| writers(paths, buffer_bytes);
     let mut own = open(&files.own)?;
     let mut halo = open(&files.halo)?;
     let (mut own_n, mut halo_n) = match &files.normals {
@@ -361,6 +356,26 @@ pub fn spill(
         w.flush()?;
     }
     Ok(files)
+}
+
+/// One buffered writer per path, each file created. An error names the file, and says
+/// what to do when too many files are open at once.
+pub fn writers(paths: &[PathBuf], buffer: usize) -> anyhow::Result<Vec<BufWriter<File>>> {
+    paths
+        .iter()
+        .map(|p| {
+            let file = File::create(p).map_err(|e| {
+                let hint = if e.raw_os_error() == Some(24) {
+                    " (too many files open at once: raise `ulimit -n`, or give a larger \
+                     --memory for fewer jobs)"
+                } else {
+                    ""
+                };
+                anyhow::anyhow!("{}: cannot create a spill file: {e}{hint}", p.display())
+            })?;
+            Ok(BufWriter::with_capacity(buffer, file))
+        })
+        .collect()
 }
 
 /// The points of a spill file, read straight into their vector.
