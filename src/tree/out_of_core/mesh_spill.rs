@@ -18,8 +18,9 @@
 //! writes each vertex to its own job's file and to the halo file of each of its halo
 //! pairs' jobs, in file order: each file's vertices ascend.
 //!
-//! Memory: 2 bytes per vertex for `own`, a bit per vertex, and 8 bytes per pair, which
-//! only vertices near a job's border have.
+//! Memory: 2 bytes per vertex for `own`, a bit per vertex for each list of pairs, and 8
+//! bytes per pair, which only vertices near a job's border have (1–1.5 % of a job's
+//! vertices are its halo on the Lucy-size mesh in 14 jobs).
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
