@@ -264,3 +264,37 @@ fn a_mesh_whose_first_job_votes_against_the_model_is_built_again_right() {
         assert!(dot > 0.999, "normal at {at:?}: cos {dot}");
     }
 }
+
+#[test]
+fn stray_and_unstorable_points_are_dropped_or_kept_as_the_whole_file_reader_does() {
+    use spt::io::ply::{FaceList, PolyMesh};
+    // A 100 × 100 sheet, one stray sample 10⁶ away (an outlier, kept), one 10³⁰⁰
+    // away and one NaN (both dropped: no f32 offset holds them).
+    let mut positions: Vec<[f64; 3]> = (0..100 * 100)
+        .map(|i| [(i % 100) as f64 * 0.01, (i / 100) as f64 * 0.01, 0.0])
+        .collect();
+    positions.extend([[1e6, 0.0, 0.0], [1e300, 0.0, 0.0], [f64::NAN, 0.0, 0.0]]);
+    let cloud = PolyMesh {
+        positions,
+        normals: None,
+        colors: None,
+        faces: FaceList::default(),
+    };
+    let dir = common::temp_dir();
+    let input = dir.path().join("stray.ply");
+    common::write_double(&input, &cloud);
+    let output = dir.path().join("stray.spt");
+    let options = Options {
+        job_points: 1500,
+        spill_buffers: 1 << 20,
+        temp_dir: dir.path().to_owned(),
+    };
+    let built = build_file(&input, &output, &options, &Quiet).unwrap();
+    assert_eq!((built.dropped, built.outliers), (2, 1));
+    // The grid spans the sheet, not the stray sample: the sheet is split.
+    assert!(built.jobs >= 6, "{} jobs", built.jobs);
+    let list = SptFile::open(&output).unwrap().to_list();
+    let memory = in_memory_list(&input);
+    assert_eq!(list.meta.leaf_count, memory.meta.leaf_count);
+    assert_eq!(list.meta.leaf_count, 100 * 100 + 1);
+}

@@ -114,6 +114,14 @@ pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
         built.jobs,
         output.display()
     );
+    if built.dropped + built.outliers > 0 {
+        println!(
+            "{} points dropped (not finite, or too far from the rest to store), {} outliers \
+             kept outside the model's core",
+            count(built.dropped),
+            count(built.outliers)
+        );
+    }
     println!(
         "total {total:.2} s, {:.2} M points/s{}",
         m.leaf_count as f64 / 1e6 / total,

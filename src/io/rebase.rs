@@ -92,6 +92,10 @@ impl Quantiles {
             .map(|i| rows.position(i))
             .filter(|p| keep(*p))
             .collect();
+        Quantiles::of_sample(&sample)
+    }
+
+    fn of_sample(sample: &[[f64; 3]]) -> Option<Quantiles> {
         let m = sample.len();
         if m == 0 {
             return None;
@@ -163,7 +167,24 @@ fn measure<R: VertexRows>(rows: &R, keep: Keep) -> Measured {
     }
 }
 
-fn within(p: [f64; 3], origin: DVec3, reach: f64) -> bool {
+/// The same rule for a model read a batch at a time (out of core), from an evenly
+/// strided sample of its finite points (at most [`SAMPLE`] of them): the anchor that
+/// kept points lie within `MAX_OFFSET / 2` of (the sample's per-axis median), and the
+/// window outside which a kept point is an outlier (from the sample's kept points),
+/// `None` when nothing can be one. Unlike [`frame`], the anchor always applies; the
+/// two differ only on models that span more than `MAX_OFFSET / 2`.
+pub fn streamed_window(sample: &[[f64; 3]]) -> Option<(DVec3, Option<Bounds>)> {
+    let anchor = Quantiles::of_sample(sample)?.median;
+    let kept: Vec<[f64; 3]> = sample
+        .iter()
+        .copied()
+        .filter(|&p| within(p, anchor, MAX_OFFSET / 2.0))
+        .collect();
+    Some((anchor, Quantiles::of_sample(&kept).and_then(|q| q.window())))
+}
+
+/// Whether `p` lies within `reach` of `origin` on every axis.
+pub fn within(p: [f64; 3], origin: DVec3, reach: f64) -> bool {
     (0..3).all(|k| (p[k] - origin[k]).abs() <= reach)
 }
 

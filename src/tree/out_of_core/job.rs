@@ -30,6 +30,8 @@ const INTENSITY_SAMPLE: usize = 1 << 16;
 pub struct Model {
     pub origin: DVec3,
     pub bounds: Bounds,
+    /// The bounds without outliers: the model's size, for its unit scale.
+    pub core: Bounds,
     pub error_scale: f32,
     pub has_colors: bool,
     /// Whether the file gives normals.
@@ -71,7 +73,7 @@ fn geometry(
     Geometry {
         origin: model.origin,
         bounds: model.bounds,
-        core: model.bounds,
+        core: model.core,
         positions: all().map(|p| Vec3::from(p.position)).collect(),
         normals,
         colors: model.has_colors.then(|| all().map(|p| p.color).collect()),

@@ -90,7 +90,7 @@ fn geometry(model: &Model, (own, halo, triangles): Files) -> anyhow::Result<(Geo
     let g = Geometry {
         origin: model.origin,
         bounds: model.bounds,
-        core: model.bounds,
+        core: model.core,
         positions: all().map(|m| Vec3::from(m.position)).collect(),
         normals: model
             .has_normals

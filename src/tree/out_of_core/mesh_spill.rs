@@ -29,10 +29,10 @@ use std::path::{Path, PathBuf};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
-use super::spill::{Grid, writers};
+use super::spill::{Grid, Scan, writers};
 use crate::io::stream::ModelStream;
 
-/// `own` of a vertex that belongs to no job (a non-finite one: its triangles are
+/// `own` of a vertex that belongs to no job (one the scan drops: its triangles are
 /// dropped, as the whole-file reader drops them).
 pub const NO_JOB: u16 = u16::MAX;
 
@@ -100,13 +100,18 @@ impl Pairs {
     }
 }
 
-/// Pass over the vertices: each one's job by its cell ([`NO_JOB`] when not finite).
-pub fn own_jobs(input: &ModelStream, grid: &Grid, table: &[u32]) -> anyhow::Result<Vec<u16>> {
+/// Pass over the vertices: each one's job by its cell ([`NO_JOB`] when the scan
+/// drops it).
+pub fn own_jobs(
+    input: &ModelStream,
+    (scan, grid): (&Scan, &Grid),
+    table: &[u32],
+) -> anyhow::Result<Vec<u16>> {
     let mut own = Vec::new();
     input.points(|b| {
         own.extend(b.xyz.iter().map(|p| {
             let p = DVec3::from(*p);
-            if p.is_finite() {
+            if scan.keeps(p) {
                 table[Grid::index(grid.locate(p).0)] as u16
             } else {
                 NO_JOB

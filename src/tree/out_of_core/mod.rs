@@ -84,6 +84,10 @@ impl Options {
 pub struct Built {
     pub meta: TreeMeta,
     pub jobs: usize,
+    /// Points dropped (not finite, or beyond reach of the rest) and outliers kept
+    /// ([`spill::Scan`]).
+    pub dropped: u64,
+    pub outliers: u64,
     /// A mesh's jobs were built twice: the first job's guess of the orientation was
     /// not the whole model's vote ([`mesh_job`]).
     pub rebuilt: bool,
@@ -108,20 +112,20 @@ pub fn build_file(
     progress.stage("scan", 0);
     let scan = spill::scan(&stream, input)?;
     progress.stage("count", scan.count);
-    let grid = Grid::over(&scan.bounds);
-    let counts = spill::count_cells(&stream, &grid)?;
+    let grid = Grid::over(&scan.core);
+    let counts = spill::count_cells(&stream, &scan, &grid)?;
     let mut jobs = Vec::new();
     let whole = (IVec3::ZERO, IVec3::splat(GRID));
     let split = spill::split(&counts, &grid, whole, options.job_points, &mut jobs);
     let dir = tempfile::Builder::new()
         .prefix("spt-build-")
         .tempdir_in(&options.temp_dir)?;
-    let lo = DVec3::from(scan.bounds.min);
-    let origin = (lo + DVec3::from(scan.bounds.max)) * 0.5;
     let model = Model {
-        origin,
+        // The centre of the core, as the whole-file readers take it.
+        origin: scan.core.center(),
         bounds: scan.bounds,
-        error_scale: (DVec3::from(scan.bounds.max) - lo).max_element().max(1e-30) as f32,
+        core: scan.core,
+        error_scale: scan.bounds.extent().max_element().max(1e-30) as f32,
         has_colors: scan.has_color,
         has_normals: stream.has_normals(),
         has_attributes: stream.has_attributes(),
@@ -149,6 +153,8 @@ pub fn build_file(
     Ok(Built {
         meta,
         jobs: parts.len(),
+        dropped: scan.dropped,
+        outliers: scan.outliers,
         rebuilt,
     })
 }
@@ -183,7 +189,7 @@ impl Run<'_> {
         let files = spill::spill(
             self.stream,
             (self.grid, &table, self.jobs.len()),
-            (self.model.origin, self.scan.eight_bit),
+            (self.scan, self.model.origin),
             self.dir,
             self.buffer(2),
             |n| self.progress.advance(n),
@@ -212,7 +218,8 @@ impl Run<'_> {
             mesh_spill::NO_JOB
         );
         self.progress.stage("jobs", self.scan.count);
-        let own = mesh_spill::own_jobs(self.stream, self.grid, &spill::cell_jobs(self.jobs))?;
+        let table = spill::cell_jobs(self.jobs);
+        let own = mesh_spill::own_jobs(self.stream, (self.scan, self.grid), &table)?;
         self.progress.advance(own.len() as u64);
         self.progress.stage("spill", self.scan.count);
         let files = mesh_spill::spill(

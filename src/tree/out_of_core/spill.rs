@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, IVec3};
 
+use crate::io::rebase::{MAX_OFFSET, SAMPLE, streamed_window, within};
 use crate::io::stream::{ModelStream, PointBatch};
 use crate::io::{Bounds, PointAttributes};
 
@@ -34,34 +35,82 @@ pub struct SpillPoint {
 /// What the scan found.
 #[derive(Debug, Clone)]
 pub struct Scan {
+    /// Points kept ([`Scan::keeps`]).
     pub count: u64,
+    /// Bounding box of the kept points.
     pub bounds: Bounds,
-    /// The mean of the finite points.
+    /// Bounding box of the kept points that are not outliers: the model's size, and
+    /// what the counting grid spans (outliers fall in its edge cells).
+    pub core: Bounds,
+    /// The mean of the kept points.
     pub mean: DVec3,
+    /// Points dropped: not finite, or further than the rest can be stored from
+    /// ([`crate::io::rebase`]'s rule, as the whole-file readers drop them).
+    pub dropped: u64,
+    /// Kept points outside the core.
+    pub outliers: u64,
     pub has_color: bool,
     /// No colour channel exceeds 255: LAS colours are taken as 8-bit.
     pub eight_bit: bool,
+    /// Kept points lie within `MAX_OFFSET / 2` of this, per axis.
+    anchor: DVec3,
 }
 
-/// The finite positions of a batch.
-fn finite(b: &PointBatch) -> impl Iterator<Item = DVec3> + '_ {
-    b.xyz
-        .iter()
-        .map(|p| DVec3::from(*p))
-        .filter(|p| p.is_finite())
+impl Scan {
+    /// Whether the point `p` is kept: finite, and within reach of the others.
+    pub fn keeps(&self, p: DVec3) -> bool {
+        p.is_finite() && within(p.to_array(), self.anchor, MAX_OFFSET / 2.0)
+    }
+
+    /// The kept positions of a batch.
+    fn kept<'a>(&'a self, b: &'a PointBatch) -> impl Iterator<Item = DVec3> + 'a {
+        b.xyz
+            .iter()
+            .map(|p| DVec3::from(*p))
+            .filter(|&p| self.keeps(p))
+    }
 }
 
-/// Pass 1: bounds of the finite points, their count, colours.
+/// Passes 1 and 2: an evenly strided sample of the finite points (where kept points
+/// lie, and the outlier window), then the kept points' count, boxes and mean, and the
+/// colours.
 pub fn scan(input: &ModelStream, path: &Path) -> anyhow::Result<Scan> {
-    let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
-    let (mut count, mut eight_bit, mut has_color) = (0u64, true, false);
-    let mut sum = DVec3::ZERO;
+    let stride = input.point_count().div_ceil(SAMPLE as u64).max(1) as usize;
+    let (mut sample, mut seen) = (Vec::new(), 0usize);
     input.points(|b| {
-        for p in finite(b) {
+        for p in &b.xyz {
+            if seen % stride == 0 && p.iter().all(|c| c.is_finite()) {
+                sample.push(*p);
+            }
+            seen += 1;
+        }
+    })?;
+    let Some((anchor, window)) = streamed_window(&sample) else {
+        anyhow::bail!("{}: the file holds no finite point", path.display());
+    };
+    let mut scan = Scan {
+        count: 0,
+        bounds: Bounds::empty(),
+        core: Bounds::empty(),
+        mean: DVec3::ZERO,
+        dropped: 0,
+        outliers: 0,
+        has_color: false,
+        eight_bit: true,
+        anchor,
+    };
+    let (mut sum, mut count, mut inliers) = (DVec3::ZERO, 0u64, 0u64);
+    let (mut bounds, mut core) = (Bounds::empty(), Bounds::empty());
+    let (mut has_color, mut eight_bit) = (false, true);
+    input.points(|b| {
+        for p in scan.kept(b) {
             sum += p;
-            lo = lo.min(p);
-            hi = hi.max(p);
             count += 1;
+            bounds = bounds.grow(p.to_array());
+            if window.is_none_or(|w| w.contains(p.to_array())) {
+                core = core.grow(p.to_array());
+                inliers += 1;
+            }
         }
         has_color |= !b.rgb.is_empty();
         eight_bit &= b.rgb.iter().flatten().all(|&c| c <= 255);
@@ -71,16 +120,16 @@ pub fn scan(input: &ModelStream, path: &Path) -> anyhow::Result<Scan> {
         "{}: the file holds no finite point",
         path.display()
     );
-    Ok(Scan {
-        count,
-        mean: sum / count as f64,
-        bounds: Bounds {
-            min: lo.to_array(),
-            max: hi.to_array(),
-        },
-        has_color,
-        eight_bit,
-    })
+    scan.count = count;
+    scan.mean = sum / count as f64;
+    scan.bounds = bounds;
+    // The sample's quartiles lie among the kept points, so the core is not empty but
+    // for a file that changed between the passes.
+    scan.core = if inliers > 0 { core } else { bounds };
+    scan.outliers = count - inliers;
+    scan.dropped = seen as u64 - count;
+    (scan.has_color, scan.eight_bit) = (has_color, eight_bit);
+    Ok(scan)
 }
 
 /// The counting grid over the bounds.
@@ -130,11 +179,11 @@ pub enum Split {
     Node(Box<Split>, Box<Split>),
 }
 
-/// Pass 2: points per cell.
-pub fn count_cells(input: &ModelStream, grid: &Grid) -> anyhow::Result<Vec<u64>> {
+/// Pass 3: kept points per cell.
+pub fn count_cells(input: &ModelStream, scan: &Scan, grid: &Grid) -> anyhow::Result<Vec<u64>> {
     let mut counts = vec![0u64; (GRID * GRID * GRID) as usize];
     input.points(|b| {
-        for p in finite(b) {
+        for p in scan.kept(b) {
             counts[Grid::index(grid.locate(p).0)] += 1;
         }
     })?;
@@ -282,12 +331,12 @@ fn halo_jobs(table: &[u32], (cell, frac): (IVec3, DVec3), job: u32, out: &mut Ve
     }
 }
 
-/// Pass 3: every finite point to its job's file and to the halo files of the jobs
+/// Pass 4: every kept point to its job's file and to the halo files of the jobs
 /// around it, relative to `origin`, colours as 8-bit RGBA.
 pub fn spill(
     input: &ModelStream,
     (grid, table, job_count): (&Grid, &[u32], usize),
-    (origin, eight_bit): (DVec3, bool),
+    (scan, origin): (&Scan, DVec3),
     dir: &Path,
     buffer_bytes: usize,
     mut progress: impl FnMut(u64),
@@ -316,11 +365,11 @@ pub fn spill(
     input.points(|b| {
         for (i, p) in b.xyz.iter().enumerate() {
             let p = DVec3::from(*p);
-            if !p.is_finite() {
+            if !scan.keeps(p) {
                 continue;
             }
             let color = b
-                .color(i, eight_bit)
+                .color(i, scan.eight_bit)
                 .unwrap_or(crate::surfel::DEFAULT_COLOR);
             let point = SpillPoint {
                 position: (p - origin).as_vec3().to_array(),
