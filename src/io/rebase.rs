@@ -167,20 +167,14 @@ fn measure<R: VertexRows>(rows: &R, keep: Keep) -> Measured {
     }
 }
 
-/// The same rule for a model read a batch at a time (out of core), from an evenly
-/// strided sample of its finite points (at most [`SAMPLE`] of them): the anchor that
-/// kept points lie within `MAX_OFFSET / 2` of (the sample's per-axis median), and the
-/// window outside which a kept point is an outlier (from the sample's kept points),
-/// `None` when nothing can be one. Unlike [`frame`], the anchor always applies; the
-/// two differ only on models that span more than `MAX_OFFSET / 2`.
-pub fn streamed_window(sample: &[[f64; 3]]) -> Option<(DVec3, Option<Bounds>)> {
-    let anchor = Quantiles::of_sample(sample)?.median;
-    let kept: Vec<[f64; 3]> = sample
-        .iter()
-        .copied()
-        .filter(|&p| within(p, anchor, MAX_OFFSET / 2.0))
-        .collect();
-    Some((anchor, Quantiles::of_sample(&kept).and_then(|q| q.window())))
+/// The quantiles' part of the rule for a model read a batch at a time (out of core),
+/// from an evenly strided sample of the points a filter accepts (at most [`SAMPLE`],
+/// strided over the file's rows as [`frame`] strides them): the sample's per-axis
+/// median and the window outside which a point is an outlier (`None` when nothing
+/// can be one). `None` for an empty sample.
+pub fn sample_window(sample: &[[f64; 3]]) -> Option<(DVec3, Option<Bounds>)> {
+    let q = Quantiles::of_sample(sample)?;
+    Some((q.median, q.window()))
 }
 
 /// Whether `p` lies within `reach` of `origin` on every axis.

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, IVec3};
 
-use crate::io::rebase::{MAX_OFFSET, SAMPLE, streamed_window, within};
+use crate::io::rebase::{MAX_OFFSET, SAMPLE, sample_window, within};
 use crate::io::stream::{ModelStream, PointBatch};
 use crate::io::{Bounds, PointAttributes};
 
@@ -44,22 +44,25 @@ pub struct Scan {
     pub core: Bounds,
     /// The mean of the kept points.
     pub mean: DVec3,
-    /// Points dropped: not finite, or further than the rest can be stored from
-    /// ([`crate::io::rebase`]'s rule, as the whole-file readers drop them).
+    /// Points dropped: not finite, or further than the rest can be stored from.
     pub dropped: u64,
     /// Kept points outside the core.
     pub outliers: u64,
     pub has_color: bool,
     /// No colour channel exceeds 255: LAS colours are taken as 8-bit.
     pub eight_bit: bool,
-    /// Kept points lie within `MAX_OFFSET / 2` of this, per axis.
-    anchor: DVec3,
+    /// When the finite points span more than f32 offsets hold: the point that kept
+    /// points lie within `MAX_OFFSET / 2` of, per axis.
+    anchor: Option<DVec3>,
 }
 
 impl Scan {
     /// Whether the point `p` is kept: finite, and within reach of the others.
     pub fn keeps(&self, p: DVec3) -> bool {
-        p.is_finite() && within(p.to_array(), self.anchor, MAX_OFFSET / 2.0)
+        p.is_finite()
+            && self
+                .anchor
+                .is_none_or(|a| within(p.to_array(), a, MAX_OFFSET / 2.0))
     }
 
     /// The kept positions of a batch.
@@ -69,25 +72,55 @@ impl Scan {
             .map(|p| DVec3::from(*p))
             .filter(|&p| self.keeps(p))
     }
+
+    /// A pass over the kept points: their count, boxes (the core within `window`)
+    /// and mean, and the colours.
+    fn measure(&mut self, input: &ModelStream, window: Option<Bounds>) -> anyhow::Result<()> {
+        let (mut sum, mut count, mut inliers) = (DVec3::ZERO, 0u64, 0u64);
+        let (mut bounds, mut core) = (Bounds::empty(), Bounds::empty());
+        let (mut has_color, mut eight_bit) = (false, true);
+        input.points(|b| {
+            for p in self.kept(b) {
+                sum += p;
+                count += 1;
+                bounds = bounds.grow(p.to_array());
+                if window.is_none_or(|w| w.contains(p.to_array())) {
+                    core = core.grow(p.to_array());
+                    inliers += 1;
+                }
+            }
+            has_color |= !b.rgb.is_empty();
+            eight_bit &= b.rgb.iter().flatten().all(|&c| c <= 255);
+        })?;
+        self.count = count;
+        self.mean = sum / count.max(1) as f64;
+        self.bounds = bounds;
+        // The sample comes from kept points, so the core is empty only for a file
+        // that changed between the passes.
+        self.core = if inliers > 0 { core } else { bounds };
+        self.outliers = count - inliers;
+        (self.has_color, self.eight_bit) = (has_color, eight_bit);
+        Ok(())
+    }
 }
 
-/// Passes 1 and 2: an evenly strided sample of the finite points (where kept points
-/// lie, and the outlier window), then the kept points' count, boxes and mean, and the
-/// colours.
+/// The first passes, with [`crate::io::rebase`]'s rule (the whole-file readers'): an
+/// evenly strided sample of the finite points gives the outlier window; a pass
+/// measures the finite points. When some lies beyond `MAX_OFFSET / 2` of the core's
+/// centre, only those within it of the sample's median are kept, measured again.
 pub fn scan(input: &ModelStream, path: &Path) -> anyhow::Result<Scan> {
     let stride = input.point_count().div_ceil(SAMPLE as u64).max(1) as usize;
-    let (mut sample, mut seen) = (Vec::new(), 0usize);
+    let (mut sample, mut rows) = (Vec::new(), 0usize);
     input.points(|b| {
         for p in &b.xyz {
-            if seen % stride == 0 && p.iter().all(|c| c.is_finite()) {
+            if rows % stride == 0 && p.iter().all(|c| c.is_finite()) {
                 sample.push(*p);
             }
-            seen += 1;
+            rows += 1;
         }
     })?;
-    let Some((anchor, window)) = streamed_window(&sample) else {
-        anyhow::bail!("{}: the file holds no finite point", path.display());
-    };
+    let none = || anyhow::anyhow!("{}: the file holds no finite point", path.display());
+    let (median, window) = sample_window(&sample).ok_or_else(none)?;
     let mut scan = Scan {
         count: 0,
         bounds: Bounds::empty(),
@@ -97,38 +130,23 @@ pub fn scan(input: &ModelStream, path: &Path) -> anyhow::Result<Scan> {
         outliers: 0,
         has_color: false,
         eight_bit: true,
-        anchor,
+        anchor: None,
     };
-    let (mut sum, mut count, mut inliers) = (DVec3::ZERO, 0u64, 0u64);
-    let (mut bounds, mut core) = (Bounds::empty(), Bounds::empty());
-    let (mut has_color, mut eight_bit) = (false, true);
-    input.points(|b| {
-        for p in scan.kept(b) {
-            sum += p;
-            count += 1;
-            bounds = bounds.grow(p.to_array());
-            if window.is_none_or(|w| w.contains(p.to_array())) {
-                core = core.grow(p.to_array());
-                inliers += 1;
-            }
-        }
-        has_color |= !b.rgb.is_empty();
-        eight_bit &= b.rgb.iter().flatten().all(|&c| c <= 255);
-    })?;
+    scan.measure(input, window)?;
+    let reach = MAX_OFFSET / 2.0;
+    let origin = scan.core.center();
+    if !(within(scan.bounds.min, origin, reach) && within(scan.bounds.max, origin, reach)) {
+        sample.retain(|&p| within(p, median, reach));
+        let window = sample_window(&sample).and_then(|(_, w)| w);
+        scan.anchor = Some(median);
+        scan.measure(input, window)?;
+    }
     anyhow::ensure!(
-        count > 0,
+        scan.count > 0,
         "{}: the file holds no finite point",
         path.display()
     );
-    scan.count = count;
-    scan.mean = sum / count as f64;
-    scan.bounds = bounds;
-    // The sample's quartiles lie among the kept points, so the core is not empty but
-    // for a file that changed between the passes.
-    scan.core = if inliers > 0 { core } else { bounds };
-    scan.outliers = count - inliers;
-    scan.dropped = seen as u64 - count;
-    (scan.has_color, scan.eight_bit) = (has_color, eight_bit);
+    scan.dropped = rows as u64 - scan.count;
     Ok(scan)
 }
 
