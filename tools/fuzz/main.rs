@@ -50,6 +50,12 @@ pub fn justified(kind: Kind, len: usize) -> usize {
     64 * len + (1 << 20) + chunk
 }
 
+/// Every this many accepted PLY, LAS or LAZ inputs, one is also built out of core.
+const OUT_OF_CORE_EVERY: u64 = 16;
+/// An out-of-core build's fixed tables, whatever its input: the 64³ counting grid's
+/// counts (u64) and cells' jobs (u32).
+const OUT_OF_CORE_TABLES: usize = 64 * 64 * 64 * 12;
+
 #[derive(Parser)]
 #[command(about = "Mutation fuzzer for spt's PLY and .spt readers")]
 struct Args {
@@ -80,6 +86,8 @@ struct Tally {
     violations: u64,
     slow: u64,
     oversized: u64,
+    /// Inputs also built out of core.
+    out_of_core: u64,
     slowest: Duration,
     /// The largest allocation as a fraction of what its input justified, the
     /// allocation and the input's size.
@@ -101,8 +109,13 @@ static IN_INPUT: AtomicBool = AtomicBool::new(false);
 
 /// Runs one input; panics are caught and returned as text.
 fn execute(kind: Kind, path: &Path) -> Result<Outcome, String> {
+    caught(|| target::run(kind, path))
+}
+
+/// Runs `f`; a panic is caught and returned as text.
+fn caught(f: impl FnOnce() -> Outcome) -> Result<Outcome, String> {
     IN_INPUT.store(true, Ordering::Relaxed);
-    let result = catch_unwind(AssertUnwindSafe(|| target::run(kind, path)));
+    let result = catch_unwind(AssertUnwindSafe(f));
     IN_INPUT.store(false, Ordering::Relaxed);
     result.map_err(|p| {
         p.downcast_ref::<String>()
@@ -212,6 +225,7 @@ fn main() {
         tally.executions += 1;
         let n = tally.executions;
         let note = |what: &str| format!("{what} (mutant of {}, {} bytes)", seed.name, bytes.len());
+        let accepted = matches!(result, Ok(Outcome::Accepted)) && seed.kind != Kind::Spt;
         match result {
             Ok(Outcome::Accepted) => tally.accepted[seed.kind as usize] += 1,
             Ok(Outcome::Refused) => tally.refused[seed.kind as usize] += 1,
@@ -222,6 +236,25 @@ fn main() {
             Err(panic) => {
                 tally.panics += 1;
                 save(&args.out, n, "panic", seed.kind, &bytes, &note(&panic));
+            }
+        }
+        if accepted && tally.accepted[seed.kind as usize] % OUT_OF_CORE_EVERY == 0 {
+            largest_allocation::reset();
+            let built = caught(|| target::out_of_core(&path));
+            let largest = largest_allocation::largest();
+            tally.out_of_core += 1;
+            let failure = match built {
+                Ok(Outcome::Violation(why)) => Some(("violation", why)),
+                Err(panic) => Some(("panic", panic)),
+                _ if largest > justified(seed.kind, bytes.len()) + OUT_OF_CORE_TABLES => {
+                    Some(("allocation", format!("one allocation of {largest} bytes")))
+                }
+                _ => None,
+            };
+            if let Some((what, why)) = failure {
+                tally.violations += 1;
+                let why = format!("out of core: {why}");
+                save(&args.out, n, what, seed.kind, &bytes, &note(&why));
             }
         }
         tally.slowest = tally.slowest.max(took);
@@ -268,7 +301,7 @@ fn report(t: &Tally, elapsed: Duration, last: bool) {
         "{}executions {} in {s:.0} s ({:.0}/s): {}; panics {}, invariant violations {}, slower \
          than the limit {}, oversized allocations {}; slowest input {:.1} ms; largest \
          allocation {:.0} % of what its input justified ({} bytes for {} input bytes); LAZ \
-         decoder panics contained as errors {}",
+         decoder panics contained as errors {}; also built out of core {}",
         if last { "fuzz: " } else { "      " },
         t.executions,
         t.executions as f64 / s.max(1e-9),
@@ -282,5 +315,6 @@ fn report(t: &Tally, elapsed: Duration, last: bool) {
         t.worst.1,
         t.worst.2,
         CONTAINED.load(Ordering::Relaxed),
+        t.out_of_core,
     );
 }

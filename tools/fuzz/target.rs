@@ -9,6 +9,9 @@
 //! * `.spt`: open (checksum, header, nodes) → meta and node checks → a prefix search →
 //!   written again and reopened → the same list back.
 //!
+//! Every 16th accepted PLY, LAS or LAZ input is also built out of core in jobs of 64
+//! points ([`out_of_core`]): it must build, validate, and hold as many leaves.
+//!
 //! A refusal (an error) is a fine outcome; a violated invariant is not.
 //!
 //! [`Geometry::check`]: spt::io::Geometry::check
@@ -19,8 +22,10 @@ use std::path::Path;
 use glam::DVec3;
 use spt::io::Geometry;
 use spt::io::las::read_las;
+use spt::io::model::read_model;
 use spt::io::ply::{PlyStream, read_ply};
 use spt::surfel::leaf_surfels;
+use spt::tree::out_of_core::{Options, Progress, build_file};
 use spt::tree::select::PrefixIndex;
 use spt::tree::spt_file::{SptFile, write_to};
 use spt::tree::validate::{check_chunks, check_meta, check_nodes, check_structure};
@@ -148,4 +153,41 @@ pub fn run(kind: Kind, path: &Path) -> Outcome {
         Kind::Las | Kind::Laz => las(path),
     };
     result.unwrap_or_else(|o| o)
+}
+
+/// An accepted PLY, LAS or LAZ input built out of core in jobs of 64 points: it builds,
+/// opens and validates, with as many leaves as the in-memory build.
+pub fn out_of_core(path: &Path) -> Outcome {
+    struct Quiet;
+    impl Progress for Quiet {
+        fn stage(&self, _: &'static str, _: u64) {}
+        fn advance(&self, _: u64) {}
+    }
+    let Ok(model) = read_model(path) else {
+        return Outcome::Refused;
+    };
+    let leaves = build_sequential_list(leaf_surfels(&model.geometry))
+        .meta
+        .leaf_count;
+    let dir = path.with_extension("ooc");
+    if let Err(e) = std::fs::create_dir_all(&dir) {
+        return Outcome::Violation(format!("temporary folder: {e}"));
+    }
+    let options = Options {
+        job_points: 64,
+        spill_buffers: 1 << 16,
+        temp_dir: dir.clone(),
+    };
+    let out = dir.join("out.spt");
+    let outcome = match build_file(path, &out, &options, &Quiet).map(|_| SptFile::open(&out)) {
+        Err(e) => Outcome::Violation(format!("out of core refuses what the reader reads: {e:#}")),
+        Ok(Err(e)) => Outcome::Violation(format!("out of core wrote a bad file: {e}")),
+        Ok(Ok(f)) if f.meta.leaf_count != leaves => Outcome::Violation(format!(
+            "out of core: {} leaves, in memory {leaves}",
+            f.meta.leaf_count
+        )),
+        Ok(Ok(_)) => Outcome::Accepted,
+    };
+    let _ = std::fs::remove_dir_all(&dir);
+    outcome
 }
