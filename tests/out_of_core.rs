@@ -298,3 +298,41 @@ fn stray_and_unstorable_points_are_dropped_or_kept_as_the_whole_file_reader_does
     assert_eq!(list.meta.leaf_count, memory.meta.leaf_count);
     assert_eq!(list.meta.leaf_count, 100 * 100 + 1);
 }
+
+#[test]
+fn a_model_whose_disks_dwarf_its_points_box_gets_their_error_scale() {
+    use spt::io::ply::{FaceList, PolyMesh};
+    // The fuzzer's case: points 10⁻³⁰ apart, whose disks (sized by the unit-scale
+    // fallback) are 10²⁶ times the points' box; errors relative to the box overflow f16.
+    let cloud = PolyMesh {
+        positions: vec![
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0],
+            [
+                5.831554006032442e-39,
+                -6.310887241768095e-30,
+                5.6492941212700346e-39,
+            ],
+            [
+                7.681846387076256e31,
+                1.6884937804572382e25,
+                4.3053280908255565e21,
+            ],
+        ],
+        normals: None,
+        colors: None,
+        faces: FaceList::default(),
+    };
+    let dir = common::temp_dir();
+    let input = dir.path().join("tiny.ply");
+    common::write_double(&input, &cloud);
+    let (_, list) = build_in_jobs(&input, 64, dir.path());
+    let memory = in_memory_list(&input);
+    assert_eq!(list.meta.leaf_count, memory.meta.leaf_count);
+    assert!(
+        list.meta.error_scale >= memory.meta.error_scale / 64.0,
+        "{:?}",
+        list.meta
+    );
+    check_structure(&list.meta, &list.nodes, &list.parents, &list.chunks).unwrap();
+}

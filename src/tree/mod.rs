@@ -147,7 +147,7 @@ pub fn build_hierarchy(leaves: &mut LeafSurfels, report: &dyn Report) -> Hierarc
 
 /// The size errors are stored relative to: the largest extent of the box holding every
 /// leaf disk (> 0 since radii are > 0).
-fn error_scale(surfels: &[Surfel]) -> f32 {
+pub fn error_scale(surfels: &[Surfel]) -> f32 {
     let (lo, hi) = surfels
         .par_iter()
         .map(|s| {

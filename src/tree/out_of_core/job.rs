@@ -60,6 +60,9 @@ pub struct Part {
     pub centre_max: Vec3,
     pub oriented: bool,
     pub intensities: Vec<PointAttributes>,
+    /// The error scale its leaves alone would take ([`crate::tree::error_scale`]: the
+    /// largest extent of the box holding their disks).
+    pub disk_extent: f32,
 }
 
 /// The geometry of a job: its own points first, then its halo.
@@ -139,6 +142,7 @@ pub fn build_leaves(
 ) -> anyhow::Result<Part> {
     leaves.drop_redundant();
     let leaf_count = leaves.surfels.len() as u64;
+    let disk_extent = crate::tree::error_scale(&leaves.surfels);
     let oriented = leaves.oriented_normals;
     let hierarchy = build_hierarchy(&mut leaves, &Silent);
     let set = build_records_scaled(leaves, hierarchy, model.error_scale, &Silent);
@@ -164,6 +168,7 @@ pub fn build_leaves(
         centre_max: Vec3::from(list.meta.centre_max),
         oriented,
         intensities,
+        disk_extent,
     })
 }
 

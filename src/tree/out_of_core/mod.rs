@@ -55,6 +55,11 @@ use spill::{GRID, Grid};
 /// list: measured on clouds of 1–10 M points, with room to spare).
 pub const BYTES_PER_JOB_POINT: u64 = 320;
 
+/// How far the leaves' own error scale may exceed the model's (from the points' box)
+/// before the jobs are built again with theirs: errors up to about this many scales fit
+/// an f16 (at most 65,504) with room for a tree's depth of sums.
+pub const SCALE_SLACK: f32 = 64.0;
+
 /// How an out-of-core build runs.
 #[derive(Debug, Clone)]
 pub struct Options {
@@ -132,20 +137,32 @@ pub fn build_file(
         // A tree has about 1.5 nodes per point.
         chunk_nodes: crate::tree::chunks::chunk_nodes_for((scan.count + scan.count / 2) as usize),
     };
-    let run = Run {
-        stream: &stream,
-        scan: &scan,
-        grid: &grid,
-        jobs: &jobs,
-        model: &model,
-        dir: dir.path(),
-        options,
-        progress,
-    };
-    let (parts, rebuilt) = if stream.has_faces() {
-        run.mesh_parts()?
-    } else {
-        (run.cloud_parts()?, false)
+    let mut model = model;
+    let (parts, rebuilt) = loop {
+        let run = Run {
+            stream: &stream,
+            scan: &scan,
+            grid: &grid,
+            jobs: &jobs,
+            model: &model,
+            dir: dir.path(),
+            options,
+            progress,
+        };
+        let (parts, rebuilt) = if stream.has_faces() {
+            run.mesh_parts()?
+        } else {
+            (run.cloud_parts()?, false)
+        };
+        // Errors are stored as f16 multiples of the scale, so it must not be far below
+        // the leaves' own (their disks reach past the points' box by their radii, which
+        // the scale from the points cannot know: on degenerate models, by far). Then
+        // everything is built again with theirs; on other models this never happens.
+        let needed = parts.iter().map(|p| p.disk_extent).fold(0.0, f32::max);
+        if needed <= SCALE_SLACK * model.error_scale {
+            break (parts, rebuilt);
+        }
+        model.error_scale = needed;
     };
     progress.stage("write", 0);
     let split = drop_empty(split, &jobs);
