@@ -133,21 +133,31 @@ enum Source {
 }
 
 /// Which way a mesh's normals turn ([`orient_outward`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Outward {
     /// By the vote of its own vertices.
     Vote,
-    /// As decided for the whole model (a piece of it, [`crate::tree::out_of_core`]):
-    /// negated when true.
-    Turn(bool),
+    /// As decided for the whole model, of which this is a piece
+    /// ([`crate::tree::out_of_core`]): negated when `turn`. The piece's own vertices
+    /// (its first `own`) give their terms of the model's vote about its mean vertex
+    /// `mean` ([`outward_flux`]), taken before the normals turn.
+    Piece { turn: bool, own: usize, mean: DVec3 },
+}
+
+/// What [`vertex_disks`] returns besides the surfels.
+pub struct MeshDisks {
+    /// The isolated vertices that are redundant ([`super::isolated`]), ascending.
+    pub redundant: Vec<u32>,
+    /// The vertex normals (the surfels' are their shading fields', `super::field`).
+    pub normals: Vec<Vec3>,
+    /// A piece's terms of the orientation vote ([`Outward::Piece`]).
+    pub vote: Option<(f64, f64)>,
 }
 
 /// Normals and radii of the vertices of a mesh, written into `surfels` (one per
 /// vertex), then their ellipses and shading fields. `scale` is the model's unit scale
 /// ([`super::unit_scale`]); `given` the file's normals, `colored` whether it has
-/// colours (the surfels' on entry). Returns the isolated vertices that are redundant
-/// ([`super::isolated`]), ascending, and the vertex normals (the surfels' are their
-/// shading fields', `super::field`).
+/// colours (the surfels' on entry).
 pub fn vertex_disks(
     points: &[Vec3],
     scale: f32,
@@ -155,11 +165,13 @@ pub fn vertex_disks(
     (given, colored, outward): (Option<&[Vec3]>, bool, Outward),
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
-) -> (Vec<u32>, Vec<Vec3>) {
+) -> MeshDisks {
     let isolated = face_disks(points, scale, triangles, given, surfels, stats);
+    let mut vote = None;
     stats.turned_outward = match outward {
         Outward::Vote => orient_outward(points, surfels),
-        Outward::Turn(turn) => {
+        Outward::Piece { turn, own, mean } => {
+            vote = Some(outward_flux(&points[..own], &surfels[..own], mean));
             if turn {
                 surfels.par_iter_mut().for_each(|s| s.normal = -s.normal);
             }
@@ -169,7 +181,11 @@ pub fn vertex_disks(
     let normals = super::ring::ring_shapes(points, scale, triangles, surfels, colored);
     let redundant = super::isolated::redundant(points, scale, &isolated, surfels);
     stats.redundant_vertices = redundant.len() as u64;
-    (redundant, normals)
+    MeshDisks {
+        redundant,
+        normals,
+        vote,
+    }
 }
 
 /// Normals and radii of the vertices of a mesh from their faces (and from their

@@ -172,22 +172,28 @@ pub use mesh::Outward;
 /// points around it (its halo, [`crate::tree::out_of_core`]). The halo's own surfels
 /// are not made.
 pub fn leaf_surfels_of(g: &Geometry, own: usize) -> LeafSurfels {
-    let mut leaves = leaf_surfels_among(g, own, Outward::Vote);
+    let mut leaves = leaf_surfels_among(g, own, Outward::Vote).0;
     leaves.surfels.truncate(own);
     leaves
 }
 
 /// The leaf surfels of the first `own` vertices of a piece of a mesh, whose one-rings
 /// and their vertices' one-rings are all among its triangles (the rest of its vertices
-/// and triangles are its halo, [`crate::tree::out_of_core`]), with the whole model's
-/// orientation `outward`. Only the own vertices' surfels, redundant vertices and vertex
-/// normals are kept.
-pub fn mesh_surfels_of(g: &Geometry, own: usize, outward: Outward) -> LeafSurfels {
-    let mut leaves = leaf_surfels_among(g, own, outward);
+/// and triangles are its halo, [`crate::tree::out_of_core`]), their normals negated
+/// when `turn` (the whole model's orientation), and their terms of the model's
+/// orientation vote about its mean vertex `mean` ([`mesh::Outward::Piece`]). Only the
+/// own vertices' surfels and redundant vertices are kept; no vertex normals.
+pub fn mesh_surfels_of(
+    g: &Geometry,
+    own: usize,
+    (turn, mean): (bool, DVec3),
+) -> (LeafSurfels, (f64, f64)) {
+    let outward = Outward::Piece { turn, own, mean };
+    let (mut leaves, vote) = leaf_surfels_among(g, own, outward);
     leaves.surfels.truncate(own);
-    leaves.vertex_normals.truncate(own);
+    leaves.vertex_normals = Vec::new();
     leaves.redundant.retain(|&v| (v as usize) < own);
-    leaves
+    (leaves, vote.unwrap_or_default())
 }
 
 /// The sums of a mesh's orientation vote ([`mesh::outward_flux`]) over the first `own`
@@ -237,7 +243,12 @@ fn initial_surfels(g: &Geometry) -> Vec<Surfel> {
         .collect()
 }
 
-fn leaf_surfels_among(g: &Geometry, own: usize, outward: Outward) -> LeafSurfels {
+/// The leaf surfels, and a mesh piece's terms of the orientation vote.
+fn leaf_surfels_among(
+    g: &Geometry,
+    own: usize,
+    outward: Outward,
+) -> (LeafSurfels, Option<(f64, f64)>) {
     let scale = model_scale(g);
     let given = g.normals.as_deref();
     let mut stats = SurfelStats {
@@ -247,7 +258,7 @@ fn leaf_surfels_among(g: &Geometry, own: usize, outward: Outward) -> LeafSurfels
         ..SurfelStats::default()
     };
     let mut surfels = initial_surfels(g);
-    let (mut redundant, mut vertex_normals) = (Vec::new(), Vec::new());
+    let (mut redundant, mut vertex_normals, mut vote) = (Vec::new(), Vec::new(), None);
     let oriented = if g.triangles.is_empty() {
         let all: Vec<u32> = (0..own as u32).collect();
         let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
@@ -262,7 +273,7 @@ fn leaf_surfels_among(g: &Geometry, own: usize, outward: Outward) -> LeafSurfels
         );
         given.is_some() && stats.given_normals == own as u64
     } else {
-        (redundant, vertex_normals) = mesh::vertex_disks(
+        let disks = mesh::vertex_disks(
             &g.positions,
             scale,
             &g.triangles,
@@ -270,9 +281,10 @@ fn leaf_surfels_among(g: &Geometry, own: usize, outward: Outward) -> LeafSurfels
             &mut surfels,
             &mut stats,
         );
+        (redundant, vertex_normals, vote) = (disks.redundant, disks.normals, disks.vote);
         true
     };
-    LeafSurfels {
+    let leaves = LeafSurfels {
         surfels,
         origin: g.origin,
         has_colors: g.colors.is_some(),
@@ -281,5 +293,6 @@ fn leaf_surfels_among(g: &Geometry, own: usize, outward: Outward) -> LeafSurfels
         stats,
         redundant,
         vertex_normals,
-    }
+    };
+    (leaves, vote)
 }

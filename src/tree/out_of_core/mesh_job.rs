@@ -17,7 +17,7 @@ use super::job::{Model, Part, build_leaves};
 use super::mesh_spill::MeshVertex;
 use super::spill::read_records;
 use crate::io::Geometry;
-use crate::surfel::{Outward, mesh_flux_of, mesh_surfels_of};
+use crate::surfel::{mesh_flux_of, mesh_surfels_of};
 
 /// A job's spill files: own vertices, halo vertices, triangles.
 pub type Files<'a> = (&'a Path, &'a Path, &'a Path);
@@ -120,9 +120,7 @@ pub fn build(
 ) -> anyhow::Result<(Part, (f64, f64))> {
     let (g, own) = geometry(model, files)?;
     anyhow::ensure!(own > 0, "{}: a job without vertices", files.0.display());
-    let vote = mesh_flux_of(&g, own, c);
-    let mut leaves = mesh_surfels_of(&g, own, Outward::Turn(turn));
+    let (leaves, vote) = mesh_surfels_of(&g, own, (turn, c));
     drop(g);
-    leaves.vertex_normals = Vec::new();
     Ok((build_leaves(model, leaves, Vec::new(), part)?, vote))
 }
