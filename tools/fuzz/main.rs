@@ -160,7 +160,7 @@ fn replay(path: &Path) -> i32 {
     let result = execute(kind, path);
     let took = start.elapsed();
     match result {
-        Ok(Outcome::Accepted) => println!("accepted in {took:?}"),
+        Ok(Outcome::Accepted { .. }) => println!("accepted in {took:?}"),
         Ok(Outcome::Refused) => println!("refused in {took:?}"),
         Ok(Outcome::Violation(why)) => {
             println!("invariant violated: {why}");
@@ -225,9 +225,12 @@ fn main() {
         tally.executions += 1;
         let n = tally.executions;
         let note = |what: &str| format!("{what} (mutant of {}, {} bytes)", seed.name, bytes.len());
-        let accepted = matches!(result, Ok(Outcome::Accepted)) && seed.kind != Kind::Spt;
+        let leaves = match result {
+            Ok(Outcome::Accepted { leaves }) if seed.kind != Kind::Spt => Some(leaves),
+            _ => None,
+        };
         match result {
-            Ok(Outcome::Accepted) => tally.accepted[seed.kind as usize] += 1,
+            Ok(Outcome::Accepted { .. }) => tally.accepted[seed.kind as usize] += 1,
             Ok(Outcome::Refused) => tally.refused[seed.kind as usize] += 1,
             Ok(Outcome::Violation(why)) => {
                 tally.violations += 1;
@@ -238,9 +241,11 @@ fn main() {
                 save(&args.out, n, "panic", seed.kind, &bytes, &note(&panic));
             }
         }
-        if accepted && tally.accepted[seed.kind as usize] % OUT_OF_CORE_EVERY == 0 {
+        if let Some(leaves) =
+            leaves.filter(|_| tally.accepted[seed.kind as usize].is_multiple_of(OUT_OF_CORE_EVERY))
+        {
             largest_allocation::reset();
-            let built = caught(|| target::out_of_core(&path));
+            let built = caught(|| target::out_of_core(&path, leaves));
             let largest = largest_allocation::largest();
             tally.out_of_core += 1;
             let failure = match built {

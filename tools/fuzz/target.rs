@@ -22,7 +22,6 @@ use std::path::Path;
 use glam::DVec3;
 use spt::io::Geometry;
 use spt::io::las::read_las;
-use spt::io::model::read_model;
 use spt::io::ply::{PlyStream, read_ply};
 use spt::surfel::leaf_surfels;
 use spt::tree::out_of_core::{Options, Progress, build_file};
@@ -35,7 +34,10 @@ use crate::seeds::Kind;
 
 /// How a run ended, when it did not panic.
 pub enum Outcome {
-    Accepted,
+    /// With the leaves of the tree built (0 for an `.spt` input).
+    Accepted {
+        leaves: u64,
+    },
     Refused,
     Violation(String),
 }
@@ -87,7 +89,9 @@ fn build(geometry: &Geometry, path: &Path) -> Result<Outcome, Outcome> {
         .map_err(violation("tree"))?;
     select(&list)?;
     round_trip(&list, path)?;
-    Ok(Outcome::Accepted)
+    Ok(Outcome::Accepted {
+        leaves: list.meta.leaf_count,
+    })
 }
 
 fn ply(path: &Path) -> Result<Outcome, Outcome> {
@@ -142,7 +146,7 @@ fn spt(path: &Path) -> Result<Outcome, Outcome> {
     check_chunks(&list.nodes, &list.chunks).map_err(violation("chunks"))?;
     select(&list)?;
     round_trip(&list, path)?;
-    Ok(Outcome::Accepted)
+    Ok(Outcome::Accepted { leaves: 0 })
 }
 
 /// Runs the input stored at `path`.
@@ -156,19 +160,13 @@ pub fn run(kind: Kind, path: &Path) -> Outcome {
 }
 
 /// An accepted PLY, LAS or LAZ input built out of core in jobs of 64 points: it builds,
-/// opens and validates, with as many leaves as the in-memory build.
-pub fn out_of_core(path: &Path) -> Outcome {
+/// opens and validates, with as many leaves as the in-memory build made, `leaves`.
+pub fn out_of_core(path: &Path, leaves: u64) -> Outcome {
     struct Quiet;
     impl Progress for Quiet {
         fn stage(&self, _: &'static str, _: u64) {}
         fn advance(&self, _: u64) {}
     }
-    let Ok(model) = read_model(path) else {
-        return Outcome::Refused;
-    };
-    let leaves = build_sequential_list(leaf_surfels(&model.geometry))
-        .meta
-        .leaf_count;
     let dir = path.with_extension("ooc");
     if let Err(e) = std::fs::create_dir_all(&dir) {
         return Outcome::Violation(format!("temporary folder: {e}"));
@@ -186,7 +184,7 @@ pub fn out_of_core(path: &Path) -> Outcome {
             "out of core: {} leaves, in memory {leaves}",
             f.meta.leaf_count
         )),
-        Ok(Ok(_)) => Outcome::Accepted,
+        Ok(Ok(_)) => Outcome::Accepted { leaves },
     };
     let _ = std::fs::remove_dir_all(&dir);
     outcome
