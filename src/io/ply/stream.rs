@@ -193,10 +193,6 @@ impl PlyStream {
         self
     }
 
-    pub fn header(&self) -> &Header {
-        &self.header
-    }
-
     pub fn vertex_count(&self) -> u64 {
         self.header.elements[self.plan.vertex_element].count
     }
@@ -206,10 +202,6 @@ impl PlyStream {
         self.plan
             .faces
             .is_some_and(|(f, _)| self.header.elements[f].count > 0)
-    }
-
-    pub fn has_colors(&self) -> bool {
-        self.plan.vertex_fields.color_channels > 0
     }
 
     pub fn has_normals(&self) -> bool {
