@@ -1,5 +1,6 @@
 #import common
 #import fullscreen
+#import surrounded
 
 // Pass 3: normalize the blended attributes and shade each pixel (Blinn-Phong with a
 // movable light); background where no splat contributed, unless the pixel is a gap
@@ -18,22 +19,6 @@
 struct Sums {
     c: vec4<f32>,
     nz: vec4<f32>,
-}
-
-// The pixel and its four neighbours.
-const CROSS = array<vec2<i32>, 5>(vec2<i32>(0, 0), vec2<i32>(1, 0), vec2<i32>(-1, 0), vec2<i32>(0, 1), vec2<i32>(0, -1));
-
-// Whether a surface covers the centre of the pixel and of its four neighbours: then the
-// pixel shows no background, whatever the coverage samples that passed the depth test
-// say (beside an occluding edge, the hidden surface's samples failed it).
-fn surrounded(texel: vec2<i32>) -> bool {
-    let last = vec2<i32>(textureDimensions(depth)) - 1;
-    for (var k = 0; k < 5; k++) {
-        if textureLoad(depth, clamp(texel + CROSS[k], vec2<i32>(0), last), 0).x <= 0.0 {
-            return false;
-        }
-    }
-    return true;
 }
 
 // Pass 3's targets: the shaded colour, and 1 where the pixel shows a surface, 0 where
@@ -89,7 +74,7 @@ fn shade(frag: vec2<f32>, texel: vec2<i32>, sums: Sums, alpha: f32) -> vec3<f32>
 // The share of the pixel's coverage `samples` that the splats cover (all of it where
 // the pixel and its neighbours show a surface at their centres).
 fn coverage_alpha(texel: vec2<i32>, samples: vec4<f32>) -> f32 {
-    return select(dot(samples, vec4<f32>(0.25)), 1.0, surrounded(texel));
+    return select(dot(samples, vec4<f32>(0.25)), 1.0, surrounded(depth, texel));
 }
 
 // The eight unit directions eye-dome lighting looks in, every 45°.

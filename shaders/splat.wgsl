@@ -1,6 +1,7 @@
 #import common
 #import constants
 #import shape
+#import surrounded
 
 // Splats: pass 1 (visibility, depth only) and pass 2 (attributes, additive blending),
 // one instanced quad of 4 vertices per node of the list slice bound here: every node
@@ -12,6 +13,8 @@
 @group(1) @binding(2) var<storage, read> shapes: array<SplatShape>;
 // Each node's LiDAR attributes (one u32 of zero for a model without them).
 @group(1) @binding(3) var<storage, read> attributes: array<u32>;
+// Pass 1's depth, for pass 2 (`fs_attributes`); read as a float texture, as pass 3 does.
+@group(2) @binding(0) var visible_depth: texture_2d<f32>;
 
 // A splat's clip (src/surfel/clip.rs) in one vec4, for the fragments: a wedge as the
 // unit directions (start, end) of its sides, a line as (cos θ, sin θ, d, LINE_TAG). No
@@ -193,7 +196,7 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     let cp = frame.proj * vec4<f32>(center, 1.0);
     let center_px = vec2<f32>((cp.x / cp.w * 0.5 + 0.5) * frame.viewport.x, (0.5 - cp.y / cp.w * 0.5) * frame.viewport.y);
     var out: SplatVarying;
-    out.clip = vec4<f32>(pick, 0.5, 1.0);
+    out.clip = vec4<f32>(pick, nearest_depth(center, r), 1.0);
     out.center = center;
     out.normal = normal;
     out.tangent_u = u;
@@ -214,6 +217,20 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     // may lie that far off the surface its neighbours draw.
     out.push = frame.depth_push * r + node.error;
     return out;
+}
+
+// The quad's depth: that of the nearest point the splat can have (view distance
+// −c.z − R, see `hit`), at most 1. Every fragment shader writes a depth no nearer
+// (`@early_depth_test(less_equal)`: reversed-Z, nearer is greater), so the GPU may
+// reject a fragment by the quad's depth before running it.
+fn nearest_depth(center: vec3<f32>, r: f32) -> f32 {
+    return depth_of(max(-center.z - r, frame.near));
+}
+
+// The depth a fragment writes at view distance z ≥ −c.z − R: no nearer than the
+// quad's (`nearest_depth`), however near z comes to the eye.
+fn fragment_depth(z: f32) -> f32 {
+    return depth_of(max(z, frame.near));
 }
 
 // Where the ray through a framebuffer position meets a splat's patch.
@@ -371,7 +388,7 @@ struct DepthOnly {
 // share a pixel pass pass 2's depth test and blend: by a fraction of the radius and the
 // node's error, plus the depth range the pixel's prefilter footprint spans on the
 // splat's plane (large when the surface is seen at a grazing angle and minified).
-@fragment
+@fragment @early_depth_test(less_equal)
 fn fs_visibility(in: SplatVarying) -> DepthOnly {
     let h = hit(in);
     // Fragments the prefilter alone adds (the patch misses the pixel centre) do not
@@ -380,11 +397,17 @@ fn fs_visibility(in: SplatVarying) -> DepthOnly {
     if !h.centre_inside {
         discard;
     }
+    return DepthOnly(fragment_depth(h.depth + push_back(in, h)));
+}
+
+// How far pass 1 pushes a fragment back (view units): the splat's push, and the depth
+// range the pixel's prefilter footprint spans on its plane.
+fn push_back(in: SplatVarying, h: Hit) -> f32 {
     let dir = normalize(view_ray(in.clip.xy));
     let c = max(abs(dot(dir, in.normal)), 0.02);
     let pixel = h.depth * 2.0 * frame.tan_half_fov.y * frame.inv_viewport.y;
     let footprint = frame.prefilter_px * pixel * sqrt(1.0 - c * c) / c;
-    return DepthOnly(depth_of(h.depth + in.push + footprint));
+    return in.push + footprint;
 }
 
 struct Attributes {
@@ -422,9 +445,16 @@ const BAND_WEIGHT: f32 = 1.0 / 16.0;
 
 // Pass 2 for the splats on an outline: kernel weight of the splat-space distance,
 // additive blending, and the pixel's coverage samples.
-@fragment
+@fragment @early_depth_test(less_equal)
 fn fs_attributes(in: SplatVarying) -> Attributes {
     let h = hit(in);
+    // A fragment whose centre the patch covers weighs the same whatever its coverage
+    // samples, and where the pixel is surrounded pass 3 does not read them: there
+    // (inside the picture's outlines) it is drawn as the inner splats' are, without
+    // them. Same picture, without the four rays that cost an H100 most of pass 2.
+    if h.centre_inside && surrounded(visible_depth, vec2<i32>(in.clip.xy)) {
+        return blended(in, h, centre_weight(h.rho2), vec4<f32>(1.0));
+    }
     let coverage = pixel_coverage(in, h);
     if !h.centre_inside && outside(h.rho2) && all(coverage == vec4<f32>(0.0)) {
         discard;
@@ -442,7 +472,7 @@ fn fs_attributes(in: SplatVarying) -> Attributes {
 // covers, as covering the whole pixel. Those of the prefilter's band are left out: they
 // only give colour where no patch covers a pixel's centre, which inside the outlines
 // the neighbouring patches do.
-@fragment
+@fragment @early_depth_test(less_equal)
 fn fs_attributes_inner(in: SplatVarying) -> Attributes {
     let h = hit(in);
     if !h.centre_inside {
@@ -476,12 +506,12 @@ fn blended(in: SplatVarying, h: Hit, weight: f32, coverage: vec4<f32>) -> Attrib
     out.color = vec4<f32>(color * w, w);
     out.normal = vec4<f32>(n * w, h.depth * w);
     out.coverage = coverage;
-    out.depth = depth_of(h.depth);
+    out.depth = fragment_depth(h.depth);
     return out;
 }
 
 // Plain points (no blending): the disk's centre pixel area, nearest wins.
-@fragment
+@fragment @early_depth_test(less_equal)
 fn fs_points(in: SplatVarying) -> Attributes {
     let h = hit(in);
     if outside(h.rho2) {
@@ -493,6 +523,6 @@ fn fs_points(in: SplatVarying) -> Attributes {
     out.color = vec4<f32>(in.color.rgb, 1.0);
     out.normal = vec4<f32>(n, h.depth);
     out.coverage = vec4<f32>(1.0);
-    out.depth = depth_of(h.depth);
+    out.depth = fragment_depth(h.depth);
     return out;
 }

@@ -84,9 +84,11 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     );
     if let Some(n) = stats.gpu_drawn {
         println!(
-            "culled    {} splats survived the compute culling: {:.2} nodes tested per survivor",
+            "culled    {} splats survived the compute culling: {:.2} nodes tested per survivor; \
+             {} of them on an outline",
             count(n),
-            stats.tested as f64 / n.max(1) as f64
+            stats.tested as f64 / n.max(1) as f64,
+            count(stats.gpu_outline.unwrap_or(0)),
         );
     }
     print_times(&mut gpu_ms, passes_ms, &mut wall_ms, stats.selected);

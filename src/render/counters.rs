@@ -25,6 +25,9 @@ pub struct GpuCounters {
     pub passes_ms: Option<[f64; 3]>,
     /// Splats the compute culling kept (None with vertex culling).
     pub drawn: Option<u64>,
+    /// Of those, the splats on an outline (`on_outline`), which pass 2 draws with the
+    /// coverage samples and the prefilter's band.
+    pub outline: Option<u64>,
 }
 
 /// Bytes of one frame's counters: the timestamps, then two u32 per slice (of the
@@ -69,16 +72,19 @@ pub(super) fn parse_counters(gpu: &Gpu, bytes: &[u8], frame: &EncodedFrame) -> G
         ]
     });
     let gpu_ms = passes_ms.map(|p| p.iter().sum());
-    let drawn = frame.compute.then(|| {
+    // Per slice: (outline, inner) survivors.
+    let survivors = || {
         bytes[stamps..stamps + 8 * frame.slices]
             .chunks_exact(4)
             .map(|c| u32::from_le_bytes(c.try_into().unwrap()) as u64)
-            .sum()
-    });
+    };
+    let drawn = frame.compute.then(|| survivors().sum());
+    let outline = frame.compute.then(|| survivors().step_by(2).sum());
     GpuCounters {
         gpu_ms,
         passes_ms,
         drawn,
+        outline,
     }
 }
 

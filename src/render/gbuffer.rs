@@ -36,6 +36,18 @@ pub(super) fn target(
     })
 }
 
+/// What a pass over the G-buffer writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Writes {
+    /// The depth alone (pass 1).
+    Depth,
+    /// The colour targets and the depth (the clear, the points and mesh passes).
+    All,
+    /// The colour targets; the depth is tested, read-only, so that the pass may also
+    /// read it as a texture (pass 2).
+    Attributes,
+}
+
 pub(super) struct GBuffer {
     pub color_sum: wgpu::Texture,
     pub normal_sum: wgpu::Texture,
@@ -70,13 +82,13 @@ impl GBuffer {
         }
     }
 
-    /// A render pass over the G-buffer: its colour targets (unless `depth_only`) and
-    /// the depth, cleared or loaded, with `timestamps` written at its start.
+    /// A render pass over the G-buffer: the targets that `writes` names, cleared or
+    /// loaded, with `timestamps` written at its start.
     pub fn pass<'e>(
         &self,
         encoder: &'e mut wgpu::CommandEncoder,
         label: &str,
-        depth_only: bool,
+        writes: Writes,
         clear: bool,
         timestamps: Option<wgpu::RenderPassTimestampWrites>,
     ) -> wgpu::RenderPass<'e> {
@@ -99,14 +111,21 @@ impl GBuffer {
         ];
         encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
-            color_attachments: if depth_only { &[] } else { &colors },
+            color_attachments: if writes == Writes::Depth {
+                &[]
+            } else {
+                &colors
+            },
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &self.depth_view,
-                depth_ops: Some(store(if clear {
-                    wgpu::LoadOp::Clear(0.0)
-                } else {
-                    wgpu::LoadOp::Load
-                })),
+                // None: read-only.
+                depth_ops: (writes != Writes::Attributes).then(|| {
+                    store(if clear {
+                        wgpu::LoadOp::Clear(0.0)
+                    } else {
+                        wgpu::LoadOp::Load
+                    })
+                }),
                 stencil_ops: None,
             }),
             timestamp_writes: timestamps,

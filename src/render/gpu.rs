@@ -22,6 +22,9 @@ pub struct Gpu {
     /// A texture can be viewed in another format of its family (not on GL): the viewer
     /// then draws its panel through the output's gamma view ([`Gpu::overlay_format`]).
     pub view_formats: bool,
+    /// A depth attachment that a pass only tests can also be read as a texture in that
+    /// pass (not on GL): pass 2 then reads pass 1's depth (`SplatPasses::depth_bind`).
+    pub read_only_depth: bool,
 }
 
 /// Parses a backend name: vulkan, gl, metal, dx12, or `all` (any).
@@ -87,7 +90,8 @@ impl Gpu {
                 }
             )
         })?;
-        let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+        let wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SHADER_EARLY_DEPTH_TEST;
+        let features = adapter.features() & wanted;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("spt"),
             required_features: features,
@@ -96,8 +100,9 @@ impl Gpu {
         }))
         .context("cannot open the GPU device")?;
         let info = adapter.get_info();
-        let view_formats = (adapter.get_downlevel_capabilities().flags)
-            .contains(wgpu::DownlevelFlags::VIEW_FORMATS);
+        let downlevel = adapter.get_downlevel_capabilities().flags;
+        let view_formats = downlevel.contains(wgpu::DownlevelFlags::VIEW_FORMATS);
+        let read_only_depth = downlevel.contains(wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL);
         Ok(Gpu {
             instance,
             adapter,
@@ -106,6 +111,7 @@ impl Gpu {
             info,
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
             view_formats,
+            read_only_depth,
         })
     }
 

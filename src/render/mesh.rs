@@ -5,7 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
-use super::gbuffer::{GBuffer, color_targets, depth_state};
+use super::gbuffer::{GBuffer, Writes, color_targets, depth_state};
 use super::gpu_scene::MeshBuffers;
 use super::shaders::module;
 use crate::tree::scene::MeshData;
@@ -110,7 +110,7 @@ impl MeshPass {
         mesh: &MeshBuffers,
         timestamps: Option<wgpu::RenderPassTimestampWrites>,
     ) {
-        let mut pass = gbuffer.pass(encoder, "mesh", false, false, timestamps);
+        let mut pass = gbuffer.pass(encoder, "mesh", Writes::All, false, timestamps);
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, frame_bind, &[]);
         pass.set_vertex_buffer(0, mesh.vertices.slice(..));

@@ -17,7 +17,7 @@ use super::camera::Camera;
 use super::counters::read_counters_now;
 use super::cull::CullPass;
 use super::frame::{FrameUniform, frame_layout, srgb_to_linear};
-use super::gbuffer::{GBuffer, store};
+use super::gbuffer::{GBuffer, Writes, store};
 use super::gpu::Gpu;
 use super::gpu_scene::{GpuScene, MeshUpload, SliceUpload};
 use super::mesh::MeshPass;
@@ -60,6 +60,8 @@ pub struct FrameStats {
     pub passes_ms: Option<[f64; 3]>,
     /// Splats the GPU drew, counted by the compute culling (None with vertex culling).
     pub gpu_drawn: Option<u64>,
+    /// Of those, the splats on an outline (drawn with the coverage samples).
+    pub gpu_outline: Option<u64>,
     /// ε of the selection, world error per unit of distance, and whether it was raised
     /// above the asked one because the GPU did not hold the asked ranges.
     pub eps: f64,
@@ -95,12 +97,16 @@ impl Renderer {
         let device = &self.gpu.device;
         check_size(&device.limits(), size)?;
         let gbuffer = GBuffer::new(device, size);
-        let gbuffer_bind = self.shading.bind(device, &gbuffer);
+        let binds = [
+            self.shading.bind(device, &gbuffer),
+            self.splats
+                .depth_bind(device, &gbuffer, self.gpu.read_only_depth),
+        ];
         Ok(FrameTargets::new(
             &self.gpu,
             size,
             &self.frame_layout,
-            (gbuffer, gbuffer_bind),
+            (gbuffer, binds),
         ))
     }
 
@@ -134,18 +140,14 @@ impl Renderer {
         let one_pass = matches!(settings.mode, Mode::Mesh | Mode::Points);
         let clear_end = one_pass.then_some(stamp::VISIBILITY_END);
         let clear_stamps = targets.timestamps(Some(stamp::START), clear_end);
-        g.pass(encoder, "clear", false, true, clear_stamps);
+        g.pass(encoder, "clear", Writes::All, true, clear_stamps);
         let pipelines = self.splats.of(compute);
-        let draw = |encoder: &mut wgpu::CommandEncoder, label, depth_only, pipeline, end| {
-            let mut pass = g.pass(
-                encoder,
-                label,
-                depth_only,
-                false,
-                targets.timestamps(None, end),
-            );
+        let draw = |encoder: &mut wgpu::CommandEncoder, label, writes, pipeline, end| {
+            let mut pass = g.pass(encoder, label, writes, false, targets.timestamps(None, end));
+            let depth = (writes == Writes::Attributes).then_some(&targets.depth_bind);
+            let binds = (&targets.frame_bind, depth);
             self.splats
-                .draw(&mut pass, pipeline, &targets.frame_bind, &shares, compute);
+                .draw(&mut pass, pipeline, binds, &shares, compute);
         };
         let attributes_end = Some(stamp::ATTRIBUTES_END);
         match (settings.mode, &gpu_scene.mesh) {
@@ -154,18 +156,30 @@ impl Renderer {
                 self.mesh
                     .encode(encoder, g, &targets.frame_bind, mesh, stamps)
             }
-            (Mode::Points, _) => draw(encoder, "points", false, &pipelines.points, attributes_end),
+            (Mode::Points, _) => draw(
+                encoder,
+                "points",
+                Writes::All,
+                &pipelines.points,
+                attributes_end,
+            ),
             _ => {
                 let visibility_end = Some(stamp::VISIBILITY_END);
                 draw(
                     encoder,
                     "visibility",
-                    true,
+                    Writes::Depth,
                     &pipelines.visibility,
                     visibility_end,
                 );
                 let attributes = pipelines.attributes(settings.mode);
-                draw(encoder, "attributes", false, attributes, attributes_end);
+                draw(
+                    encoder,
+                    "attributes",
+                    Writes::Attributes,
+                    attributes,
+                    attributes_end,
+                );
             }
         }
         self.shading.encode(encoder, targets);
@@ -325,6 +339,7 @@ impl Renderer {
                 gpu_ms: counters.gpu_ms,
                 passes_ms: counters.passes_ms,
                 gpu_drawn: counters.drawn,
+                gpu_outline: counters.outline,
                 eps: frame.eps,
                 coarsened: frame.coarsened,
             },

@@ -27,6 +27,7 @@ const FILES: &[(&str, &str)] = &[
     ("shade", include_str!("../../shaders/shade.wgsl")),
     ("shape", include_str!("../../shaders/shape.wgsl")),
     ("splat", include_str!("../../shaders/splat.wgsl")),
+    ("surrounded", include_str!("../../shaders/surrounded.wgsl")),
 ];
 
 /// Which splats a pipeline draws (the WGSL override `SPLAT_CLASS`; its values are
@@ -138,11 +139,25 @@ pub fn compose(name: &str) -> String {
     out
 }
 
+/// The attribute by which a fragment shader that writes its depth promises to write
+/// none nearer than its quad's (reversed-Z: no greater), so that the GPU may test the
+/// quad's depth before running it. Needs `Features::SHADER_EARLY_DEPTH_TEST`.
+pub const CONSERVATIVE_DEPTH: &str = "@early_depth_test(less_equal)";
+
+/// `source` for a device with the `features` given: without early depth tests, the
+/// [`CONSERVATIVE_DEPTH`] attributes are left out (the shaders are correct either way).
+fn for_features(source: String, features: wgpu::Features) -> String {
+    match features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST) {
+        true => source,
+        false => source.replace(CONSERVATIVE_DEPTH, ""),
+    }
+}
+
 /// The shader module `name`, composed, on `device`.
 pub fn module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
     device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(name),
-        source: wgpu::ShaderSource::Wgsl(compose(name).into()),
+        source: wgpu::ShaderSource::Wgsl(for_features(compose(name), device.features()).into()),
     })
 }
 
@@ -169,26 +184,47 @@ mod tests {
     /// The modules that pipelines are made of (the others are only imported).
     const ENTRY_MODULES: &[&str] = &["cull", "mesh", "present", "shade", "splat"];
 
-    /// Parses and validates `source` as naga does inside wgpu, with the capabilities
-    /// wgpu gives a device that has no optional feature and full downlevel support
-    /// (wgpu-naga-bridge's mapping: only `SHADER_F16_IN_F32`, for `unpack2x16float`).
-    fn validate(name: &str, source: &str) -> Result<(), String> {
-        let module = naga::front::wgsl::parse_str(source)
-            .map_err(|e| format!("{name}: {}", e.emit_to_string(source)))?;
-        naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::SHADER_FLOAT16_IN_FLOAT32,
-        )
-        .validate(&module)
-        .map_err(|e| format!("{name}: {}", e.emit_to_string(source)))?;
+    /// Parses and validates `source` as naga does inside wgpu on a device with the
+    /// optional `features` given and full downlevel support (wgpu-naga-bridge's
+    /// mapping: `SHADER_F16_IN_F32` always, for `unpack2x16float`).
+    fn validate(name: &str, source: &str, features: wgpu::Features) -> Result<(), String> {
+        let source = for_features(source.to_owned(), features);
+        let module = naga::front::wgsl::parse_str(&source)
+            .map_err(|e| format!("{name}: {}", e.emit_to_string(&source)))?;
+        let mut capabilities = naga::valid::Capabilities::SHADER_FLOAT16_IN_FLOAT32;
+        if features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST) {
+            capabilities |= naga::valid::Capabilities::EARLY_DEPTH_TEST;
+        }
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
+            .validate(&module)
+            .map_err(|e| format!("{name}: {}", e.emit_to_string(&source)))?;
         Ok(())
     }
 
+    /// Every module validates on a device with early depth tests and on one without.
     #[test]
     fn every_shader_module_parses_and_validates() {
-        for name in ENTRY_MODULES {
-            validate(name, &compose(name)).unwrap_or_else(|e| panic!("{e}"));
+        for features in [
+            wgpu::Features::empty(),
+            wgpu::Features::SHADER_EARLY_DEPTH_TEST,
+        ] {
+            for name in ENTRY_MODULES {
+                validate(name, &compose(name), features).unwrap_or_else(|e| panic!("{e}"));
+            }
         }
+    }
+
+    #[test]
+    fn conservative_depth_needs_the_feature() {
+        let splat = compose("splat");
+        assert!(splat.contains(CONSERVATIVE_DEPTH));
+        let no_feature = naga::front::wgsl::parse_str(&splat).expect("parses");
+        let without = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::SHADER_FLOAT16_IN_FLOAT32,
+        )
+        .validate(&no_feature);
+        assert!(without.is_err(), "the attribute needs EARLY_DEPTH_TEST");
     }
 
     #[test]
@@ -204,6 +240,6 @@ mod tests {
     #[test]
     fn a_broken_shader_is_caught() {
         let broken = compose("cull").replace("atomicAdd", "atomic_add_misspelled");
-        assert!(validate("broken cull", &broken).is_err());
+        assert!(validate("broken cull", &broken, wgpu::Features::empty()).is_err());
     }
 }

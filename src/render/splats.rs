@@ -5,14 +5,19 @@
 //! survivors that `cull.rs` compacted, drawn indirectly ("compacted"). WGSL:
 //! `shaders/splat.wgsl`. The splat passes read each drawn node's record (32 bytes) and
 //! shape (24 bytes, [`SplatShape`]); the cull pass reads each tested node's record and
-//! each survivor's shape, to sort it into one of its two lists.
+//! each survivor's shape, to sort it into one of its two lists. Pass 2 also reads pass
+//! 1's depth (bind group 2, the depth attachment held read-only), to leave out the
+//! coverage samples of pixels inside the picture's outlines. Every fragment shader
+//! writes a depth no nearer than its quad's, which the quad carries (the splat's
+//! nearest point), so that the GPU may reject fragments before running them.
 
 use std::sync::OnceLock;
 
 use wgpu::CompareFunction::{Greater, GreaterEqual};
 
 use super::cull::Compaction;
-use super::gbuffer::{ADD, color_targets, depth_state};
+use super::fullscreen::fragment_texture;
+use super::gbuffer::{ADD, GBuffer, color_targets, depth_state, target};
 use super::gpu_scene::Share;
 use super::settings::Mode;
 use super::shaders::{ColorSource, SplatClass, module};
@@ -35,15 +40,21 @@ pub(super) struct SplatPipelines {
     maker: PipelineMaker,
 }
 
-/// Layouts of bind group 1 and the pipelines of both culling strategies.
+/// Layouts of bind groups 1 and 2 and the pipelines of both culling strategies.
 pub(super) struct SplatPasses {
     /// The slice's nodes (binding 0) and shapes (2), for vertex culling.
     pub nodes_layout: wgpu::BindGroupLayout,
     /// The slice's nodes (0), survivors (1) and shapes (2), for compute culling.
     pub compacted_layout: wgpu::BindGroupLayout,
+    /// Pass 1's depth as a texture, for pass 2 (group 2; see `fs_attributes`).
+    depth_layout: wgpu::BindGroupLayout,
     pub direct: SplatPipelines,
     pub compacted: SplatPipelines,
 }
+
+/// The format of the texel that stands for pass 1's depth where it cannot be read
+/// (`SplatPasses::depth_bind`); wgpu clears new textures to 0.
+const NO_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 
 /// A read-only storage buffer of bind group 1 for the vertex stage.
 fn vertex_storage(binding: u32, min_size: u64) -> wgpu::BindGroupLayoutEntry {
@@ -66,11 +77,13 @@ fn draws_band(fs: &str) -> bool {
 }
 
 /// Makes the splat pipelines of vertex entry point `vs` (bind group 1 laid out as
-/// `layout` says), which reads compacted lists or not.
+/// `layout` says; pass 2's `attributes_layout` adds group 2, pass 1's depth), which
+/// reads compacted lists or not.
 struct PipelineMaker {
     device: wgpu::Device,
     shader: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
+    attributes_layout: wgpu::PipelineLayout,
     vs: &'static str,
     compacted: bool,
 }
@@ -85,10 +98,14 @@ impl PipelineMaker {
         depth: Option<wgpu::DepthStencilState>,
         (class, color): (SplatClass, ColorSource),
     ) -> wgpu::RenderPipeline {
+        let layout = match fs.starts_with("fs_attributes") {
+            true => &self.attributes_layout,
+            false => &self.layout,
+        };
         self.device
             .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(fs),
-                layout: Some(&self.layout),
+                layout: Some(layout),
                 vertex: wgpu::VertexState {
                     module: &self.shader,
                     entry_point: Some(self.vs),
@@ -203,10 +220,12 @@ impl SplatPasses {
                 vertex_storage(3, attribute),
             ],
         );
-        let pipeline_layout = |second: &wgpu::BindGroupLayout| {
+        let depth_layout = bind_layout("pass 1 depth", &[fragment_texture(0)]);
+        let pipeline_layout = |groups: &[&wgpu::BindGroupLayout]| {
+            let groups: Vec<_> = groups.iter().map(|&g| Some(g)).collect();
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: None,
-                bind_group_layouts: &[Some(frame_layout), Some(second)],
+                bind_group_layouts: &groups,
                 immediate_size: 0,
             })
         };
@@ -214,7 +233,8 @@ impl SplatPasses {
         let maker = |layout: &wgpu::BindGroupLayout, vs, compacted| PipelineMaker {
             device: device.clone(),
             shader: shader.clone(),
-            layout: pipeline_layout(layout),
+            layout: pipeline_layout(&[frame_layout, layout]),
+            attributes_layout: pipeline_layout(&[frame_layout, layout, &depth_layout]),
             vs,
             compacted,
         };
@@ -223,24 +243,58 @@ impl SplatPasses {
             compacted: maker(&compacted_layout, "vs_splat_compacted", true).pipelines(),
             nodes_layout,
             compacted_layout,
+            depth_layout,
         }
     }
 
-    /// Draws each slice's share of the frame's ranges with each of `pipelines` in turn.
-    /// After compute culling, pipeline k draws the k-th list of survivors (indirect,
+    /// Bind group 2 of pass 2: `gbuffer`'s depth, which pass 1 wrote, where the
+    /// adapter can read a depth attachment as a texture in the pass that tests it
+    /// (`read_only_depth`, not on GL). Elsewhere a texel of depth 0, which surrounds
+    /// no pixel: pass 2 then samples every outline splat's coverage.
+    pub fn depth_bind(
+        &self,
+        device: &wgpu::Device,
+        gbuffer: &GBuffer,
+        read_only_depth: bool,
+    ) -> wgpu::BindGroup {
+        let none = || {
+            let usage = wgpu::TextureUsages::TEXTURE_BINDING;
+            let texel = target(device, (1, 1), NO_DEPTH, "no depth", usage);
+            texel.create_view(&Default::default())
+        };
+        let view = match read_only_depth {
+            true => gbuffer.depth_view.clone(),
+            false => none(),
+        };
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("pass 1 depth"),
+            layout: &self.depth_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&view),
+            }],
+        })
+    }
+
+    /// Draws each slice's share of the frame's ranges with each of `pipelines` in turn,
+    /// with the frame's bind group and, for pass 2, pass 1's depth (`binds`). After
+    /// compute culling, pipeline k draws the k-th list of survivors (indirect,
     /// [`Compaction::DRAWS_AT`]); else every pipeline draws every node of each range (its
     /// instances are its nodes' slice indices).
     pub fn draw(
         &self,
         pass: &mut wgpu::RenderPass,
         pipelines: &[wgpu::RenderPipeline],
-        frame_bind: &wgpu::BindGroup,
+        (frame_bind, depth_bind): (&wgpu::BindGroup, Option<&wgpu::BindGroup>),
         shares: &[Share],
         compacted: bool,
     ) {
         for (pipeline, draw_at) in pipelines.iter().zip(Compaction::DRAWS_AT) {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, frame_bind, &[]);
+            if let Some(depth) = depth_bind {
+                pass.set_bind_group(2, depth, &[]);
+            }
             for share in shares.iter().filter(|s| s.count > 0) {
                 if compacted {
                     pass.set_bind_group(1, &share.slice.compacted, &[]);

@@ -45,19 +45,21 @@ pub struct FrameTargets {
     pub(super) frame_buffer: wgpu::Buffer,
     pub(super) frame_bind: wgpu::BindGroup,
     pub(super) gbuffer_bind: wgpu::BindGroup,
+    /// Pass 1's depth for pass 2 (bind group 2 of its pipelines).
+    pub(super) depth_bind: wgpu::BindGroup,
     /// The frame's timestamps ([`stamp`]) and their resolve buffer.
     pub(super) queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
 }
 
 impl FrameTargets {
-    /// Targets of `size` around `gbuffer` (of the same size) and its bind group for
-    /// shading; the frame uniform bound as `frame_layout` says; with timestamp queries
+    /// Targets of `size` around `gbuffer` (of the same size) and its bind groups for
+    /// shading and for pass 2 (its depth); the frame uniform bound as `frame_layout` says; with timestamp queries
     /// and the output's gamma view where `gpu` has them.
     pub(super) fn new(
         gpu: &Gpu,
         size: (u32, u32),
         frame_layout: &wgpu::BindGroupLayout,
-        (gbuffer, gbuffer_bind): (GBuffer, wgpu::BindGroup),
+        (gbuffer, [gbuffer_bind, depth_bind]): (GBuffer, [wgpu::BindGroup; 2]),
     ) -> FrameTargets {
         let device = &gpu.device;
         let output = device.create_texture(&wgpu::TextureDescriptor {
@@ -120,6 +122,7 @@ impl FrameTargets {
             frame_buffer,
             frame_bind,
             gbuffer_bind,
+            depth_bind,
             queries,
         }
     }
