@@ -84,6 +84,12 @@ struct SplatVarying {
 // is mostly band: without it, far fewer fragments).
 override PREFILTER_BAND: bool = true;
 
+// Whether pass 2 reads pass 1's depth to spare the coverage samples of surrounded pixels
+// (`pixel_coverage`; pipeline-overridable, see splats.rs): a GPU skips the rays; on a
+// CPU rasterizer, which runs the five depth loads for every fragment of the shader
+// whatever the branch, they cost more than the rays they spare.
+override SKIP_SURROUNDED_SAMPLES: bool = true;
+
 // Where a splat's colour comes from (pipeline-overridable: src/render/splats.rs makes a
 // pipeline per source, so that each vertex runs only its own).
 override COLOR_SOURCE: u32 = COLOR_NODE;
@@ -313,12 +319,15 @@ fn screen_rho(in: SplatVarying) -> f32 {
 
 // The pixel's four coverage samples that the patch covers (pass 2 only). Far enough
 // inside the projected ellipse, all four; far enough outside, none. A fragment whose
-// centre the patch covers counts as covering at least one sample (the centre's share).
+// centre the patch covers counts as covering at least one sample (the centre's share),
+// and as covering all four where the pixel is surrounded: pass 3 does not read them
+// there, and such a fragment weighs the same whatever they say. That spares the rays
+// inside the picture's outlines, which cost an H100 most of pass 2.
 fn pixel_coverage(in: SplatVarying, h: Hit) -> vec4<f32> {
     let rho = screen_rho(in);
     let reach = in.conic0.w;
     if h.centre_inside {
-        if rho <= 1.0 - reach {
+        if rho <= 1.0 - reach || (SKIP_SURROUNDED_SAMPLES && surrounded(visible_depth, vec2<i32>(in.clip.xy))) {
             return vec4<f32>(1.0);
         }
         var covered = subsample_coverage(in);
@@ -448,13 +457,6 @@ const BAND_WEIGHT: f32 = 1.0 / 16.0;
 @fragment @early_depth_test(less_equal)
 fn fs_attributes(in: SplatVarying) -> Attributes {
     let h = hit(in);
-    // A fragment whose centre the patch covers weighs the same whatever its coverage
-    // samples, and where the pixel is surrounded pass 3 does not read them: there
-    // (inside the picture's outlines) it is drawn as the inner splats' are, without
-    // them. Same picture, without the four rays that cost an H100 most of pass 2.
-    if h.centre_inside && surrounded(visible_depth, vec2<i32>(in.clip.xy)) {
-        return blended(in, h, centre_weight(h.rho2), vec4<f32>(1.0));
-    }
     let coverage = pixel_coverage(in, h);
     if !h.centre_inside && outside(h.rho2) && all(coverage == vec4<f32>(0.0)) {
         discard;

@@ -115,6 +115,14 @@ impl Gpu {
         })
     }
 
+    /// Whether pass 2 reads pass 1's depth to leave out the coverage samples of pixels
+    /// inside the picture's outlines (WGSL `SKIP_SURROUNDED_SAMPLES`): where it can
+    /// ([`Gpu::read_only_depth`]) and where branches spare work, not on a CPU
+    /// rasterizer. Knot at 512×512, pass 2: H100 −10 %, lavapipe +20 to +30 %.
+    pub fn skips_surrounded_samples(&self) -> bool {
+        self.read_only_depth && self.info.device_type != wgpu::DeviceType::Cpu
+    }
+
     /// The format the viewer sees the output in, to draw its panel and to present it:
     /// [`OUTPUT_GAMMA`] where views can be reinterpreted (not on GL), else [`OUTPUT`].
     pub fn overlay_format(&self) -> wgpu::TextureFormat {

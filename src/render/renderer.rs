@@ -84,7 +84,7 @@ impl Renderer {
         let frame_layout = frame_layout(device);
         Renderer {
             cull: CullPass::new(device, &frame_layout),
-            splats: SplatPasses::new(device, &frame_layout),
+            splats: SplatPasses::new(&gpu, &frame_layout),
             mesh: MeshPass::new(device, &frame_layout),
             shading: ShadingPass::new(device, &frame_layout),
             frame_layout,

@@ -15,6 +15,7 @@ use std::sync::OnceLock;
 
 use wgpu::CompareFunction::{Greater, GreaterEqual};
 
+use super::Gpu;
 use super::cull::Compaction;
 use super::fullscreen::fragment_texture;
 use super::gbuffer::{ADD, GBuffer, color_targets, depth_state, target};
@@ -86,6 +87,8 @@ struct PipelineMaker {
     attributes_layout: wgpu::PipelineLayout,
     vs: &'static str,
     compacted: bool,
+    /// WGSL `SKIP_SURROUNDED_SAMPLES` ([`Gpu::skips_surrounded_samples`]).
+    skip_surrounded: bool,
 }
 
 impl PipelineMaker {
@@ -128,7 +131,13 @@ impl PipelineMaker {
                 fragment: Some(wgpu::FragmentState {
                     module: &self.shader,
                     entry_point: Some(fs),
-                    compilation_options: Default::default(),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &[(
+                            "SKIP_SURROUNDED_SAMPLES",
+                            f64::from(u8::from(self.skip_surrounded)),
+                        )],
+                        ..Default::default()
+                    },
                     targets,
                 }),
                 multiview_mask: None,
@@ -193,7 +202,8 @@ impl SplatPipelines {
 }
 
 impl SplatPasses {
-    pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> SplatPasses {
+    pub fn new(gpu: &Gpu, frame_layout: &wgpu::BindGroupLayout) -> SplatPasses {
+        let device = &gpu.device;
         let node = std::mem::size_of::<NodeRecord>() as u64;
         let shape = std::mem::size_of::<SplatShape>() as u64;
         let attribute = std::mem::size_of::<PointAttributes>() as u64;
@@ -237,6 +247,7 @@ impl SplatPasses {
             attributes_layout: pipeline_layout(&[frame_layout, layout, &depth_layout]),
             vs,
             compacted,
+            skip_surrounded: gpu.skips_surrounded_samples(),
         };
         SplatPasses {
             direct: maker(&nodes_layout, "vs_splat", false).pipelines(),
