@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
-use super::spill::{Grid, Scan, writers};
+use super::spill::{Grid, Scan, job_paths, writers};
 use crate::io::stream::ModelStream;
 
 /// `own` of a vertex that belongs to no job (one the scan drops: its triangles are
@@ -240,11 +240,7 @@ pub fn spill(
     buffer_bytes: usize,
     progress: impl FnMut(u64),
 ) -> anyhow::Result<MeshFiles> {
-    let name = |kind: &str| -> Vec<PathBuf> {
-        (0..jobs)
-            .map(|j| dir.join(format!("job{j}.{kind}")))
-            .collect()
-    };
+    let name = |kind| job_paths(dir, jobs, kind);
     let files = MeshFiles {
         own: name("own"),
         halo: name("halo"),

@@ -359,11 +359,7 @@ pub fn spill(
     buffer_bytes: usize,
     mut progress: impl FnMut(u64),
 ) -> anyhow::Result<SpillFiles> {
-    let names = |kind: &str| -> Vec<PathBuf> {
-        (0..job_count)
-            .map(|j| dir.join(format!("job{j}.{kind}")))
-            .collect()
-    };
+    let names = |kind| job_paths(dir, job_count, kind);
     let files = SpillFiles {
         own: names("own"),
         halo: names("halo"),
@@ -423,6 +419,13 @@ pub fn spill(
         w.flush()?;
     }
     Ok(files)
+}
+
+/// The spill file of each of `jobs` jobs for records of `kind`: `dir/job{j}.{kind}`.
+pub fn job_paths(dir: &Path, jobs: usize, kind: &str) -> Vec<PathBuf> {
+    (0..jobs)
+        .map(|j| dir.join(format!("job{j}.{kind}")))
+        .collect()
 }
 
 /// One buffered writer per path, each file created. An error names the file, and says
