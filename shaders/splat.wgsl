@@ -77,12 +77,14 @@ struct SplatVarying {
     @location(11) @interpolate(flat) color_dy: vec3<f32>,
 }
 
-// Whether the pipeline's fragments draw the prefilter's band around each splat's
-// projected rim (pipeline-overridable, see splats.rs): pass 2 of the outline splats and
-// the points do; pass 1 and pass 2 of the inner splats keep only fragments whose centre
-// the patch covers, so their quads are not grown by the band (a sub-pixel splat's quad
-// is mostly band: without it, far fewer fragments).
-override PREFILTER_BAND: bool = true;
+// How far beyond a splat's patch its quad reaches, so that it holds every fragment the
+// pipeline keeps (pipeline-overridable, see splats.rs). REACH_PATCH: pass 1 and pass 2
+// of the inner splats keep only fragments whose centre the patch covers. REACH_SAMPLES:
+// pass 2 of the outline splats also keeps those whose coverage samples the patch
+// covers, up to SUBSAMPLE_SPAN px away (a fragment of the prefilter's band that covers
+// none weighs 0). REACH_BAND: the points keep the whole band. A sub-pixel splat's quad
+// is mostly margin: the tighter, the fewer fragments.
+override QUAD_REACH: u32 = REACH_BAND;
 
 // Whether pass 2 reads pass 1's depth to spare the coverage samples of surrounded pixels
 // (`pixel_coverage`; pipeline-overridable, see splats.rs): a GPU skips the rays; on a
@@ -153,6 +155,28 @@ fn prefiltered_conic(m: vec3<f32>, p: f32) -> vec3<f32> {
     return vec3<f32>(m22, -m.y, m11) / det;
 }
 
+// The screen box (NDC, lower and upper corners) of the ellipse c + a cos θ + b sin θ,
+// which lies in front of the eye. With C, A, B the clip coordinates of c, a and b (the
+// last two as directions), the line x = X touches the projected ellipse where (C_x − X
+// C_w) + (A_x − X A_w) cos θ + (B_x − X B_w) sin θ has a double root in θ: (C_x − X C_w)²
+// = (A_x − X A_w)² + (B_x − X B_w)², a quadratic α X² − 2 β X + γ whose roots are the
+// box's sides (likewise y). Its discriminant β² − α γ is written as (C_w A_x − C_x A_w)²
+// + (C_w B_x − C_x B_w)² − (A_w B_x − A_x B_w)², which a splat far smaller than its
+// distance does not lose to cancellation. Tighter than the box of the ellipse's
+// bounding rectangle by up to √2 along each axis.
+fn ellipse_box(c: vec3<f32>, a: vec3<f32>, b: vec3<f32>) -> array<vec2<f32>, 2> {
+    let pc = frame.proj * vec4<f32>(c, 1.0);
+    let pa = frame.proj * vec4<f32>(a, 0.0);
+    let pb = frame.proj * vec4<f32>(b, 0.0);
+    let alpha = pc.w * pc.w - pa.w * pa.w - pb.w * pb.w;
+    let beta = pc.xy * pc.w - pa.xy * pa.w - pb.xy * pb.w;
+    let ca = pc.w * pa.xy - pc.xy * pa.w;
+    let cb = pc.w * pb.xy - pc.xy * pb.w;
+    let ab = pa.w * pb.xy - pa.xy * pb.w;
+    let root = sqrt(max(ca * ca + cb * cb - ab * ab, vec2<f32>(0.0)));
+    return array<vec2<f32>, 2>((beta - root) / alpha, (beta + root) / alpha);
+}
+
 fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     let node = decode_node(nodes[2u * index], nodes[2u * index + 1u]);
     let disk = view_disk(node);
@@ -173,29 +197,30 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     if cull && SPLAT_CLASS != ALL_SPLATS && on_outline(disk, shape, packed.clip) != (SPLAT_CLASS == OUTLINE_SPLATS) {
         return culled();
     }
-    // Footprint: the screen box of the ellipse's bounding rectangle p ± R u ± ratio R v.
-    // A splat crossing the near plane is skipped rather than drawn garbled.
-    var lo = vec2<f32>(1e30, 1e30);
-    var hi = vec2<f32>(-1e30, -1e30);
-    for (var k = 0u; k < 4u; k++) {
-        let s = vec2<f32>(select(-1.0, 1.0, (k & 1u) != 0u), select(-1.0, 1.0, (k & 2u) != 0u));
-        let c = center + r * (s.x * u + s.y * ratio * v);
-        if -c.z < near {
-            return culled();
-        }
-        let p = frame.proj * vec4<f32>(c, 1.0);
-        lo = min(lo, p.xy / p.w);
-        hi = max(hi, p.xy / p.w);
+    // Footprint: the screen box of the ellipse p + R u cos θ + ratio R v sin θ. A splat
+    // crossing the near plane is skipped rather than drawn garbled.
+    let a = r * u;
+    let b = ratio * r * v;
+    if -center.z - length(vec2<f32>(a.z, b.z)) < near {
+        return culled();
     }
-    // Grow by the prefilter radius, so that sub-pixel splats still cover a pixel; that
-    // also holds the curved patch where it bulges off its plane. A pipeline that keeps
-    // only the fragments whose centre a patch covers grows by the bulge alone, |h| ≤
-    // ½ ‖G‖ R (ρ ≤ 1, see patch_hit) as projected at the centre, up to the same radius.
+    let footprint = ellipse_box(center, a, b);
+    var lo = footprint[0];
+    var hi = footprint[1];
+    // Grow by the bulge of the curved patch off its plane, |h| ≤ ½ ‖G‖ R (ρ ≤ 1, see
+    // patch_hit) as projected at the centre, up to the prefilter radius, and by what
+    // QUAD_REACH adds; the band's reach, the prefilter radius, holds the bulge too.
     let band_px = select(0.0, frame.prefilter_px, frame.ewa > 0.0);
     let g = shape.gradient;
     let g_norm = abs(0.5 * (g.x + g.z)) + sqrt(0.25 * (g.x - g.z) * (g.x - g.z) + g.y * g.y);
     let bulge_px = min(abs(project_delta(center, normal * (0.5 * g_norm * r))), vec2<f32>(band_px));
-    let grow = 2.0 * select(bulge_px, vec2<f32>(band_px), PREFILTER_BAND) * frame.inv_viewport;
+    var reach_px = bulge_px;
+    if QUAD_REACH == REACH_SAMPLES {
+        reach_px = min(bulge_px + SUBSAMPLE_SPAN, vec2<f32>(band_px));
+    } else if QUAD_REACH == REACH_BAND {
+        reach_px = vec2<f32>(band_px);
+    }
+    let grow = 2.0 * reach_px * frame.inv_viewport;
     lo -= grow;
     hi += grow;
     let pick = vec2<f32>(select(lo.x, hi.x, (corner & 1u) != 0u), select(lo.y, hi.y, (corner & 2u) != 0u));
@@ -214,7 +239,7 @@ fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
     }
     out.extra = vec4<f32>(r, center_px, ratio);
     out.gradient = shape.gradient;
-    let covariance = screen_covariance(center, r * u, ratio * r * v);
+    let covariance = screen_covariance(center, a, b);
     out.conic = prefiltered_conic(covariance, frame.prefilter_px);
     let conic0 = prefiltered_conic(covariance, 1e-3);
     out.conic0 = vec4<f32>(conic0, rho_reach(conic0));
@@ -291,6 +316,9 @@ fn patch_hit(in: SplatVarying, pixel: vec2<f32>) -> PatchHit {
 // Offsets of the coverage samples within a pixel (a rotated grid).
 const SUBSAMPLES = array<vec2<f32>, 4>(
     vec2<f32>(0.125, -0.375), vec2<f32>(0.375, 0.125), vec2<f32>(-0.125, 0.375), vec2<f32>(-0.375, -0.125));
+// The largest coordinate of SUBSAMPLES: a fragment whose samples a patch covers lies
+// within that many pixels of it along x and y.
+const SUBSAMPLE_SPAN: f32 = 0.375;
 
 // Which of the pixel's four coverage samples the splat's patch covers (1 or 0 each).
 fn subsample_coverage(in: SplatVarying) -> vec4<f32> {
@@ -359,9 +387,9 @@ fn conic_at(q: vec3<f32>, d: vec2<f32>) -> f32 {
 }
 
 // The pixel centre's ray against the splat. Whether a fragment whose centre the patch
-// misses is kept is each pass's choice: pass 2 keeps it if the prefilter's band reaches
-// it or the patch covers one of its coverage samples (with weight 0: it only adds
-// coverage).
+// misses is kept is each pass's choice: pass 2 keeps it if the patch covers one of its
+// coverage samples (weighed by the prefilter's band and the share covered), the points
+// if the band reaches it.
 fn hit(in: SplatVarying) -> Hit {
     let h = patch_hit(in, in.clip.xy);
     var rho2 = h.object2;
@@ -458,11 +486,11 @@ const BAND_WEIGHT: f32 = 1.0 / 16.0;
 fn fs_attributes(in: SplatVarying) -> Attributes {
     let h = hit(in);
     let coverage = pixel_coverage(in, h);
-    if !h.centre_inside && outside(h.rho2) && all(coverage == vec4<f32>(0.0)) {
+    // A fragment of the prefilter's band weighs by the share of the pixel it covers,
+    // and BAND_WEIGHT: one that covers none of it adds nothing.
+    if !h.centre_inside && all(coverage == vec4<f32>(0.0)) {
         discard;
     }
-    // A fragment of the prefilter's band weighs by the share of the pixel it covers,
-    // and BAND_WEIGHT.
     var w = kernel(h.rho2) * dot(coverage, vec4<f32>(0.25)) * BAND_WEIGHT;
     if w < MIN_WEIGHT * BAND_WEIGHT {
         w = 0.0;

@@ -40,6 +40,18 @@ pub(super) enum SplatClass {
     Inner = 2,
 }
 
+/// How far beyond a splat's patch its quad reaches (the WGSL override `QUAD_REACH`; its
+/// values are given to WGSL as constants).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum QuadReach {
+    /// Fragments whose centre the patch covers.
+    Patch = 0,
+    /// And those whose coverage samples it covers.
+    Samples = 1,
+    /// And the prefilter's band.
+    Band = 2,
+}
+
 /// Where a splat's colour comes from (the WGSL override `COLOR_SOURCE`; its values are
 /// given to WGSL as constants).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -83,6 +95,9 @@ pub fn constants_wgsl() -> String {
         ("ALL_SPLATS", SplatClass::All as u32),
         ("OUTLINE_SPLATS", SplatClass::Outline as u32),
         ("INNER_SPLATS", SplatClass::Inner as u32),
+        ("REACH_PATCH", QuadReach::Patch as u32),
+        ("REACH_SAMPLES", QuadReach::Samples as u32),
+        ("REACH_BAND", QuadReach::Band as u32),
         ("COLOR_NODE", ColorSource::Node as u32),
         ("COLOR_LEVELS", ColorSource::Levels as u32),
         ("COLOR_RADIUS", ColorSource::Radius as u32),

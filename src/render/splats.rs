@@ -21,7 +21,7 @@ use super::fullscreen::fragment_texture;
 use super::gbuffer::{ADD, GBuffer, color_targets, depth_state, target};
 use super::gpu_scene::Share;
 use super::settings::Mode;
-use super::shaders::{ColorSource, SplatClass, module};
+use super::shaders::{ColorSource, QuadReach, SplatClass, module};
 use crate::tree::NodeRecord;
 use crate::tree::record::{PointAttributes, SplatShape};
 
@@ -71,10 +71,16 @@ fn vertex_storage(binding: u32, min_size: u64) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// Whether fragment entry point `fs` draws the prefilter's band (WGSL `PREFILTER_BAND`):
-/// pass 1 and the inner splats' pass 2 keep only fragments whose centre a patch covers.
-fn draws_band(fs: &str) -> bool {
-    !matches!(fs, "fs_visibility" | "fs_attributes_inner")
+/// How far the quads of fragment entry point `fs` reach beyond the patch (WGSL
+/// `QUAD_REACH`): pass 1 and the inner splats' pass 2 keep only fragments whose centre
+/// a patch covers, the outline splats' pass 2 those its coverage samples reach, the
+/// points the prefilter's band.
+fn quad_reach(fs: &str) -> QuadReach {
+    match fs {
+        "fs_visibility" | "fs_attributes_inner" => QuadReach::Patch,
+        "fs_attributes" => QuadReach::Samples,
+        _ => QuadReach::Band,
+    }
 }
 
 /// Makes the splat pipelines of vertex entry point `vs` (bind group 1 laid out as
@@ -116,7 +122,7 @@ impl PipelineMaker {
                         constants: &[
                             ("SPLAT_CLASS", class as u32 as f64),
                             ("COLOR_SOURCE", color as u32 as f64),
-                            ("PREFILTER_BAND", f64::from(u8::from(draws_band(fs)))),
+                            ("QUAD_REACH", quad_reach(fs) as u32 as f64),
                         ],
                         ..Default::default()
                     },
