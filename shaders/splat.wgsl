@@ -347,25 +347,42 @@ fn screen_rho(in: SplatVarying) -> f32 {
 
 // The pixel's four coverage samples that the patch covers (pass 2 only). Far enough
 // inside the projected ellipse, all four; far enough outside, none. A fragment whose
-// centre the patch covers counts as covering at least one sample (the centre's share),
-// and as covering all four where the pixel is surrounded: pass 3 does not read them
-// there, and such a fragment weighs the same whatever they say. That spares the rays
-// inside the picture's outlines, which cost an H100 most of pass 2.
+// centre the patch covers counts as covering at least one sample (the centre's share).
+// Where the pixel is surrounded, pass 3 does not read the samples, and they only set a
+// fragment's weight: one whose centre the patch covers weighs the same whatever they
+// say (all four, then), and one of the prefilter's band, which weighs 1/16 of those at
+// most, takes them from the flat ellipse's conic (`conic_coverage`). That spares the
+// rays inside the picture's outlines, which cost an H100 most of pass 2.
 fn pixel_coverage(in: SplatVarying, h: Hit) -> vec4<f32> {
     let rho = screen_rho(in);
     let reach = in.conic0.w;
-    if h.centre_inside {
-        if rho <= 1.0 - reach || (SKIP_SURROUNDED_SAMPLES && surrounded(visible_depth, vec2<i32>(in.clip.xy))) {
-            return vec4<f32>(1.0);
-        }
-        var covered = subsample_coverage(in);
-        covered.x = select(covered.x, 1.0, all(covered == vec4<f32>(0.0)));
-        return covered;
+    if h.centre_inside && rho <= 1.0 - reach {
+        return vec4<f32>(1.0);
     }
-    if rho > 1.0 + reach {
+    if !h.centre_inside && rho > 1.0 + reach {
         return vec4<f32>(0.0);
     }
-    return subsample_coverage(in);
+    if SKIP_SURROUNDED_SAMPLES && surrounded(visible_depth, vec2<i32>(in.clip.xy)) {
+        if h.centre_inside {
+            return vec4<f32>(1.0);
+        }
+        return conic_coverage(in);
+    }
+    var covered = subsample_coverage(in);
+    covered.x = select(covered.x, 1.0, h.centre_inside && all(covered == vec4<f32>(0.0)));
+    return covered;
+}
+
+// Which of the pixel's coverage samples the flat ellipse's projection covers: the conic
+// of its affine projection at the centre, without the patch's curvature, perspective
+// or clip (cheap, and exact enough for a weight).
+fn conic_coverage(in: SplatVarying) -> vec4<f32> {
+    var covered = vec4<f32>(0.0);
+    for (var k = 0u; k < 4u; k++) {
+        let d = in.clip.xy + SUBSAMPLES[k] - in.extra.yz;
+        covered[k] = select(0.0, 1.0, conic_at(in.conic0.xyz, d) <= 1.0);
+    }
+    return covered;
 }
 
 struct Hit {
