@@ -7,9 +7,11 @@
 //! shape (24 bytes, [`SplatShape`]); the cull pass reads each tested node's record and
 //! each survivor's shape, to sort it into one of its two lists. Pass 2 also reads pass
 //! 1's depth (bind group 2, the depth attachment held read-only), to leave out the
-//! coverage samples of pixels inside the picture's outlines. Every fragment shader
-//! writes a depth no nearer than its quad's, which the quad carries (the splat's
-//! nearest point), so that the GPU may reject fragments before running them.
+//! coverage samples of pixels inside the picture's outlines. Each quad is the screen
+//! box of the splat's projected ellipse, grown by what its fragment shader keeps
+//! beyond the patch ([`quad_reach`]). Every fragment shader writes a depth no nearer
+//! than its quad's, which the quad carries (the splat's nearest point), so that the
+//! GPU may reject fragments before running them.
 
 use std::sync::OnceLock;
 
