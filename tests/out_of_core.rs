@@ -6,7 +6,7 @@
 
 mod common;
 
-use spt::tree::out_of_core::{Options, Progress, build_file};
+use spt::tree::out_of_core::{Built, Options, Progress, build_file};
 use spt::tree::select::{TreeView, check_views, random_views};
 use spt::tree::spt_file::SptFile;
 use spt::tree::validate::check_structure;
@@ -23,16 +23,8 @@ fn a_cloud_built_in_jobs_is_one_hole_free_tree() {
     let dir = common::temp_dir();
     let input = dir.path().join("tile.las");
     std::fs::write(&input, common::las_files::sample(64 * 400, false)).unwrap();
-    let output = dir.path().join("tile.spt");
-    let options = Options {
-        job_points: 3000,
-        spill_buffers: 1 << 20,
-        temp_dir: dir.path().to_owned(),
-    };
-    let built = build_file(&input, &output, &options, &Quiet).unwrap();
+    let (built, list) = build_in_jobs(&input, 3000, dir.path());
     assert!(built.jobs >= 8, "{} jobs", built.jobs);
-    let file = SptFile::open(&output).unwrap();
-    let list = file.to_list();
     assert_eq!(list.meta.leaf_count, 64 * 400);
     check_structure(&list.meta, &list.nodes, &list.parents, &list.chunks).unwrap();
     common::assert_tree_invariants(&list, "out of core");
@@ -78,13 +70,13 @@ fn leaf_colors(list: &spt::tree::SequentialList) -> Vec<[u8; 4]> {
     colors
 }
 
-/// `input` built out of core in jobs of at most `job_points`, in `dir`: the jobs and
-/// the file's list.
+/// `input` built out of core in jobs of at most `job_points`, in `dir`: what the build
+/// says of itself, and the file's list.
 fn build_in_jobs(
     input: &std::path::Path,
     job_points: u64,
     dir: &std::path::Path,
-) -> (usize, spt::tree::SequentialList) {
+) -> (Built, spt::tree::SequentialList) {
     let output = dir.join("built.spt");
     let options = Options {
         job_points,
@@ -92,7 +84,20 @@ fn build_in_jobs(
         temp_dir: dir.to_owned(),
     };
     let built = build_file(input, &output, &options, &Quiet).unwrap();
-    (built.jobs, SptFile::open(&output).unwrap().to_list())
+    (built, SptFile::open(&output).unwrap().to_list())
+}
+
+/// A face-less cloud of `positions` (f64 coordinates) written to `dir/name`.
+fn write_cloud(dir: &std::path::Path, name: &str, positions: Vec<[f64; 3]>) -> std::path::PathBuf {
+    let cloud = spt::io::ply::PolyMesh {
+        positions,
+        normals: None,
+        colors: None,
+        faces: spt::io::ply::FaceList::default(),
+    };
+    let path = dir.join(name);
+    common::write_double(&path, &cloud);
+    path
 }
 
 /// The in-memory build of `input`.
@@ -121,8 +126,8 @@ fn leaves_by_position(
 fn a_mesh_built_in_jobs_has_the_in_memory_build_s_leaves() {
     let dir = common::temp_dir();
     let input = common::default_model();
-    let (jobs, list) = build_in_jobs(&input, 4000, dir.path());
-    assert!(jobs >= 12, "{jobs} jobs");
+    let (built, list) = build_in_jobs(&input, 4000, dir.path());
+    assert!(built.jobs >= 12, "{} jobs", built.jobs);
     check_structure(&list.meta, &list.nodes, &list.parents, &list.chunks).unwrap();
     common::assert_tree_invariants(&list, "mesh out of core");
     let view = TreeView::new(&list.meta, &list.nodes, &list.chunks);
@@ -151,7 +156,8 @@ fn a_mesh_built_in_jobs_has_the_in_memory_build_s_leaves() {
     }
     let share = same_shape as f64 / ours.len() as f64;
     eprintln!(
-        "{jobs} jobs: worst normal cos {worst_normal}, {share:.4} of the shapes bit-identical"
+        "{} jobs: worst normal cos {worst_normal}, {share:.4} of the shapes bit-identical",
+        built.jobs
     );
     assert!(worst_normal > 0.9999, "{worst_normal}");
     assert!(share > 0.999, "{share}");
@@ -181,8 +187,8 @@ fn a_ply_cloud_built_in_jobs_keeps_its_given_normals() {
     let dir = common::temp_dir();
     let input = dir.path().join("sheet.ply");
     common::write_standard(&input, &cloud, Encoding::BinaryLittleEndian);
-    let (jobs, list) = build_in_jobs(&input, 2000, dir.path());
-    assert!(jobs >= 6, "{jobs} jobs");
+    let (built, list) = build_in_jobs(&input, 2000, dir.path());
+    assert!(built.jobs >= 6, "{} jobs", built.jobs);
     assert!(list.meta.oriented_normals, "given normals are oriented");
     let memory_list = in_memory_list(&input);
     let (ours, theirs) = (leaves_by_position(&list), leaves_by_position(&memory_list));
@@ -243,15 +249,8 @@ fn a_mesh_whose_first_job_votes_against_the_model_is_built_again_right() {
     let dir = common::temp_dir();
     let input = dir.path().join("spheres.ply");
     common::write_standard(&input, &mesh, spt::io::ply::Encoding::BinaryLittleEndian);
-    let output = dir.path().join("spheres.spt");
-    let options = Options {
-        job_points: 3000,
-        spill_buffers: 1 << 20,
-        temp_dir: dir.path().to_owned(),
-    };
-    let built = build_file(&input, &output, &options, &Quiet).unwrap();
+    let (built, list) = build_in_jobs(&input, 3000, dir.path());
     assert!(built.rebuilt, "the first job's guess was the model's vote");
-    let list = SptFile::open(&output).unwrap().to_list();
     let (ours, theirs) = (
         leaves_by_position(&list),
         leaves_by_position(&in_memory_list(&input)),
@@ -267,33 +266,18 @@ fn a_mesh_whose_first_job_votes_against_the_model_is_built_again_right() {
 
 #[test]
 fn stray_and_unstorable_points_are_dropped_or_kept_as_the_whole_file_reader_does() {
-    use spt::io::ply::{FaceList, PolyMesh};
     // A 100 × 100 sheet, one stray sample 10⁶ away (an outlier, kept), one 10³⁰⁰
     // away and one NaN (both dropped: no f32 offset holds them).
     let mut positions: Vec<[f64; 3]> = (0..100 * 100)
         .map(|i| [(i % 100) as f64 * 0.01, (i / 100) as f64 * 0.01, 0.0])
         .collect();
     positions.extend([[1e6, 0.0, 0.0], [1e300, 0.0, 0.0], [f64::NAN, 0.0, 0.0]]);
-    let cloud = PolyMesh {
-        positions,
-        normals: None,
-        colors: None,
-        faces: FaceList::default(),
-    };
     let dir = common::temp_dir();
-    let input = dir.path().join("stray.ply");
-    common::write_double(&input, &cloud);
-    let output = dir.path().join("stray.spt");
-    let options = Options {
-        job_points: 1500,
-        spill_buffers: 1 << 20,
-        temp_dir: dir.path().to_owned(),
-    };
-    let built = build_file(&input, &output, &options, &Quiet).unwrap();
+    let input = write_cloud(dir.path(), "stray.ply", positions);
+    let (built, list) = build_in_jobs(&input, 1500, dir.path());
     assert_eq!((built.dropped, built.outliers), (2, 1));
     // The grid spans the sheet, not the stray sample: the sheet is split.
     assert!(built.jobs >= 6, "{} jobs", built.jobs);
-    let list = SptFile::open(&output).unwrap().to_list();
     let memory = in_memory_list(&input);
     assert_eq!(list.meta.leaf_count, memory.meta.leaf_count);
     assert_eq!(list.meta.leaf_count, 100 * 100 + 1);
@@ -301,31 +285,24 @@ fn stray_and_unstorable_points_are_dropped_or_kept_as_the_whole_file_reader_does
 
 #[test]
 fn a_model_whose_disks_dwarf_its_points_box_gets_their_error_scale() {
-    use spt::io::ply::{FaceList, PolyMesh};
     // The fuzzer's case: points 10⁻³⁰ apart, whose disks (sized by the unit-scale
     // fallback) are 10²⁶ times the points' box; errors relative to the box overflow f16.
-    let cloud = PolyMesh {
-        positions: vec![
-            [0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0],
-            [
-                5.831554006032442e-39,
-                -6.310887241768095e-30,
-                5.6492941212700346e-39,
-            ],
-            [
-                7.681846387076256e31,
-                1.6884937804572382e25,
-                4.3053280908255565e21,
-            ],
+    let positions = vec![
+        [0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0],
+        [
+            5.831554006032442e-39,
+            -6.310887241768095e-30,
+            5.6492941212700346e-39,
         ],
-        normals: None,
-        colors: None,
-        faces: FaceList::default(),
-    };
+        [
+            7.681846387076256e31,
+            1.6884937804572382e25,
+            4.3053280908255565e21,
+        ],
+    ];
     let dir = common::temp_dir();
-    let input = dir.path().join("tiny.ply");
-    common::write_double(&input, &cloud);
+    let input = write_cloud(dir.path(), "tiny.ply", positions);
     let (_, list) = build_in_jobs(&input, 64, dir.path());
     let memory = in_memory_list(&input);
     assert_eq!(list.meta.leaf_count, memory.meta.leaf_count);

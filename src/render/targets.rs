@@ -53,8 +53,8 @@ pub struct FrameTargets {
 
 impl FrameTargets {
     /// Targets of `size` around `gbuffer` (of the same size) and its bind groups for
-    /// shading and for pass 2 (its depth); the frame uniform bound as `frame_layout` says; with timestamp queries
-    /// and the output's gamma view where `gpu` has them.
+    /// shading and for pass 2 (its depth); the frame uniform bound as `frame_layout`
+    /// says; with timestamp queries and the output's gamma view where `gpu` has them.
     pub(super) fn new(
         gpu: &Gpu,
         size: (u32, u32),
