@@ -4,7 +4,8 @@
 //!
 //! * normal: the smallest principal axis of the neighbourhood (self + [`K`] − 1
 //!   neighbours: enough to span several scan lines), unless the file gives a non-zero
-//!   one; oriented afterwards where a direction is known ([`Orientation`]);
+//!   one; on a terrain, the mean of its neighbours' ([`terrain_disks`]); oriented
+//!   afterwards where a direction is known ([`Orientation`]);
 //! * radius and ellipse: the covering of [`super::covering`], from the same
 //!   neighbourhood; a capped one is counted ([`SurfelStats::capped_radii`]);
 //! * clip: a splat on a boundary of the sampling ends there ([`boundary_clip`]), except
