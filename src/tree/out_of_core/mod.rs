@@ -52,7 +52,9 @@ use job::{Model, Part};
 use spill::{GRID, Grid};
 
 /// Bytes of memory a job takes per point at its peak (its surfels, k-d tree, nodes and
-/// list: measured on clouds of 1–10 M points, with room to spare).
+/// list), halo included. Measured on the 200 M-point `gen_cloud` tile's jobs of 6.7 M
+/// points: 160 before issue 13's terrain normals, about 300 since (each sample's 24
+/// neighbours are kept between the fits and their mean, `surfel::cloud`).
 pub const BYTES_PER_JOB_POINT: u64 = 320;
 
 /// How far the leaves' own error scale may exceed the model's (from the points' box)
