@@ -35,8 +35,10 @@ struct Frame {
     cull_back_faces: u32,
     lod_on: u32,
     lod_frozen: u32,
+    // 1 for a terrain's estimated normals, which face up (the rule that turned them):
+    // a splat seen from behind is then the ground's underside (see fs_attributes).
+    normals_up: u32,
     // Padding: elevation_range is 8-byte aligned.
-    pad_a: f32,
     pad_b: f32,
     // Lowest and highest node centre height along elevation_up, relative to the model
     // origin (MODE_ELEVATION).

@@ -541,13 +541,14 @@ fn blended(in: SplatVarying, h: Hit, weight: f32, coverage: vec4<f32>) -> Attrib
     var w = weight;
     let q = view_ray(in.clip.xy) * h.depth;
     // Two-sided: a normal facing away from the eye is flipped before blending. Where
-    // normals face out of the surface, such a fragment shows the surface's back, which
+    // normals face out of the surface (a mesh's, given ones, a terrain's turned up:
+    // cloud_quality --terrain 0.2280 -> 0.2265), such a fragment shows its back, which
     // is what the pixel shows where nothing else reaches it (inside a hole's rim); but
     // where front fragments blend with it (a silhouette or a fold, within pass 1's
     // push) it is the far side that the surface hides, and weighs BACK_WEIGHT of them.
     let back = dot(h.normal, q) > 0.0;
     let n = select(h.normal, -h.normal, back);
-    w *= select(1.0, BACK_WEIGHT, back && frame.oriented_normals != 0u);
+    w *= select(1.0, BACK_WEIGHT, back && (frame.oriented_normals != 0u || frame.normals_up != 0u));
     var out: Attributes;
     let color = clamp(in.color.rgb + in.color_dx * h.xy.x + in.color_dy * h.xy.y, vec3<f32>(0.0), vec3<f32>(1.0));
     out.color = vec4<f32>(color * w, w);

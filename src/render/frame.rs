@@ -33,7 +33,7 @@ pub(super) struct FrameUniform {
     pub cull_back_faces: u32,
     pub lod_on: u32,
     pub lod_frozen: u32,
-    pub pad_a: f32,
+    pub normals_up: u32,
     pub pad_b: f32,
     pub elevation_range: [f32; 2],
     pub lod_eye: [f32; 3],
@@ -134,7 +134,7 @@ impl FrameUniform {
             cull_back_faces: settings.cull_back_faces as u32,
             lod_on: (lod_eps > 0.0) as u32,
             lod_frozen: settings.lod_eye.is_some() as u32,
-            pad_a: 0.0,
+            normals_up: meta.is_flat() as u32,
             pad_b: 0.0,
             elevation_range,
             lod_eye: settings
