@@ -14,9 +14,13 @@ use crate::io::ply::Header;
 use crate::io::ply::fields::Plan;
 use crate::io::rebase::MAX_OFFSET;
 use crate::io::{Bounds, GeometryStats};
+use crate::surfel::cloud::Orientation;
 use crate::surfel::{LeafSurfels, SurfelStats, leaf_surfels};
 use crate::tree::spt_file::{SptFile, is_spt};
 use crate::tree::{NodeRecord, TreeMeta};
+
+/// How `spt info` names a terrain's estimated normals, turned up.
+const UP_NORMALS: &str = "up (a terrain's: a splat's underside weighs 1/64, as a mesh's back)";
 
 #[derive(Debug, Serialize)]
 pub struct ElementInfo {
@@ -39,6 +43,9 @@ pub struct SurfelInfo {
     pub radius_median: f32,
     pub radius_max: f32,
     pub oriented_normals: bool,
+    /// A terrain's estimated normals, turned up: the renderer weighs a splat's
+    /// underside as it does a mesh's back ([`crate::tree::TreeMeta::is_flat`]).
+    pub normals_up: bool,
     #[serde(flatten)]
     pub stats: SurfelStats,
 }
@@ -143,6 +150,9 @@ impl ModelInfo {
                 radius_median,
                 radius_max,
                 oriented_normals: leaves.oriented_normals,
+                normals_up: !leaves.oriented_normals
+                    && g.triangles.is_empty()
+                    && Orientation::of(&g.core, &g.bounds, g.origin) == Orientation::Up,
                 stats: leaves.stats,
             },
             timing: Timing {
@@ -263,6 +273,7 @@ impl ModelInfo {
                 match (s.oriented_normals, s.stats.turned_outward) {
                     (true, false) => "oriented",
                     (true, true) => "oriented (all turned outward: the triangles wind inward)",
+                    _ if s.normals_up => UP_NORMALS,
                     _ => "unoriented (two-sided)",
                 }
             ),
@@ -518,6 +529,8 @@ impl SptInfo {
                 if m.has_colors { "yes" } else { "no" },
                 if m.oriented_normals {
                     "oriented"
+                } else if m.is_flat() {
+                    UP_NORMALS
                 } else {
                     "unoriented (two-sided)"
                 },
