@@ -14,7 +14,6 @@ use crate::io::ply::Header;
 use crate::io::ply::fields::Plan;
 use crate::io::rebase::MAX_OFFSET;
 use crate::io::{Bounds, GeometryStats};
-use crate::surfel::cloud::Orientation;
 use crate::surfel::{LeafSurfels, SurfelStats, leaf_surfels};
 use crate::tree::spt_file::{SptFile, is_spt};
 use crate::tree::{NodeRecord, TreeMeta};
@@ -150,9 +149,7 @@ impl ModelInfo {
                 radius_median,
                 radius_max,
                 oriented_normals: leaves.oriented_normals,
-                normals_up: !leaves.oriented_normals
-                    && g.triangles.is_empty()
-                    && Orientation::of(&g.core, &g.bounds, g.origin) == Orientation::Up,
+                normals_up: leaves.normals_up,
                 stats: leaves.stats,
             },
             timing: Timing {

@@ -85,6 +85,9 @@ pub struct LeafSurfels {
     /// False for normals estimated from neighbours, whose sign is arbitrary: such
     /// surfels must be drawn two-sided.
     pub oriented_normals: bool,
+    /// A terrain's estimated normals, turned up ([`cloud::Orientation::Up`]): not
+    /// oriented out of a surface, but up, so that a splat's underside is the ground's.
+    pub normals_up: bool,
     pub stats: SurfelStats,
     /// A mesh's vertex normals, which its triangles interpolate (the surfels' normals
     /// and colours are the centres of their fitted normal and colour fields, [`field`];
@@ -259,6 +262,7 @@ fn leaf_surfels_among(
     };
     let mut surfels = initial_surfels(g);
     let (mut redundant, mut vertex_normals, mut vote) = (Vec::new(), Vec::new(), None);
+    let mut normals_up = false;
     let oriented = if g.triangles.is_empty() {
         let all: Vec<u32> = (0..own as u32).collect();
         let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
@@ -271,7 +275,9 @@ fn leaf_surfels_among(
             &mut surfels,
             &mut stats,
         );
-        given.is_some() && stats.given_normals == own as u64
+        let oriented = given.is_some() && stats.given_normals == own as u64;
+        normals_up = !oriented && orientation == cloud::Orientation::Up;
+        oriented
     } else {
         let disks = mesh::vertex_disks(
             &g.positions,
@@ -290,6 +296,7 @@ fn leaf_surfels_among(
         has_colors: g.colors.is_some(),
         has_attributes: g.attributes.is_some(),
         oriented_normals: oriented,
+        normals_up,
         stats,
         redundant,
         vertex_normals,
