@@ -48,6 +48,9 @@ fn a_cloud_built_in_jobs_is_one_hole_free_tree() {
     assert_eq!(memory.meta().leaf_count, list.meta.leaf_count);
     let ratio = list.meta.node_count as f64 / memory.meta().node_count as f64;
     assert!((0.97..1.03).contains(&ratio), "{ratio}");
+    // A flat tile: both turn its normals up.
+    assert_eq!(list.meta.normals_turned, memory.meta().normals_turned);
+    assert_eq!(list.meta.normals_turned, spt::surfel::NormalsTurned::Up);
     // The leaves carry the colours the in-memory reader gives the same points.
     let memory_list = match &memory.tree {
         spt::tree::scene::TreeSource::Memory(l) => l.clone(),

@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use spt::io::PointAttributes;
 use spt::io::atomic::{temporary_path, write_atomically};
 use spt::io::ply::read_ply;
-use spt::surfel::leaf_surfels;
 use spt::surfel::shape::SplatShape;
+use spt::surfel::{NormalsTurned, leaf_surfels};
 use spt::tree::report::Silent;
 use spt::tree::select::PrefixIndex;
 use spt::tree::spt_file::{SptError, SptFile, file_bytes, write_spt, write_to};
@@ -260,6 +260,39 @@ fn version_2_files_read_as_files_without_attributes() {
     assert_eq!(back.chunks[0].count as usize, n);
 }
 
+/// A terrain whose box one stray return makes tall: the builder turns its normals up
+/// (decided on the core box), the file keeps that, and a version 7 file, which did not
+/// store it, is read as its leaf box tells, as the renderer read it then.
+#[test]
+fn a_terrain_s_up_turned_normals_survive_the_file() {
+    let mut points: Vec<[f64; 3]> = (0..10_000)
+        .map(|i| {
+            let (x, y) = ((i % 100) as f64, (i / 100) as f64);
+            [x, y, 0.5 * (0.1 * x).sin()]
+        })
+        .collect();
+    points.push([50.0, 50.0, 2_000.0]);
+    let list = build_sequential_list(leaf_surfels(&common::geometry_of(&points)));
+    assert_eq!(list.meta.normals_turned, NormalsTurned::Up);
+    assert_eq!(list.meta.normals_turned_by_leaf_box(), NormalsTurned::No);
+    let mut bytes = Vec::new();
+    write_to(&mut bytes, &list).unwrap();
+    let dir = common::temp_dir();
+    let path = dir.path().join("tile.spt");
+    std::fs::write(&path, &bytes).unwrap();
+    assert_eq!(SptFile::open(&path).unwrap().meta, list.meta);
+    // The same image as version 7 wrote it: flags 8 and 16 unused.
+    bytes[8..12].copy_from_slice(&7u32.to_le_bytes());
+    bytes[16] &= !(8 | 16);
+    assert!(spt::tree::spt_file::reseal(&mut bytes));
+    std::fs::write(&path, &bytes).unwrap();
+    let file = SptFile::open(&path).unwrap();
+    assert_eq!(
+        (file.version, file.meta.normals_turned),
+        (7, NormalsTurned::No)
+    );
+}
+
 #[test]
 fn lidar_attributes_survive_the_file() {
     let dir = common::temp_dir();
@@ -278,7 +311,7 @@ fn lidar_attributes_survive_the_file() {
     assert_eq!(file.to_list(), list);
 }
 
-/// `bytes` (a version 7 image) as version 6 wrote it: 16-byte shapes, without their
+/// `bytes` (a version 8 image of a mesh) as version 6 wrote it: 16-byte shapes, without their
 /// colour field, the sections after them moved up.
 fn narrowed(bytes: &[u8]) -> Vec<u8> {
     let u64_at = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());
@@ -319,12 +352,12 @@ fn older_files_build_the_index_version_6_files_store_it() {
     let mut bytes = Vec::new();
     write_to(&mut bytes, &list).unwrap();
     let dir = common::temp_dir();
-    let path = dir.path().join("v7.spt");
+    let path = dir.path().join("v8.spt");
     std::fs::write(&path, &bytes).unwrap();
     let built = PrefixIndex::new(&list.meta, &list.chunks, &list.nodes);
     // Streaming opens read the stored index, the same as the one built from the nodes.
     let (file, stored) = SptFile::open_for_streaming(&path).unwrap();
-    assert_eq!(file.version, 7);
+    assert_eq!(file.version, 8);
     assert_eq!(stored, built);
     // Version 6: 16-byte shapes, read with a zero colour field; the same index.
     let v6 = narrowed(&bytes);
@@ -348,7 +381,7 @@ fn older_files_build_the_index_version_6_files_store_it() {
     assert_eq!(file.prefix_index().unwrap(), built);
     // A stored maximum below a node's δ, or a head below a block's parent error, would
     // cut prefixes short: the full check refuses them, naming the file.
-    let table_end = table_end + 8 * list.nodes.len(); // in the version 7 image
+    let table_end = table_end + 8 * list.nodes.len(); // in the version 8 image
     for (at, name, what) in [
         (table_end, "bad_suffix.spt", "suffix"),
         (table_end + 2 * blocks, "bad_head.spt", "heads"),

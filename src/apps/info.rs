@@ -14,12 +14,21 @@ use crate::io::ply::Header;
 use crate::io::ply::fields::Plan;
 use crate::io::rebase::MAX_OFFSET;
 use crate::io::{Bounds, GeometryStats};
-use crate::surfel::{LeafSurfels, SurfelStats, leaf_surfels};
+use crate::surfel::{LeafSurfels, NormalsTurned, SurfelStats, leaf_surfels};
 use crate::tree::spt_file::{SptFile, is_spt};
 use crate::tree::{NodeRecord, TreeMeta};
 
-/// How `spt info` names a terrain's estimated normals, turned up.
-const UP_NORMALS: &str = "up (a terrain's: a splat's underside weighs 1/64, as a mesh's back)";
+/// How `spt info` names estimated normals turned `turned`, and what the renderer does
+/// with them.
+fn estimated_normals(turned: NormalsTurned) -> &'static str {
+    match turned {
+        NormalsTurned::No => "unoriented (two-sided)",
+        NormalsTurned::Up => "up (a terrain's: a splat's underside weighs 1/64, as a mesh's back)",
+        NormalsTurned::TowardOrigin => {
+            "toward the sensor at the file's origin (a frame's: drawn two-sided)"
+        }
+    }
+}
 
 #[derive(Debug, Serialize)]
 pub struct ElementInfo {
@@ -42,9 +51,9 @@ pub struct SurfelInfo {
     pub radius_median: f32,
     pub radius_max: f32,
     pub oriented_normals: bool,
-    /// A terrain's estimated normals, turned up: the renderer weighs a splat's
-    /// underside as it does a mesh's back ([`crate::tree::TreeMeta::is_flat`]).
-    pub normals_up: bool,
+    /// Which way estimated normals were turned (up on a terrain, toward the sensor on a
+    /// frame): see [`estimated_normals`].
+    pub normals_turned: NormalsTurned,
     #[serde(flatten)]
     pub stats: SurfelStats,
 }
@@ -149,7 +158,7 @@ impl ModelInfo {
                 radius_median,
                 radius_max,
                 oriented_normals: leaves.oriented_normals,
-                normals_up: leaves.normals_up,
+                normals_turned: leaves.normals_turned,
                 stats: leaves.stats,
             },
             timing: Timing {
@@ -270,8 +279,7 @@ impl ModelInfo {
                 match (s.oriented_normals, s.stats.turned_outward) {
                     (true, false) => "oriented",
                     (true, true) => "oriented (all turned outward: the triangles wind inward)",
-                    _ if s.normals_up => UP_NORMALS,
-                    _ => "unoriented (two-sided)",
+                    _ => estimated_normals(s.normals_turned),
                 }
             ),
         );
@@ -526,10 +534,8 @@ impl SptInfo {
                 if m.has_colors { "yes" } else { "no" },
                 if m.oriented_normals {
                     "oriented"
-                } else if m.is_flat() {
-                    UP_NORMALS
                 } else {
-                    "unoriented (two-sided)"
+                    estimated_normals(m.normals_turned)
                 },
                 if m.has_attributes {
                     format!(

@@ -262,11 +262,20 @@ fn box_corners(lo: [f64; 3], hi: [f64; 3]) -> impl Iterator<Item = DVec3> {
 mod tests {
     use super::*;
 
-    /// A cloud of estimated normals in the box `min`–`max` (file coordinates).
+    /// A cloud of estimated normals in the box `min`–`max` (file coordinates), turned
+    /// as its box tells (its core, here).
     fn cloud(min: [f64; 3], max: [f64; 3]) -> TreeMeta {
         let mut meta = TreeMeta::empty(1.0);
         (meta.bounds.min, meta.bounds.max) = (min, max);
         meta.origin = meta.bounds.center().to_array();
+        meta.normals_turned = meta.normals_turned_by_leaf_box();
+        meta
+    }
+
+    /// `meta` with given, oriented normals.
+    fn oriented(mut meta: TreeMeta) -> TreeMeta {
+        meta.oriented_normals = true;
+        meta.normals_turned = crate::surfel::NormalsTurned::No;
         meta
     }
 
@@ -303,8 +312,7 @@ mod tests {
     #[test]
     fn chunk_boxes_frame_the_samples_not_the_model_s_box() {
         // A box 2 wide whose samples all lie in one chunk 0.2 wide at its centre.
-        let mut meta = cloud([-1.0; 3], [1.0; 3]);
-        meta.oriented_normals = true;
+        let meta = oriented(cloud([-1.0; 3], [1.0; 3]));
         let chunk = Chunk {
             start: 0,
             count: 1,
@@ -336,8 +344,8 @@ mod tests {
         let mut frame = cloud([-1.0, -1.5, 0.8], [1.8, 0.4, 3.8]);
         (frame.centre_min, frame.centre_max) = ([-1.0, -2.0, -1.5], [2.0, 3.0, 1.5]);
         assert_eq!(heights(&frame), (-DVec3::Y, [-3.0, 2.0]));
-        frame.oriented_normals = true;
-        assert_eq!(heights(&frame), (DVec3::Z, [-1.5, 1.5]));
+        let mesh = oriented(frame);
+        assert_eq!(heights(&mesh), (DVec3::Z, [-1.5, 1.5]));
     }
 
     #[test]
@@ -346,8 +354,7 @@ mod tests {
         assert_eq!(OrbitAxes::of(&around), OrbitAxes::Z_UP);
         let tile = cloud([500.0, 700.0, 10.0], [900.0, 1100.0, 40.0]);
         assert_eq!(OrbitAxes::of(&tile), OrbitAxes::Z_UP);
-        let mut mesh = cloud([-1.0, -1.5, 0.8], [1.8, 0.4, 3.8]);
-        mesh.oriented_normals = true;
+        let mesh = oriented(cloud([-1.0, -1.5, 0.8], [1.8, 0.4, 3.8]));
         assert_eq!(OrbitAxes::of(&mesh), OrbitAxes::Z_UP);
         let c = Camera::orbit(&mesh, 0.0, 0.0, 2.0, 1.0);
         assert!(c.eye.y < c.target.y && c.up == DVec3::Z, "{c:?}");

@@ -134,7 +134,7 @@ impl FrameUniform {
             cull_back_faces: settings.cull_back_faces as u32,
             lod_on: (lod_eps > 0.0) as u32,
             lod_frozen: settings.lod_eye.is_some() as u32,
-            normals_up: meta.is_flat() as u32,
+            normals_up: meta.normals_up() as u32,
             pad_b: 0.0,
             elevation_range,
             lod_eye: settings

@@ -303,6 +303,32 @@ pub enum Orientation {
     Unknown,
 }
 
+/// Which way a model's normals were turned when its surfels were estimated: what the
+/// renderer must know of the [`Orientation`] (a `.spt` file stores it from version 8).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NormalsTurned {
+    /// Not turned: a mesh's, given ones, or a cloud's of unknown orientation (drawn
+    /// two-sided).
+    #[default]
+    No,
+    /// A terrain's, up: a splat's underside is the ground's, weighed as a mesh's back.
+    Up,
+    /// A sensor frame's, toward the file's origin, where the sensor stood.
+    TowardOrigin,
+}
+
+impl NormalsTurned {
+    /// How estimated normals facing `orientation` were turned.
+    pub fn of(orientation: Orientation) -> NormalsTurned {
+        match orientation {
+            Orientation::Up => NormalsTurned::Up,
+            Orientation::Toward(_) => NormalsTurned::TowardOrigin,
+            Orientation::Unknown => NormalsTurned::No,
+        }
+    }
+}
+
 /// A model whose core is less than a quarter as high as it is wide is a terrain.
 const TERRAIN_ASPECT: f64 = 0.25;
 

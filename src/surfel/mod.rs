@@ -85,9 +85,10 @@ pub struct LeafSurfels {
     /// False for normals estimated from neighbours, whose sign is arbitrary: such
     /// surfels must be drawn two-sided.
     pub oriented_normals: bool,
-    /// A terrain's estimated normals, turned up ([`cloud::Orientation::Up`]): not
-    /// oriented out of a surface, but up, so that a splat's underside is the ground's.
-    pub normals_up: bool,
+    /// Which way estimated normals were turned: up on a terrain, toward the sensor on
+    /// a sensor frame ([`cloud::Orientation`]); not oriented out of a surface, but
+    /// consistent. [`NormalsTurned::No`] when `oriented_normals`.
+    pub normals_turned: NormalsTurned,
     pub stats: SurfelStats,
     /// A mesh's vertex normals, which its triangles interpolate (the surfels' normals
     /// and colours are the centres of their fitted normal and colour fields, [`field`];
@@ -168,6 +169,7 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
     leaf_surfels_of(g, g.positions.len())
 }
 
+pub use cloud::NormalsTurned;
 pub use mesh::Outward;
 
 /// The leaf surfels of the first `own` points of a point cloud (no triangles), whose
@@ -262,7 +264,7 @@ fn leaf_surfels_among(
     };
     let mut surfels = initial_surfels(g);
     let (mut redundant, mut vertex_normals, mut vote) = (Vec::new(), Vec::new(), None);
-    let mut normals_up = false;
+    let mut normals_turned = NormalsTurned::No;
     let oriented = if g.triangles.is_empty() {
         let all: Vec<u32> = (0..own as u32).collect();
         let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
@@ -276,7 +278,9 @@ fn leaf_surfels_among(
             &mut stats,
         );
         let oriented = given.is_some() && stats.given_normals == own as u64;
-        normals_up = !oriented && orientation == cloud::Orientation::Up;
+        if !oriented {
+            normals_turned = NormalsTurned::of(orientation);
+        }
         oriented
     } else {
         let disks = mesh::vertex_disks(
@@ -296,7 +300,7 @@ fn leaf_surfels_among(
         has_colors: g.colors.is_some(),
         has_attributes: g.attributes.is_some(),
         oriented_normals: oriented,
-        normals_up,
+        normals_turned,
         stats,
         redundant,
         vertex_normals,

@@ -30,6 +30,7 @@ use serde::Serialize;
 
 use crate::io::{Bounds, PointAttributes};
 use crate::surfel::LeafSurfels;
+use crate::surfel::NormalsTurned;
 use crate::surfel::Surfel;
 use crate::surfel::cloud::Orientation;
 use crate::surfel::field::unit_rgb;
@@ -60,6 +61,9 @@ pub struct TreeMeta {
     pub depth: u32,
     pub has_colors: bool,
     pub oriented_normals: bool,
+    /// Which way the leaves' estimated normals were turned ([`NormalsTurned::No`] when
+    /// `oriented_normals`): the builder's decision, on the model's core box.
+    pub normals_turned: NormalsTurned,
     /// Whether the nodes carry LiDAR attributes ([`SequentialList::attributes`]).
     pub has_attributes: bool,
     /// The leaves' 1st and 99th intensity percentiles ([`attributes::intensity_range`]).
@@ -68,22 +72,36 @@ pub struct TreeMeta {
 
 impl TreeMeta {
     /// Where the sensor of a sensor frame stood, in the file's coordinates: the file's
-    /// origin, for a cloud whose estimated normals were turned toward it
-    /// ([`crate::surfel::cloud::Orientation::Toward`], decided here on the leaf box);
-    /// `None` for a mesh, a cloud with given normals, a terrain or any other cloud.
+    /// origin, for a cloud whose estimated normals were turned toward it; `None` for a
+    /// mesh, a cloud with given normals, a terrain or any other cloud.
     pub fn sensor(&self) -> Option<DVec3> {
-        let frame = !self.oriented_normals && matches!(self.orientation(), Orientation::Toward(_));
-        frame.then_some(DVec3::ZERO)
+        (self.normals_turned == NormalsTurned::TowardOrigin).then_some(DVec3::ZERO)
+    }
+
+    /// Whether the leaves' normals were turned up (a terrain's estimated ones): a
+    /// splat's underside is then the ground's, which the renderer weighs as a back.
+    pub fn normals_up(&self) -> bool {
+        self.normals_turned == NormalsTurned::Up
     }
 
     /// Whether the leaf box is a terrain's: less than a quarter as high as it is wide
-    /// (the rule that turns a cloud's normals up, [`Orientation::of`]).
+    /// (the box rule of [`Orientation::of`]), which the default camera sees from
+    /// above. A mesh can be flat too; only a cloud's normals are turned up.
     pub fn is_flat(&self) -> bool {
-        self.orientation() == Orientation::Up
+        self.leaf_box_orientation() == Orientation::Up
     }
 
-    /// [`Orientation::of`] the leaf box, seen from the file's origin.
-    fn orientation(&self) -> Orientation {
+    /// How the builder turns estimated normals, decided on the leaf box instead of the
+    /// core box, seen from the file's origin: what files before version 8, which do not
+    /// store [`TreeMeta::normals_turned`], are read with (what the renderer used then).
+    pub fn normals_turned_by_leaf_box(&self) -> NormalsTurned {
+        if self.oriented_normals {
+            return NormalsTurned::No;
+        }
+        NormalsTurned::of(self.leaf_box_orientation())
+    }
+
+    fn leaf_box_orientation(&self) -> Orientation {
         Orientation::of(&self.bounds, &self.bounds, DVec3::from(self.origin))
     }
 
@@ -103,6 +121,7 @@ impl TreeMeta {
             depth: 0,
             has_colors: false,
             oriented_normals: false,
+            normals_turned: NormalsTurned::No,
             has_attributes: false,
             intensity_range: [0, 0],
         }
@@ -381,7 +400,7 @@ pub fn build_records_scaled(
     report: &dyn Report,
 ) -> NodeSet {
     let n = leaves.surfels.len();
-    let oriented = leaves.oriented_normals;
+    let (oriented, normals_turned) = (leaves.oriented_normals, leaves.normals_turned);
     let bounds = leaf_bounds(&leaves);
     let (mut records, mut shapes): (Vec<NodeRecord>, Vec<SplatShape>) = leaves
         .surfels
@@ -421,6 +440,7 @@ pub fn build_records_scaled(
         depth: depth as u32,
         has_colors: bounds.2,
         oriented_normals: oriented,
+        normals_turned,
         has_attributes: !attributes.is_empty(),
         intensity_range: attributes::intensity_range(attributes.get(..n).unwrap_or(&[])),
     };

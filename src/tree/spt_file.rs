@@ -3,14 +3,18 @@
 //! ```text
 //! offset  size  field (little-endian)
 //!      0     8  magic "spt-tree"
-//!      8     4  format version (7; versions 6, 5, 4, 3 and 2 read as well: version 6
+//!      8     4  format version (8; versions 7, 6, 5, 4, 3 and 2 read as well: version
+//!                 7 did not store how estimated normals were turned (flags 8 and 16),
+//!                 read as the leaf box tells ([`TreeMeta::normals_turned_by_leaf_box`]); version 6
 //!                 had 16-byte shapes, without the colour field, read with a zero
 //!                 one; version 5 had no block heads, version 4 no δ suffix section either,
 //!                 versions 3 and 2 no chunk table (their
 //!                 list is one chunk), version 2 no attributes section; version 1,
 //!                 refused, no shapes section)
 //!     12     4  header size (256)
-//!     16     4  flags: 1 = has colours, 2 = oriented normals, 4 = LiDAR attributes
+//!     16     4  flags: 1 = has colours, 2 = oriented normals, 4 = LiDAR attributes,
+//!                 8 = estimated normals turned up (a terrain's), 16 = turned toward
+//!                 the origin (a sensor frame's)
 //!     20     4  depth (largest level)
 //!     24     8  leaf count
 //!     32     8  node count
@@ -60,10 +64,11 @@ use super::validate;
 use super::{NodeRecord, SequentialList, TreeMeta};
 use crate::io::atomic::write_atomically;
 use crate::io::{Bounds, PointAttributes};
+use crate::surfel::NormalsTurned;
 use crate::surfel::shape::SplatShape;
 
 pub const MAGIC: &[u8; 8] = b"spt-tree";
-pub const VERSION: u32 = 7;
+pub const VERSION: u32 = 8;
 /// The oldest version read: version 2 files are version 3 files without attributes.
 pub const OLDEST_READ: u32 = 2;
 pub const HEADER_BYTES: usize = 256;
@@ -143,8 +148,11 @@ pub fn header_for(m: &TreeMeta, chunks: &[Chunk], checksum: u64) -> Vec<u8> {
     h.extend_from_slice(MAGIC);
     h.extend_from_slice(&VERSION.to_le_bytes());
     h.extend_from_slice(&(HEADER_BYTES as u32).to_le_bytes());
-    let flags =
-        m.has_colors as u32 | (m.oriented_normals as u32) << 1 | (m.has_attributes as u32) << 2;
+    let flags = m.has_colors as u32
+        | (m.oriented_normals as u32) << 1
+        | (m.has_attributes as u32) << 2
+        | ((m.normals_turned == NormalsTurned::Up) as u32) << 3
+        | ((m.normals_turned == NormalsTurned::TowardOrigin) as u32) << 4;
     h.extend_from_slice(&flags.to_le_bytes());
     h.extend_from_slice(&m.depth.to_le_bytes());
     h.extend_from_slice(&m.leaf_count.to_le_bytes());
@@ -322,12 +330,12 @@ fn sections(b: &[u8], version: u32) -> Result<Sections, String> {
     })
 }
 
-/// The tree's description in the header of the `.spt` image `b`.
-fn meta_of(b: &[u8]) -> TreeMeta {
+/// The tree's description in the header of the `.spt` image `b` (of format `version`).
+fn meta_of(b: &[u8], version: u32) -> TreeMeta {
     let flags = u32_at(b, 16);
     let v3 = |at: usize| [f64_at(b, at), f64_at(b, at + 8), f64_at(b, at + 16)];
     let f3 = |at: usize| [f32_at(b, at), f32_at(b, at + 4), f32_at(b, at + 8)];
-    TreeMeta {
+    let mut meta = TreeMeta {
         origin: v3(40),
         bounds: Bounds {
             min: v3(64),
@@ -341,9 +349,18 @@ fn meta_of(b: &[u8]) -> TreeMeta {
         depth: u32_at(b, 20),
         has_colors: flags & 1 != 0,
         oriented_normals: flags & 2 != 0,
+        normals_turned: match flags & 24 {
+            8 => NormalsTurned::Up,
+            16 => NormalsTurned::TowardOrigin,
+            _ => NormalsTurned::No,
+        },
         has_attributes: flags & 4 != 0,
         intensity_range: [0, 2].map(|k| u16::from_le_bytes([b[200 + k], b[201 + k]])),
+    };
+    if version < 8 {
+        meta.normals_turned = meta.normals_turned_by_leaf_box();
     }
+    meta
 }
 
 /// Shapes of [`SHAPE_BYTES_BEFORE_7`] bytes (`bytes`, whole ones) as [`SplatShape`]s: the
@@ -525,7 +542,7 @@ impl SptFile {
                 b.len() as u64 - size
             )));
         }
-        let meta = meta_of(b);
+        let meta = meta_of(b, version);
         let checksum = u64_at(b, CHECKSUM_AT);
         let chunks = if s.chunk_count == 0 {
             let nodes = bytemuck::cast_slice(&b[s.nodes_at as usize..s.parents_at as usize]);

@@ -19,6 +19,7 @@ use super::job::{Model, Part};
 use super::order::{Layout, Piece};
 use super::spill::Split;
 use crate::io::PointAttributes;
+use crate::surfel::NormalsTurned;
 use crate::surfel::shape::SplatShape;
 use crate::tree::chunks::Chunk;
 use crate::tree::hierarchy::{Hierarchy, Internal};
@@ -147,6 +148,12 @@ fn meta(model: &Model, parts: &[Part], top: &Top, oriented: bool) -> TreeMeta {
             .unwrap_or(0),
         has_colors: model.has_colors,
         oriented_normals: oriented,
+        // The jobs agree, but jobs whose points all had normals were not turned.
+        normals_turned: parts
+            .iter()
+            .map(|p| p.normals_turned)
+            .find(|&t| !oriented && t != NormalsTurned::No)
+            .unwrap_or_default(),
         has_attributes: model.has_attributes,
         intensity_range: attributes::intensity_range(&samples),
     }

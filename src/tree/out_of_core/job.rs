@@ -15,7 +15,7 @@ use glam::{DVec3, Vec3};
 use super::spill::{JobFiles, SpillPoint, read_records, read_spill};
 use crate::io::{Bounds, Geometry, PointAttributes};
 use crate::surfel::shape::SplatShape;
-use crate::surfel::{LeafSurfels, leaf_surfels_of};
+use crate::surfel::{LeafSurfels, NormalsTurned, leaf_surfels_of};
 use crate::tree::chunks::Chunk;
 use crate::tree::report::Silent;
 use crate::tree::{
@@ -59,6 +59,9 @@ pub struct Part {
     pub centre_min: Vec3,
     pub centre_max: Vec3,
     pub oriented: bool,
+    /// Which way its estimated normals were turned (every job decides it alike, on the
+    /// model's core box).
+    pub normals_turned: NormalsTurned,
     pub intensities: Vec<PointAttributes>,
     /// The error scale its leaves alone would take ([`crate::tree::error_scale`]: the
     /// largest extent of the box holding their disks).
@@ -143,7 +146,7 @@ pub fn build_leaves(
     leaves.drop_redundant();
     let leaf_count = leaves.surfels.len() as u64;
     let disk_extent = crate::tree::error_scale(&leaves.surfels);
-    let oriented = leaves.oriented_normals;
+    let (oriented, normals_turned) = (leaves.oriented_normals, leaves.normals_turned);
     let hierarchy = build_hierarchy(&mut leaves, &Silent);
     let set = build_records_scaled(leaves, hierarchy, model.error_scale, &Silent);
     let list = sort_list_chunked(set, model.chunk_nodes);
@@ -167,6 +170,7 @@ pub fn build_leaves(
         centre_min: Vec3::from(list.meta.centre_min),
         centre_max: Vec3::from(list.meta.centre_max),
         oriented,
+        normals_turned,
         intensities,
         disk_extent,
     })
