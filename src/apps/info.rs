@@ -287,7 +287,7 @@ impl ModelInfo {
         line(
             "",
             format!(
-                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}",
+                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, walls under a terrain's edges {}",
                 count(st.degenerate_triangles),
                 count(st.isolated_vertices),
                 count(st.redundant_vertices),
@@ -295,7 +295,8 @@ impl ModelInfo {
                 count(st.given_normals),
                 count(st.fallback_radii),
                 count(st.capped_radii),
-                count(st.clipped_boundaries)
+                count(st.clipped_boundaries),
+                count(st.wall_splats)
             ),
         );
         let t = &self.timing;

@@ -8,8 +8,9 @@
 //!   afterwards where a direction is known ([`Orientation`]);
 //! * radius and ellipse: the covering of [`super::covering`], from the same
 //!   neighbourhood; a capped one is counted ([`SurfelStats::capped_radii`]);
-//! * clip: a splat on a boundary of the sampling ends there ([`boundary_clip`]), except
-//!   on a terrain (counted: [`SurfelStats::clipped_boundaries`]).
+//! * clip: a splat on a boundary of the sampling ends there ([`boundary_clip`]), a
+//!   terrain's edge sample at its wall (counted: [`SurfelStats::clipped_boundaries`]);
+//! * walls: a terrain's steep edges stand on wall surfels of their own ([`walls`]).
 //!
 //! Duplicated samples do not shrink a radius (only distinct neighbours count). A surfel
 //! whose neighbours all coincide with it takes the median radius of the others
@@ -25,6 +26,7 @@ use rayon::prelude::*;
 use super::covering::{Covering, RadiusRule, covering};
 use super::pca::plane_normal;
 use super::shape::{Clip, Shape};
+use super::walls;
 use super::{Surfel, SurfelStats};
 
 /// Neighbourhood size, the point itself included. An RGB-D frame's quantised depth
@@ -103,9 +105,10 @@ impl Search {
 /// among all `points` (unit-scaled by `scale` for the search), written into `surfels`.
 /// Non-zero `given` normals are kept, the estimated ones turned by `orientation` (on a
 /// terrain, smoothed first: [`terrain_disks`]); a radius already set (from faces) is
-/// only grown. A boundary splat ends where its sampling does ([`boundary_clip`])
-/// unless the cloud is a terrain. Afterwards every listed surfel whose radius is still
-/// 0 gets [`fallback_radius`].
+/// only grown. A boundary splat ends where its sampling does ([`boundary_clip`]), a
+/// terrain's edge sample where its wall stands ([`walls`]). Afterwards every listed
+/// surfel whose radius is still 0 gets [`fallback_radius`]. Returns a terrain's wall
+/// surfels (none for any other cloud).
 pub fn neighbour_disks(
     points: &[Vec3],
     scale: f32,
@@ -114,9 +117,9 @@ pub fn neighbour_disks(
     given: Option<&[Vec3]>,
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
-) {
+) -> Vec<Surfel> {
     if which.is_empty() {
-        return;
+        return Vec::new();
     }
     let search = Search::new(points, scale);
     let given_normal = |i: u32| given.map_or(Vec3::ZERO, |g| g[i as usize]);
@@ -137,8 +140,13 @@ pub fn neighbour_disks(
             })
             .collect()
     };
-    let clips = orientation != Orientation::Up;
-    for (&i, (normal, c)) in which.iter().zip(disks) {
+    let walls = if orientation == Orientation::Up && search.tree.is_some() {
+        let queries: Vec<Vec3> = which.iter().map(|&i| points[i as usize] * scale).collect();
+        walls::terrain_walls(&search.coords, &queries)
+    } else {
+        vec![None; which.len()]
+    };
+    for ((&i, (normal, c)), wall) in which.iter().zip(disks).zip(&walls) {
         let s = &mut surfels[i as usize];
         let estimated = given_normal(i) == Vec3::ZERO;
         s.normal = if estimated {
@@ -151,10 +159,11 @@ pub fn neighbour_disks(
             s.radius = radius;
             let n = s.normal.as_dvec3();
             let mut shape = Shape::ellipse(n, c.axis.as_dvec3(), c.ratio as f64);
-            shape.clip = c
-                .open
-                .filter(|_| clips)
-                .map(|d| boundary_clip(&shape, n, d));
+            let p = points[i as usize] * scale;
+            shape.clip = match wall {
+                Some(w) => w.clip_of(p, (&shape, n, c.radius)),
+                None => c.open.map(|d| boundary_clip(&shape, n, d)),
+            };
             stats.clipped_boundaries += shape.clip.is_some() as u64;
             s.shape = shape.pack();
         }
@@ -173,6 +182,12 @@ pub fn neighbour_disks(
         }
         stats.fallback_radii += missing.len() as u64;
     }
+    let upper = |k: usize| &surfels[which[k] as usize];
+    let walls: Vec<Surfel> = (walls.iter().enumerate())
+        .filter_map(|(k, w)| w.map(|w| w.surfel(scale, upper(k))))
+        .collect();
+    stats.wall_splats += walls.len() as u64;
+    walls
 }
 
 /// A terrain's disks: each sample's normal is the mean of its neighbours' fitted
@@ -243,9 +258,9 @@ pub const BOUNDARY_CLIP_OFFSET: f64 = 0.0;
 /// The clip of a boundary splat of normal `n` and `shape`, whose sampling ends in the
 /// tangent direction `open`: the line ⟂ `open` at [`BOUNDARY_CLIP_OFFSET`]. A sensor
 /// frame's or a scan's boundary is an occlusion edge or the scan's end, and the splat's
-/// disk beyond it draws surface that nothing sampled; a terrain has no such edge
-/// inside it (a height field is continuous, its scan shadows are walls), so its
-/// boundary disks are left whole to bridge them.
+/// disk beyond it draws surface that nothing sampled. A terrain's too, since its steep
+/// edges stand on walls ([`walls`]): before them its boundary disks were left whole to
+/// bridge its scan shadows, and clipping them gains FLIP 0.2183 → 0.2164 with walls.
 fn boundary_clip(shape: &Shape, n: glam::DVec3, open: Vec3) -> Clip {
     let d = open.as_dvec3();
     let normal = glam::DVec2::new(d.dot(shape.axis), d.dot(shape.minor_axis(n)));

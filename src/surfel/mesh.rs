@@ -260,7 +260,7 @@ pub fn face_disks(
     stats.isolated_vertices = isolated.len() as u64;
     largest_face_normals(points, s, triangles, &cancelled, surfels);
     stats.cancelled_normals = cancelled.len() as u64;
-    neighbour_disks(
+    let walls = neighbour_disks(
         points,
         scale,
         &from_neighbours,
@@ -269,6 +269,7 @@ pub fn face_disks(
         surfels,
         stats,
     );
+    debug_assert!(walls.is_empty(), "only a terrain has walls");
     isolated
 }
 

@@ -17,6 +17,7 @@ pub mod octahedral;
 pub mod pca;
 pub mod ring;
 pub mod shape;
+pub mod walls;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
@@ -71,6 +72,9 @@ pub struct SurfelStats {
     /// A mesh's normals all negated to face outward (its triangles wound inward, or
     /// its given normals pointing in): see [`mesh::orient_outward`].
     pub turned_outward: bool,
+    /// A terrain's wall surfels, under the edges where its height drops steeply
+    /// ([`walls`]): surfels that no sample of the file is.
+    pub wall_splats: u64,
 }
 
 /// The leaf surfels of a model.
@@ -175,11 +179,9 @@ pub use mesh::Outward;
 /// The leaf surfels of the first `own` points of a point cloud (no triangles), whose
 /// neighbourhoods see all of its points: a piece of a larger cloud followed by the
 /// points around it (its halo, [`crate::tree::out_of_core`]). The halo's own surfels
-/// are not made.
+/// are not kept; a terrain's walls follow the own ones ([`walls`]).
 pub fn leaf_surfels_of(g: &Geometry, own: usize) -> LeafSurfels {
-    let mut leaves = leaf_surfels_among(g, own, Outward::Vote).0;
-    leaves.surfels.truncate(own);
-    leaves
+    leaf_surfels_among(g, own, Outward::Vote).0
 }
 
 /// The leaf surfels of the first `own` vertices of a piece of a mesh, whose one-rings
@@ -268,7 +270,7 @@ fn leaf_surfels_among(
     let oriented = if g.triangles.is_empty() {
         let all: Vec<u32> = (0..own as u32).collect();
         let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
-        cloud::neighbour_disks(
+        let walls = cloud::neighbour_disks(
             &g.positions,
             scale,
             &all,
@@ -277,6 +279,9 @@ fn leaf_surfels_among(
             &mut surfels,
             &mut stats,
         );
+        // The halo's surfels go; the walls under the own samples' edges join them.
+        surfels.truncate(own);
+        surfels.extend(walls);
         let oriented = given.is_some() && stats.given_normals == own as u64;
         if !oriented {
             normals_turned = NormalsTurned::of(orientation);
