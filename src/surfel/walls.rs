@@ -122,10 +122,12 @@ fn wall_below(p: Vec3, near: &[Vec3]) -> Option<Wall> {
         .collect();
     let rank = WIDTH_RANK.min(horizontal.len()).checked_sub(1)?;
     let spacing = *horizontal.select_nth_unstable_by(rank, f32::total_cmp).1;
+    // A sample right below p (another return of the same pulse) faces no way.
     let steepness = |q: &Vec3| (p.z - q.z) / (*q - p).truncate().length();
     let q = *near
         .iter()
-        .filter(|q| p.z - q.z > spacing && steepness(q) > WALL_SLOPE)
+        .filter(|q| p.z - q.z > spacing && (*q - p).truncate() != Vec2::ZERO)
+        .filter(|q| steepness(q) > WALL_SLOPE)
         .max_by(|a, b| steepness(a).total_cmp(&steepness(b)))?;
     let drop = p.z - q.z;
     // Not an edge where the upper level reaches nearer q than p does.
@@ -188,6 +190,11 @@ mod tests {
                 None => assert_ne!(p.x, 19.0, "no wall under the edge at {p}"),
             }
         }
+        // A second return right below an edge sample leaves its wall as it was.
+        let mut returns = coords.clone();
+        returns.push([19.0, 20.0, 4.0]);
+        let again = terrain_walls(&returns, &queries);
+        assert_eq!(again[20 * 40 + 19], walls[20 * 40 + 19]);
         // The edge sample's splat ends at its wall's foot, half a spacing out.
         let p = Vec3::new(19.0, 20.0, 10.0);
         let w = walls[20 * 40 + 19].unwrap();
