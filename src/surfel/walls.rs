@@ -140,8 +140,9 @@ fn wall_below(p: Vec3, near: &[Vec3]) -> Option<Wall> {
     {
         return None;
     }
-    let out = (q - p).truncate().try_normalize()?;
-    let normal = out.extend(0.0);
+    // In f64: an f32 direction whose squares near f32's least normal is not unit.
+    let out = (q - p).truncate().as_dvec2().try_normalize()?;
+    let normal = out.as_vec2().extend(0.0);
     let (half_height, half_width) = (0.5 * drop, spacing);
     let (axis, major, minor) = if half_height >= half_width {
         (Vec3::Z, half_height, half_width)
@@ -203,5 +204,25 @@ mod tests {
             panic!("no clip");
         };
         assert!((normal - DVec2::X).length() < 1e-9 && (offset - 0.25).abs() < 1e-9);
+    }
+
+    /// Drops to a sample 10⁻¹⁹ to 10⁻²¹ away in x (the fuzzer found such): their
+    /// squares are at or below f32's least normal; the wall's normal is still unit.
+    #[test]
+    fn a_drop_to_a_sample_almost_below_faces_a_unit_way() {
+        let p = Vec3::new(0.0, 0.0, 1.0);
+        for dx in [1e-19, 3e-20, 1.3e-20, 1e-20, 3e-21] {
+            let near = [
+                p,
+                Vec3::new(dx, 0.0, -9.0),
+                Vec3::new(2.0, 0.0, 1.0),
+                Vec3::new(0.0, 2.0, 1.0),
+                Vec3::new(-2.0, 0.0, 1.0),
+                Vec3::new(0.0, -2.0, 1.0),
+            ];
+            let w = wall_below(p, &near).expect("a wall");
+            assert!((w.normal.length() - 1.0).abs() < 1e-6, "{dx}: {w:?}");
+            assert!(w.major.is_finite() && w.major > 0.0, "{dx}: {w:?}");
+        }
     }
 }

@@ -225,8 +225,8 @@ fn main() {
         tally.executions += 1;
         let n = tally.executions;
         let note = |what: &str| format!("{what} (mutant of {}, {} bytes)", seed.name, bytes.len());
-        let leaves = match result {
-            Ok(Outcome::Accepted { leaves }) if seed.kind != Kind::Spt => Some(leaves),
+        let samples = match result {
+            Ok(Outcome::Accepted { samples }) if seed.kind != Kind::Spt => Some(samples),
             _ => None,
         };
         match result {
@@ -241,11 +241,11 @@ fn main() {
                 save(&args.out, n, "panic", seed.kind, &bytes, &note(&panic));
             }
         }
-        if let Some(leaves) =
-            leaves.filter(|_| tally.accepted[seed.kind as usize].is_multiple_of(OUT_OF_CORE_EVERY))
+        if let Some(samples) =
+            samples.filter(|_| tally.accepted[seed.kind as usize].is_multiple_of(OUT_OF_CORE_EVERY))
         {
             largest_allocation::reset();
-            let built = caught(|| target::out_of_core(&path, leaves));
+            let built = caught(|| target::out_of_core(&path, samples));
             let largest = largest_allocation::largest();
             tally.out_of_core += 1;
             let failure = match built {

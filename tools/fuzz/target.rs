@@ -10,7 +10,9 @@
 //!   written again and reopened → the same list back.
 //!
 //! Every 16th accepted PLY, LAS or LAZ input is also built out of core in jobs of 64
-//! points ([`out_of_core`]): it must build, validate, and hold as many leaves.
+//! points ([`out_of_core`]): it must build, validate, and hold a leaf for every sample
+//! the in-memory build holds one for (a terrain's walls, found by each job among its
+//! own samples and halo, may differ near a job's border).
 //!
 //! A refusal (an error) is a fine outcome; a violated invariant is not.
 //!
@@ -34,9 +36,9 @@ use crate::seeds::Kind;
 
 /// How a run ended, when it did not panic.
 pub enum Outcome {
-    /// With the leaves of the tree built (0 for an `.spt` input).
+    /// With the tree's leaves that are samples, not walls (0 for an `.spt` input).
     Accepted {
-        leaves: u64,
+        samples: u64,
     },
     Refused,
     Violation(String),
@@ -81,6 +83,7 @@ fn build(geometry: &Geometry, path: &Path) -> Result<Outcome, Outcome> {
     geometry.check().map_err(violation("geometry"))?;
     let leaves = leaf_surfels(geometry);
     leaves.check().map_err(violation("surfels"))?;
+    let walls = leaves.stats.wall_splats;
     let list = build_sequential_list(leaves);
     check_meta(&list.meta).map_err(violation("tree meta"))?;
     check_nodes(&list.meta, &list.nodes, &list.parents).map_err(violation("tree nodes"))?;
@@ -90,7 +93,7 @@ fn build(geometry: &Geometry, path: &Path) -> Result<Outcome, Outcome> {
     select(&list)?;
     round_trip(&list, path)?;
     Ok(Outcome::Accepted {
-        leaves: list.meta.leaf_count,
+        samples: list.meta.leaf_count - walls,
     })
 }
 
@@ -146,7 +149,7 @@ fn spt(path: &Path) -> Result<Outcome, Outcome> {
     check_chunks(&list.nodes, &list.chunks).map_err(violation("chunks"))?;
     select(&list)?;
     round_trip(&list, path)?;
-    Ok(Outcome::Accepted { leaves: 0 })
+    Ok(Outcome::Accepted { samples: 0 })
 }
 
 /// Runs the input stored at `path`.
@@ -160,8 +163,9 @@ pub fn run(kind: Kind, path: &Path) -> Outcome {
 }
 
 /// An accepted PLY, LAS or LAZ input built out of core in jobs of 64 points: it builds,
-/// opens and validates, with as many leaves as the in-memory build made, `leaves`.
-pub fn out_of_core(path: &Path, leaves: u64) -> Outcome {
+/// opens and validates, with a leaf for each of the `samples` the in-memory build made
+/// one for, besides its walls.
+pub fn out_of_core(path: &Path, samples: u64) -> Outcome {
     struct Quiet;
     impl Progress for Quiet {
         fn stage(&self, _: &'static str, _: u64) {}
@@ -177,14 +181,17 @@ pub fn out_of_core(path: &Path, leaves: u64) -> Outcome {
         temp_dir: dir.clone(),
     };
     let out = dir.join("out.spt");
-    let outcome = match build_file(path, &out, &options, &Quiet).map(|_| SptFile::open(&out)) {
+    let built = build_file(path, &out, &options, &Quiet);
+    let outcome = match built.map(|b| (SptFile::open(&out), b.walls)) {
         Err(e) => Outcome::Violation(format!("out of core refuses what the reader reads: {e:#}")),
-        Ok(Err(e)) => Outcome::Violation(format!("out of core wrote a bad file: {e}")),
-        Ok(Ok(f)) if f.meta.leaf_count != leaves => Outcome::Violation(format!(
-            "out of core: {} leaves, in memory {leaves}",
-            f.meta.leaf_count
-        )),
-        Ok(Ok(_)) => Outcome::Accepted { leaves },
+        Ok((Err(e), _)) => Outcome::Violation(format!("out of core wrote a bad file: {e}")),
+        Ok((Ok(f), walls)) if f.meta.leaf_count.checked_sub(walls) != Some(samples) => {
+            Outcome::Violation(format!(
+                "out of core: {} leaves with {walls} walls, in memory {samples} samples",
+                f.meta.leaf_count
+            ))
+        }
+        Ok(_) => Outcome::Accepted { samples },
     };
     let _ = std::fs::remove_dir_all(&dir);
     outcome

@@ -51,6 +51,8 @@ pub struct Part {
     pub root: (NodeRecord, SplatShape, PointAttributes),
     pub nodes: u64,
     pub leaves: u64,
+    /// How many of them are a terrain's walls ([`crate::surfel::walls`]).
+    pub walls: u64,
     pub chunks: u64,
     /// Each chunk's largest parent error (its first node's, f16 bits): where the file
     /// places it ([`super::order`]).
@@ -144,7 +146,7 @@ pub fn build_leaves(
     part: &Path,
 ) -> anyhow::Result<Part> {
     leaves.drop_redundant();
-    let leaf_count = leaves.surfels.len() as u64;
+    let (leaf_count, walls) = (leaves.surfels.len() as u64, leaves.stats.wall_splats);
     let disk_extent = crate::tree::error_scale(&leaves.surfels);
     let (oriented, normals_turned) = (leaves.oriented_normals, leaves.normals_turned);
     let hierarchy = build_hierarchy(&mut leaves, &Silent);
@@ -160,6 +162,7 @@ pub fn build_leaves(
         ),
         nodes: list.nodes.len() as u64,
         leaves: leaf_count,
+        walls,
         chunks: list.chunks.len() as u64,
         chunk_keys: list
             .chunks

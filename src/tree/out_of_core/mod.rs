@@ -95,6 +95,10 @@ pub struct Built {
     /// ([`spill::Scan`]).
     pub dropped: u64,
     pub outliers: u64,
+    /// A terrain's wall surfels, among the leaves ([`crate::surfel::walls`]): each job
+    /// finds its own samples' walls among its samples and halo, so near a job's border
+    /// they may differ from an in-memory build's.
+    pub walls: u64,
     /// A mesh's jobs were built twice: the first job's guess of the orientation was
     /// not the whole model's vote ([`mesh_job`]).
     pub rebuilt: bool,
@@ -174,6 +178,7 @@ pub fn build_file(
         jobs: parts.len(),
         dropped: scan.dropped,
         outliers: scan.outliers,
+        walls: parts.iter().map(|p| p.walls).sum(),
         rebuilt,
     })
 }
