@@ -69,7 +69,14 @@ impl Report for Steps {
                 dropped(&model.stats)
             ),
             Finished::Surfels(leaves) => {
-                format!("{:.2} M surfels/s", per_s(leaves.surfels.len() as u64))
+                let walls = match leaves.stats.wall_splats {
+                    0 => String::new(),
+                    n => format!(" ({} walls under the terrain's steep edges)", count(n)),
+                };
+                format!(
+                    "{:.2} M surfels/s{walls}",
+                    per_s(leaves.surfels.len() as u64)
+                )
             }
             Finished::Hierarchy { leaves, internal } => format!(
                 "{} internal nodes, {:.2} M leaves/s",

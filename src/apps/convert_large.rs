@@ -106,8 +106,15 @@ pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
     bars.finish();
     let m = &built.meta;
     let total = start.elapsed().as_secs_f64();
+    let walls = match built.walls {
+        0 => String::new(),
+        n => format!(
+            ", {} of them walls under the terrain's steep edges",
+            count(n)
+        ),
+    };
     println!(
-        "{} nodes ({} leaves), depth {}, {} jobs, written to {}",
+        "{} nodes ({} leaves{walls}), depth {}, {} jobs, written to {}",
         count(m.node_count),
         count(m.leaf_count),
         m.depth,
