@@ -6,7 +6,7 @@ mod common;
 use glam::Vec3;
 use spt::io::Geometry;
 use spt::io::ply::{Encoding, FaceList, PolyMesh, read_ply};
-use spt::surfel::{LeafSurfels, leaf_surfels};
+use spt::surfel::{LeafSurfels, leaf_surfels, mesh_surfels_of};
 
 fn load(mesh: &PolyMesh, name: &str) -> (Geometry, LeafSurfels) {
     let dir = common::temp_dir();
@@ -366,4 +366,25 @@ fn normals_of_a_closed_mesh_face_outward_whichever_way_it_winds() {
             );
         }
     }
+}
+
+/// A tile with a 5 m roof edge on a 1 m grid, built as a whole cloud and as the one
+/// piece of an out-of-core mesh build that has no triangles (a PLY with an empty face
+/// element; the fuzzer's find): both keep every sample's surfel and the same walls.
+#[test]
+fn a_piece_without_triangles_keeps_its_samples_and_walls() {
+    let points: Vec<[f64; 3]> = (0..30 * 30)
+        .map(|i| {
+            let (x, y) = ((i % 30) as f64, (i / 30) as f64);
+            [x, y, if x < 15.0 { 5.0 } else { 0.0 }]
+        })
+        .collect();
+    let g = common::geometry_of(&points);
+    let whole = leaf_surfels(&g);
+    let walls = whole.stats.wall_splats as usize;
+    assert!(walls >= 30, "{walls} walls under a 30-sample edge");
+    assert_eq!(whole.surfels.len(), points.len() + walls);
+    let (piece, _) = mesh_surfels_of(&g, points.len(), (false, glam::DVec3::ZERO));
+    assert_eq!(piece.stats.wall_splats as usize, walls);
+    assert_eq!(piece.surfels.len(), points.len() + walls);
 }

@@ -189,7 +189,8 @@ pub fn leaf_surfels_of(g: &Geometry, own: usize) -> LeafSurfels {
 /// and triangles are its halo, [`crate::tree::out_of_core`]), their normals negated
 /// when `turn` (the whole model's orientation), and their terms of the model's
 /// orientation vote about its mean vertex `mean` ([`mesh::Outward::Piece`]). Only the
-/// own vertices' surfels and redundant vertices are kept; no vertex normals.
+/// own vertices' surfels (and, on a piece without triangles that is a terrain, their
+/// walls) and redundant vertices are kept; no vertex normals.
 pub fn mesh_surfels_of(
     g: &Geometry,
     own: usize,
@@ -197,7 +198,6 @@ pub fn mesh_surfels_of(
 ) -> (LeafSurfels, (f64, f64)) {
     let outward = Outward::Piece { turn, own, mean };
     let (mut leaves, vote) = leaf_surfels_among(g, own, outward);
-    leaves.surfels.truncate(own);
     leaves.vertex_normals = Vec::new();
     leaves.redundant.retain(|&v| (v as usize) < own);
     (leaves, vote.unwrap_or_default())
@@ -266,11 +266,11 @@ fn leaf_surfels_among(
     };
     let mut surfels = initial_surfels(g);
     let (mut redundant, mut vertex_normals, mut vote) = (Vec::new(), Vec::new(), None);
-    let mut normals_turned = NormalsTurned::No;
+    let (mut normals_turned, mut walls) = (NormalsTurned::No, Vec::new());
     let oriented = if g.triangles.is_empty() {
         let all: Vec<u32> = (0..own as u32).collect();
         let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
-        let walls = cloud::neighbour_disks(
+        walls = cloud::neighbour_disks(
             &g.positions,
             scale,
             &all,
@@ -279,9 +279,6 @@ fn leaf_surfels_among(
             &mut surfels,
             &mut stats,
         );
-        // The halo's surfels go; the walls under the own samples' edges join them.
-        surfels.truncate(own);
-        surfels.extend(walls);
         let oriented = given.is_some() && stats.given_normals == own as u64;
         if !oriented {
             normals_turned = NormalsTurned::of(orientation);
@@ -299,6 +296,9 @@ fn leaf_surfels_among(
         (redundant, vertex_normals, vote) = (disks.redundant, disks.normals, disks.vote);
         true
     };
+    // The halo's surfels go; a terrain's walls under the own samples' edges join them.
+    surfels.truncate(own);
+    surfels.extend(walls);
     let leaves = LeafSurfels {
         surfels,
         origin: g.origin,
