@@ -140,13 +140,16 @@ pub fn neighbour_disks(
             })
             .collect()
     };
+    // Each wall with its sample's index in `which`, ascending (none but on a terrain).
     let walls = if orientation == Orientation::Up && search.tree.is_some() {
         let queries: Vec<Vec3> = which.iter().map(|&i| points[i as usize] * scale).collect();
         walls::terrain_walls(&search.coords, &queries)
     } else {
-        vec![None; which.len()]
+        Vec::new()
     };
-    for ((&i, (normal, c)), wall) in which.iter().zip(disks).zip(&walls) {
+    let mut next_wall = walls.iter().peekable();
+    for (k, (&i, (normal, c))) in which.iter().zip(disks).enumerate() {
+        let wall = next_wall.next_if(|(j, _)| *j == k).map(|(_, w)| w);
         let s = &mut surfels[i as usize];
         let estimated = given_normal(i) == Vec3::ZERO;
         s.normal = if estimated {
@@ -182,9 +185,9 @@ pub fn neighbour_disks(
         }
         stats.fallback_radii += missing.len() as u64;
     }
-    let upper = |k: usize| &surfels[which[k] as usize];
-    let walls: Vec<Surfel> = (walls.iter().enumerate())
-        .filter_map(|(k, w)| w.map(|w| w.surfel(scale, upper(k))))
+    let walls: Vec<Surfel> = walls
+        .iter()
+        .map(|(k, w)| w.surfel(scale, &surfels[which[*k] as usize]))
         .collect();
     stats.wall_splats += walls.len() as u64;
     walls

@@ -90,25 +90,27 @@ impl Wall {
     }
 }
 
-/// The wall under each of `queries` (unit-scaled positions among `coords`, the
-/// distinct positions of the cloud, unit-scaled), or `None` where no drop calls for one.
-pub fn terrain_walls(coords: &[[f32; 3]], queries: &[Vec3]) -> Vec<Option<Wall>> {
+/// The walls under `queries` (unit-scaled positions among `coords`, the distinct
+/// positions of the cloud, unit-scaled), each with the index of the query it stands
+/// under, ascending; a query where no drop calls for one has none.
+pub fn terrain_walls(coords: &[[f32; 3]], queries: &[Vec3]) -> Vec<(usize, Wall)> {
     let xy: Vec<[f32; 2]> = coords.iter().map(|c| [c[0], c[1]]).collect();
     let Ok(tree) = ImmutableKdTree::<f32, 2>::new_from_slice(&xy) else {
-        return vec![None; queries.len()];
+        return Vec::new();
     };
-    let k = std::num::NonZero::new(K.min(xy.len())).unwrap_or(std::num::NonZero::<usize>::MIN);
+    let n = std::num::NonZero::new(K.min(xy.len())).unwrap_or(std::num::NonZero::<usize>::MIN);
     queries
         .par_iter()
-        .map(|&p| {
+        .enumerate()
+        .filter_map(|(k, &p)| {
             let near: ArrayVec<Vec3, K> = tree
                 .query(&[p.x, p.y])
-                .nearest_n::<SquaredEuclidean<f32>>(k)
+                .nearest_n::<SquaredEuclidean<f32>>(n)
                 .execute()
                 .iter()
                 .map(|f| Vec3::from(coords[f.item as usize]))
                 .collect();
-            wall_below(p, &near)
+            wall_below(p, &near).map(|w| (k, w))
         })
         .collect()
 }
@@ -175,30 +177,37 @@ mod tests {
             .collect();
         let queries: Vec<Vec3> = coords.iter().map(|c| Vec3::from(*c)).collect();
         let walls = terrain_walls(&coords, &queries);
-        for (p, wall) in queries.iter().zip(&walls) {
-            match wall {
-                Some(w) => {
-                    assert_eq!(p.x, 19.0, "a wall under {p}");
-                    assert_eq!((w.normal, w.axis), (Vec3::X, Vec3::Z), "under {p}");
-                    let centre = Vec3::new(19.5, p.y, 5.0);
-                    assert!(
-                        (w.centre - centre).length() < 1e-6 && w.major == 5.0,
-                        "{w:?}"
-                    );
-                    // A spacing 1 wide (√2 at the grid's corners) and 5 high.
-                    assert!((0.25..0.29).contains(&w.ratio), "{w:?}");
-                }
-                None => assert_ne!(p.x, 19.0, "no wall under the edge at {p}"),
-            }
+        let under: Vec<usize> = walls.iter().map(|(k, _)| *k).collect();
+        let edge: Vec<usize> = (0..queries.len())
+            .filter(|&k| queries[k].x == 19.0)
+            .collect();
+        assert_eq!(under, edge, "walls under the edge row and nowhere else");
+        for (k, w) in &walls {
+            let p = queries[*k];
+            assert_eq!((w.normal, w.axis), (Vec3::X, Vec3::Z), "under {p}");
+            let centre = Vec3::new(19.5, p.y, 5.0);
+            assert!(
+                (w.centre - centre).length() < 1e-6 && w.major == 5.0,
+                "{w:?}"
+            );
+            // A spacing 1 wide (√2 at the grid's corners) and 5 high.
+            assert!((0.25..0.29).contains(&w.ratio), "{w:?}");
         }
+        let wall_under = |walls: &[(usize, Wall)], k: usize| {
+            walls.iter().find(|(j, _)| *j == k).map(|(_, w)| *w)
+        };
         // A second return right below an edge sample leaves its wall as it was.
         let mut returns = coords.clone();
         returns.push([19.0, 20.0, 4.0]);
         let again = terrain_walls(&returns, &queries);
-        assert_eq!(again[20 * 40 + 19], walls[20 * 40 + 19]);
+        let edge_sample = 20 * 40 + 19;
+        assert_eq!(
+            wall_under(&again, edge_sample),
+            wall_under(&walls, edge_sample)
+        );
         // The edge sample's splat ends at its wall's foot, half a spacing out.
         let p = Vec3::new(19.0, 20.0, 10.0);
-        let w = walls[20 * 40 + 19].unwrap();
+        let w = wall_under(&walls, edge_sample).expect("a wall under the edge");
         let shape = Shape::ellipse(DVec3::Z, DVec3::X, 1.0);
         let Some(Clip::Line { normal, offset }) = w.clip_of(p, (&shape, DVec3::Z, 2.0)) else {
             panic!("no clip");

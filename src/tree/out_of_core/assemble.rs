@@ -148,15 +148,22 @@ fn meta(model: &Model, parts: &[Part], top: &Top, oriented: bool) -> TreeMeta {
             .unwrap_or(0),
         has_colors: model.has_colors,
         oriented_normals: oriented,
-        // The jobs agree, but jobs whose points all had normals were not turned.
-        normals_turned: parts
-            .iter()
-            .map(|p| p.normals_turned)
-            .find(|&t| !oriented && t != NormalsTurned::No)
-            .unwrap_or_default(),
+        normals_turned: normals_turned(parts, oriented),
         has_attributes: model.has_attributes,
         intensity_range: attributes::intensity_range(&samples),
     }
+}
+
+/// How the jobs turned their estimated normals: alike, as all decide on the model's
+/// core box, but a job whose points all had given normals turned none (`No` where
+/// every job's were given: `oriented`).
+fn normals_turned(parts: &[Part], oriented: bool) -> NormalsTurned {
+    if oriented {
+        return NormalsTurned::No;
+    }
+    (parts.iter().map(|p| p.normals_turned))
+        .find(|&t| t != NormalsTurned::No)
+        .unwrap_or_default()
 }
 
 /// Writes the `.spt` file of the jobs' `parts`, joined by the top tree of `split`,
