@@ -73,6 +73,14 @@ const MODE_CLASSIFICATION: u32 = 8u;
 const MODE_INTENSITY: u32 = 9u;
 const MODE_RETURNS: u32 = 10u;
 
+// What pass 2 writes for each coverage sample a fragment covers when the fragment
+// does not show a front side at the pixel centre (one seen from behind, which weighs
+// BACK_WEIGHT, or one of the prefilter's band; splat.wgsl), instead of 1. Blended by
+// max, a pixel's samples stay at or below it only where no patch's front covers the
+// pixel centre, which pass 3 reads as a slit in the nearer surface when that surface's
+// pixels lie on both sides (`fill_between`, shade.wgsl).
+const OFF_FRONT_COVERAGE: f32 = 0.5;
+
 // The colour of ASPRS class `c` (LAS 1.4, table 17), linear RGB. Kept in step with the
 // viewer's legend (src/apps/view/legend.rs, CLASS_COLORS).
 fn class_color(c: u32) -> vec3<f32> {

@@ -4,8 +4,9 @@
 
 // Pass 3: normalize the blended attributes and shade each pixel (Blinn-Phong with a
 // movable light); background where no splat contributed, unless the pixel is a gap
-// between two pixels of one surface (`gap_fill`). Writes an sRGB target and the mask
-// of the pixels that show a surface.
+// between two pixels of one surface, and a surface's front where only its hidden side
+// shows through a slit in it (`fill_between`). Writes an sRGB target and the mask of
+// the pixels that show a surface.
 
 @group(1) @binding(0) var color_sum: texture_2d<f32>;
 @group(1) @binding(1) var normal_sum: texture_2d<f32>;
@@ -32,16 +33,22 @@ struct Shaded {
 fn fs_shade(@builtin(position) frag: vec4<f32>) -> Shaded {
     let texel = vec2<i32>(frag.xy);
     var sums = Sums(textureLoad(color_sum, texel, 0), textureLoad(normal_sum, texel, 0));
-    let samples = textureLoad(coverage, texel, 0);
+    let marked = textureLoad(coverage, texel, 0);
+    let samples = ceil(marked);
     var covered = sums.c.w > 0.0 && any(samples > vec4<f32>(0.0));
-    var filled = false;
-    if textureLoad(depth, texel, 0).x <= 0.0 {
-        let gap = gap_fill(texel);
-        if gap.c.w > 0.0 {
-            sums = gap;
-            filled = true;
-            covered = true;
-        }
+    // A gap of a cloud's sampling (no patch covers the centre) or a slit in a front
+    // surface (only patches seen from behind do); one call, so that the shader holds
+    // the fill's code once (a CPU rasterizer runs every branch under a mask).
+    let here = textureLoad(depth, texel, 0).x;
+    let slit = here > 0.0 && !front_at_centre(marked);
+    var fill = Sums(vec4<f32>(0.0), vec4<f32>(0.0));
+    if slit || (here <= 0.0 && fills_gaps()) {
+        fill = fill_between(texel, slit);
+    }
+    let filled = fill.c.w > 0.0;
+    if filled {
+        sums = fill;
+        covered = true;
     }
     if sums.c.w <= 0.0 {
         return Shaded(vec4<f32>(frame.background.rgb, 1.0), 0.0);
@@ -120,31 +127,49 @@ const GAP_DEPTH_RATIO = 1.1;
 // view kept 0.58 % holes. README, issue 13.)
 const GAP_MIN_DIRECTIONS = 2;
 
-// Fills a pixel whose centre no splat covers when, along GAP_MIN_DIRECTIONS or more of
-// x, y and the diagonals, the pixels on both sides within two pixels show one surface (pass 1's depth at their centres,
-// within GAP_DEPTH_RATIO): the sampling left a slit narrower than the splats' spacing,
-// which the triangles between the same samples would cover. Returns the sums of the
-// two sides' normalized attributes, for every direction across which the pixel is such
-// a gap (w = the number of pixels summed; w = 0: not a gap). Only clouds whose
-// normals were estimated (not oriented) are filled, as `on_outline` tells them: a
-// mesh's splats cover its triangles by construction, so a gap between them is the
-// mesh's own (and the mesh pass has none); plain points show the splats as they are.
-fn gap_fill(texel: vec2<i32>) -> Sums {
+// Whether pixels whose centre no splat covers are filled as gaps (`fill_between`):
+// the sampling left a slit narrower than the splats' spacing, which the triangles
+// between the same samples would cover. Only on clouds whose normals were estimated
+// (not oriented), as `on_outline` tells them: a mesh's splats cover its triangles by
+// construction, so a gap between them is the mesh's own (and the mesh pass has none);
+// plain points show the splats as they are.
+fn fills_gaps() -> bool {
+    return frame.mode != MODE_MESH && frame.mode != MODE_POINTS && frame.oriented_normals == 0u;
+}
+
+// Whether a patch's front covers the pixel centre: a covered sample of the pixel is 1
+// (OFF_FRONT_COVERAGE where only fragments seen from behind, or the prefilter's band,
+// cover it).
+fn front_at_centre(marked: vec4<f32>) -> bool {
+    return any(marked >= vec4<f32>(1.0));
+}
+
+// Fills a pixel when, along GAP_MIN_DIRECTIONS or more of x, y and the diagonals, the
+// pixels on both sides within two pixels show one surface (pass 1's depth at their
+// centres, within GAP_DEPTH_RATIO). Returns the sums of the two sides' normalized
+// attributes, for every direction across which the pixel is such a gap (w = the
+// number of pixels summed; w = 0: not a gap). Two kinds of pixel are filled:
+// - a gap of a cloud's sampling, whose centre no splat covers (`fills_gaps`);
+// - with `slit`, a pixel whose centre only patches seen from behind cover (the hidden
+//   side of an outward-facing surface) between pixels that a front covers: a slit in
+//   that front surface, not a view into a hole. Seen edge-on near a contour, patches
+//   that lie a little off the surface they sample meet the view rays beyond their rims
+//   (an offset h off the surface moves the hit by h / tan θ along it) and leave such
+//   slits, through which the sheet behind the contour showed as specks facing the
+//   other way (README, issue 12).
+fn fill_between(texel: vec2<i32>, slit: bool) -> Sums {
     var sums = Sums(vec4<f32>(0.0), vec4<f32>(0.0));
-    if frame.mode == MODE_MESH || frame.mode == MODE_POINTS || frame.oriented_normals != 0u {
-        return sums;
-    }
     var across = 0;
     for (var k = 0; k < 4; k++) {
         let d = GAP_DIRECTIONS[k];
-        let ahead = surface_depth(texel + d);
-        let behind = surface_depth(texel - d);
+        let ahead = side_depth(texel + d, slit);
+        let behind = side_depth(texel - d, slit);
         var sides = vec2<i32>(0);
         if one_surface(ahead, behind) {
             sides = vec2<i32>(1, 1);
-        } else if one_surface(ahead, surface_depth(texel - 2 * d)) {
+        } else if one_surface(ahead, side_depth(texel - 2 * d, slit)) {
             sides = vec2<i32>(1, 2);
-        } else if one_surface(surface_depth(texel + 2 * d), behind) {
+        } else if one_surface(side_depth(texel + 2 * d, slit), behind) {
             sides = vec2<i32>(2, 1);
         } else {
             continue;
@@ -159,9 +184,13 @@ fn gap_fill(texel: vec2<i32>) -> Sums {
     return sums;
 }
 
-// Pass 1's depth at a texel's centre; 0 (none) outside the target.
-fn surface_depth(texel: vec2<i32>) -> f32 {
+// Pass 1's depth at a texel's centre; 0 (none) outside the target, and with
+// `front_only` where no patch's front covers the texel's centre.
+fn side_depth(texel: vec2<i32>, front_only: bool) -> f32 {
     if any(texel < vec2<i32>(0)) || any(texel >= vec2<i32>(textureDimensions(depth))) {
+        return 0.0;
+    }
+    if front_only && !front_at_centre(textureLoad(coverage, texel, 0)) {
         return 0.0;
     }
     return textureLoad(depth, texel, 0).x;

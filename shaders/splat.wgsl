@@ -548,12 +548,13 @@ fn blended(in: SplatVarying, h: Hit, weight: f32, coverage: vec4<f32>) -> Attrib
     // push) it is the far side that the surface hides, and weighs BACK_WEIGHT of them.
     let back = dot(h.normal, q) > 0.0;
     let n = select(h.normal, -h.normal, back);
-    w *= select(1.0, BACK_WEIGHT, back && (frame.oriented_normals != 0u || frame.normals_up != 0u));
+    let hidden_side = back && (frame.oriented_normals != 0u || frame.normals_up != 0u);
+    w *= select(1.0, BACK_WEIGHT, hidden_side);
     var out: Attributes;
     let color = clamp(in.color.rgb + in.color_dx * h.xy.x + in.color_dy * h.xy.y, vec3<f32>(0.0), vec3<f32>(1.0));
     out.color = vec4<f32>(color * w, w);
     out.normal = vec4<f32>(n * w, h.depth * w);
-    out.coverage = coverage;
+    out.coverage = select(OFF_FRONT_COVERAGE * coverage, coverage, h.centre_inside && !hidden_side);
     out.depth = fragment_depth(h.depth);
     return out;
 }
