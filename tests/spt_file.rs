@@ -291,6 +291,16 @@ fn a_terrain_s_up_turned_normals_survive_the_file() {
         (file.version, file.meta.normals_turned),
         (7, NormalsTurned::No)
     );
+    // Turned both up and toward the origin: no builder writes that, and no reader guesses.
+    bytes[8..12].copy_from_slice(&8u32.to_le_bytes());
+    bytes[16] |= 8 | 16;
+    assert!(spt::tree::spt_file::reseal(&mut bytes));
+    std::fs::write(&path, &bytes).unwrap();
+    let error = SptFile::open(&path).err().unwrap().to_string();
+    assert!(
+        error.contains("tile.spt") && error.contains("both up (8) and toward the origin (16)"),
+        "{error}"
+    );
 }
 
 #[test]

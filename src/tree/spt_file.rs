@@ -330,9 +330,15 @@ fn sections(b: &[u8], version: u32) -> Result<Sections, String> {
     })
 }
 
-/// The tree's description in the header of the `.spt` image `b` (of format `version`).
-fn meta_of(b: &[u8], version: u32) -> TreeMeta {
+/// The tree's description in the header of the `.spt` image `b` (of format `version`);
+/// an error where its flags say the normals were turned both up and toward the origin.
+fn meta_of(b: &[u8], version: u32) -> Result<TreeMeta, String> {
     let flags = u32_at(b, 16);
+    if flags & 24 == 24 {
+        return Err(format!(
+            "flags {flags:#x}: estimated normals turned both up (8) and toward the origin (16)"
+        ));
+    }
     let v3 = |at: usize| [f64_at(b, at), f64_at(b, at + 8), f64_at(b, at + 16)];
     let f3 = |at: usize| [f32_at(b, at), f32_at(b, at + 4), f32_at(b, at + 8)];
     let mut meta = TreeMeta {
@@ -352,7 +358,7 @@ fn meta_of(b: &[u8], version: u32) -> TreeMeta {
         normals_turned: match flags & 24 {
             8 => NormalsTurned::Up,
             16 => NormalsTurned::TowardOrigin,
-            _ => NormalsTurned::No,
+            _ => NormalsTurned::No, // 0; 24 is refused above
         },
         has_attributes: flags & 4 != 0,
         intensity_range: [0, 2].map(|k| u16::from_le_bytes([b[200 + k], b[201 + k]])),
@@ -360,7 +366,7 @@ fn meta_of(b: &[u8], version: u32) -> TreeMeta {
     if version < 8 {
         meta.normals_turned = meta.normals_turned_by_leaf_box();
     }
-    meta
+    Ok(meta)
 }
 
 /// Shapes of [`SHAPE_BYTES_BEFORE_7`] bytes (`bytes`, whole ones) as [`SplatShape`]s: the
@@ -542,7 +548,7 @@ impl SptFile {
                 b.len() as u64 - size
             )));
         }
-        let meta = meta_of(b, version);
+        let meta = meta_of(b, version).map_err(bad)?;
         let checksum = u64_at(b, CHECKSUM_AT);
         let chunks = if s.chunk_count == 0 {
             let nodes = bytemuck::cast_slice(&b[s.nodes_at as usize..s.parents_at as usize]);
