@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use crate::apps::progress::Stage;
 use crate::apps::stats::peak_memory_bytes;
-use crate::apps::text::count;
+use crate::apps::text::{count, walls};
 use crate::io::stream::ModelStream;
 use crate::tree::out_of_core::{BYTES_PER_JOB_POINT, Options, Progress, build_file};
 
@@ -106,13 +106,7 @@ pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
     bars.finish();
     let m = &built.meta;
     let total = start.elapsed().as_secs_f64();
-    let walls = match built.walls {
-        0 => String::new(),
-        n => format!(
-            ", {} of them walls under the terrain's steep edges",
-            count(n)
-        ),
-    };
+    let walls = walls(", ", built.walls);
     println!(
         "{} nodes ({} leaves{walls}), depth {}, {} jobs, written to {}",
         count(m.node_count),

@@ -13,6 +13,15 @@ pub fn count(n: u64) -> String {
     out
 }
 
+/// How many of a terrain's leaves are walls (`spt::surfel::walls`), after `before`
+/// ("" where there are none): `before` + "1,234 walls under the terrain's steep edges".
+pub fn walls(before: &str, n: u64) -> String {
+    match n {
+        0 => String::new(),
+        n => format!("{before}{} walls under the terrain's steep edges", count(n)),
+    }
+}
+
 /// A byte count in B, KiB, MiB or GiB.
 pub fn bytes(n: u64) -> String {
     match n {
