@@ -122,18 +122,11 @@ fn contours_show_no_specks_of_the_hidden_side() {
 /// mean, all of them).
 fn flipped_normals(image: &spt::render::Image) -> (usize, usize) {
     let (w, h) = (image.width as usize, image.height as usize);
+    // Normals mode shows n · 0.5 + 0.5 in linear light.
     let normal = |x: usize, y: usize| {
         let i = y * w + x;
-        let c = |k: usize| {
-            let s = image.rgba[4 * i + k] as f32 / 255.0;
-            let linear = if s <= 0.04045 {
-                s / 12.92
-            } else {
-                ((s + 0.055) / 1.055).powf(2.4)
-            };
-            2.0 * linear - 1.0
-        };
-        image.covered[i].then(|| glam::Vec3::new(c(0), c(1), c(2)).normalize_or_zero())
+        let n = glam::Vec3::from(image.linear_rgb(i)) * 2.0 - 1.0;
+        image.covered[i].then(|| n.normalize_or_zero())
     };
     let (mut specks, mut agreeing) = (0, 0);
     for y in 1..h - 1 {

@@ -69,7 +69,7 @@ impl Report for Steps {
                 dropped(&model.stats)
             ),
             Finished::Surfels(leaves) => {
-                let walls = walls(", ", leaves.stats.wall_splats);
+                let walls = walls(leaves.stats.wall_splats);
                 format!(
                     "{:.2} M surfels/s{walls}",
                     per_s(leaves.surfels.len() as u64)

@@ -106,7 +106,7 @@ pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
     bars.finish();
     let m = &built.meta;
     let total = start.elapsed().as_secs_f64();
-    let walls = walls(", ", built.walls);
+    let walls = walls(built.walls);
     println!(
         "{} nodes ({} leaves{walls}), depth {}, {} jobs, written to {}",
         count(m.node_count),

@@ -4,7 +4,7 @@
 //! block averaged in linear light ([`downsample`]).
 
 use super::Image;
-use super::frame::{linear_to_srgb, srgb_to_linear};
+use super::frame::linear_to_srgb;
 
 /// Pixels per degree of visual angle FLIP assumes: a 0.7 m viewing distance from a
 /// 24-inch 4K screen (FLIP's default, 67).
@@ -139,12 +139,12 @@ pub fn downsample(image: &Image, k: u32) -> Image {
     let to_srgb = |c: f32| (linear_to_srgb(c) * 255.0).round().clamp(0.0, 255.0) as u8;
     for y in 0..h {
         for x in 0..w {
-            let (mut sum, mut covered, mut depth) = ([0.0f32; 4], 0u32, 0.0f32);
+            let (mut sum, mut covered, mut depth) = ([0.0f32; 3], 0u32, 0.0f32);
             for dy in 0..k {
                 for dx in 0..k {
                     let i = ((y * k + dy) * image.width + x * k + dx) as usize;
-                    for (s, v) in sum.iter_mut().zip(&image.rgba[4 * i..4 * i + 4]) {
-                        *s += srgb_to_linear(*v as f32 / 255.0);
+                    for (s, v) in sum.iter_mut().zip(image.linear_rgb(i)) {
+                        *s += v;
                     }
                     if image.covered[i] {
                         covered += 1;
@@ -154,7 +154,7 @@ pub fn downsample(image: &Image, k: u32) -> Image {
             }
             let o = (y * w + x) as usize;
             let n = (k * k) as f32;
-            let [r, g, b, _] = sum.map(|v| to_srgb(v / n));
+            let [r, g, b] = sum.map(|v| to_srgb(v / n));
             out.rgba[4 * o..4 * o + 4].copy_from_slice(&[r, g, b, 255]);
             out.covered[o] = covered > 0;
             out.depth[o] = if covered > 0 {

@@ -44,6 +44,13 @@ pub struct Image {
     pub depth: Vec<f32>,
 }
 
+impl Image {
+    /// Pixel `i`'s colour in linear light, each channel in 0–1 (`rgba` decoded).
+    pub fn linear_rgb(&self, i: usize) -> [f32; 3] {
+        [0, 1, 2].map(|k| srgb_to_linear(self.rgba[4 * i + k] as f32 / 255.0))
+    }
+}
+
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct FrameStats {
     /// Nodes handed to the GPU to test (the visible chunks' prefixes).
