@@ -13,12 +13,12 @@ pub fn count(n: u64) -> String {
     out
 }
 
-/// How many of a terrain's leaves are walls (`spt::surfel::walls`), as a clause to
-/// append: ", 1,234 walls under the terrain's steep edges" ("" where there are none).
+/// How many of a terrain's leaves are wall splats (`spt::surfel::walls`), as a clause to
+/// append: ", 1,234 wall splats under the terrain's steep edges" ("" where there are none).
 pub fn walls(n: u64) -> String {
     match n {
         0 => String::new(),
-        n => format!(", {} walls under the terrain's steep edges", count(n)),
+        n => format!(", {} wall splats under the terrain's steep edges", count(n)),
     }
 }
 

@@ -187,7 +187,7 @@ pub fn neighbour_disks(
     }
     let walls: Vec<Surfel> = walls
         .iter()
-        .map(|(k, w)| w.surfel(scale, &surfels[which[*k] as usize]))
+        .flat_map(|(k, w)| w.surfels(scale, &surfels[which[*k] as usize]))
         .collect();
     stats.wall_splats += walls.len() as u64;
     walls
