@@ -202,31 +202,10 @@ fn wall_below(p: Vec3, near: &[Vec3]) -> Option<Wall> {
         .max_by(|a, b| steepness(a).total_cmp(&steepness(b)))?;
     let drop = p.z - q.z;
     let across = (q - p).truncate().as_dvec2();
-    let upper = |r: &&Vec3| r.z > q.z + 0.5 * drop;
-    // Facing from the upper level's samples toward the lower's: across the edge, where
-    // the steepest drop alone may run along it.
-    let centroid = |level: &dyn Fn(&&Vec3) -> bool| {
-        let (sum, n) = near
-            .iter()
-            .filter(level)
-            .fold((DVec2::ZERO, 0.0), |(s, n), r| {
-                (s + r.truncate().as_dvec2(), n + 1.0)
-            });
-        sum / n
-    };
-    // Returns right below p would pull the lower level's centroid back toward p.
-    let lower = |r: &&Vec3| r.z < q.z + 0.5 * drop && (**r - p).truncate() != Vec2::ZERO;
+    let middle = q.z + 0.5 * drop;
     // In f64: an f32 direction whose squares near f32's least normal is not unit.
-    let out = (centroid(&lower) - centroid(&upper))
-        .try_normalize()
-        .or_else(|| across.try_normalize())?;
-    // Not an edge where the upper level reaches further out, beside p.
-    let along = out.perp();
-    let further = |r: &&Vec3| {
-        let d = (**r - p).truncate().as_dvec2();
-        d.dot(out) > EDGE_SLACK * spacing as f64 && d.dot(along).abs() < spacing as f64
-    };
-    if near.iter().filter(upper).any(|r| further(&r)) {
+    let out = facing_across(p, near, middle).or_else(|| across.try_normalize())?;
+    if !is_edge(p, near, middle, (out, spacing as f64)) {
         return None;
     }
     // From p's edge down to q's height as far out as q lies from p.
@@ -239,6 +218,35 @@ fn wall_below(p: Vec3, near: &[Vec3]) -> Option<Wall> {
         run as f32,
         (spacing, drop),
     ))
+}
+
+/// The unit direction across the edge at `p`, from the centroid in x–y of the
+/// neighbours above `middle` (p among them) toward that of those below it (the
+/// returns right below p left out: they would pull it back toward p).
+fn facing_across(p: Vec3, near: &[Vec3], middle: f32) -> Option<DVec2> {
+    let centroid = |level: &dyn Fn(&Vec3) -> bool| {
+        let (sum, n) = near
+            .iter()
+            .filter(|r| level(r))
+            .fold((DVec2::ZERO, 0.0), |(s, n), r| {
+                (s + r.truncate().as_dvec2(), n + 1.0)
+            });
+        sum / n
+    };
+    let upper = centroid(&|r| r.z > middle);
+    let lower = centroid(&|r| r.z < middle && (*r - p).truncate() != Vec2::ZERO);
+    (lower - upper).try_normalize()
+}
+
+/// Whether `p` is the upper level's edge facing `out`: no neighbour above `middle`
+/// within a `spacing` of p along the edge lies further out than [`EDGE_SLACK`]
+/// spacings.
+fn is_edge(p: Vec3, near: &[Vec3], middle: f32, (out, spacing): (DVec2, f64)) -> bool {
+    let along = out.perp();
+    !near.iter().filter(|r| r.z > middle).any(|r| {
+        let d = (*r - p).truncate().as_dvec2();
+        d.dot(out) > EDGE_SLACK * spacing && d.dot(along).abs() < spacing
+    })
 }
 
 #[cfg(test)]
