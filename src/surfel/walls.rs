@@ -19,7 +19,7 @@
 //! out (what a triangulation of p and q draws, the least a pair of samples says), 2s
 //! wide along the edge, with p's colour and attributes: one ellipse, or where that would
 //! be thinner than [`MIN_RATIO`] (a mast or a lone tall tree over the street) a stack
-//! of ellipses as wide as the spacing. Walls of neighbouring edge samples, s apart,
+//! of ellipses as wide as the spacing, at most [`MAX_PIECES`]. Walls of neighbouring edge samples, s apart,
 //! overlap. p's own splat is clipped where its wall stands ([`Wall::clip_of`]), as the
 //! triangulation's roof ends at its edge; so is the splat of a sample behind the edge
 //! over the same drop, where no wall stands (a tilted splat of a second row reached out
@@ -32,8 +32,9 @@
 //! median; the centroids', 19°). And an edge test on that drop ("no upper sample nearer
 //! q than p") left whole stretches of edge bare. One ellipse [`MIN_RATIO`] thin under a
 //! mast's tip was tens of metres wide. Tile FLIP (`cloud_quality --terrain`): 0.2153
-//! with those, 0.2036 with the above, 0.2000 with the splats behind the edge clipped. Tried and not kept: vertical walls (0.2057; the slope as
-//! twice |pq| out, 0.2036, three times, 0.2065); ellipses hung from the edge's height,
+//! with those, 0.2036 with the above, 0.2000 with the splats behind the edge clipped.
+//! Tried and not kept: vertical walls (0.2057; the slope as twice |pq| out, 0.2036,
+//! three times, 0.2065); ellipses hung from the edge's height,
 //! cut flat there, reaching below the foot (0.2129: they show over the water, where no
 //! street lies in front), or ending at it (0.2089).
 //!
@@ -65,18 +66,18 @@ pub const WIDTH_RANK: usize = 4;
 
 /// How far out (in spacings) an upper neighbour beside p may lie with p still the edge:
 /// the rows of the next scan line along a skew edge lie a little further out.
-const EDGE_SLACK: f64 = 0.25;
+pub const EDGE_SLACK: f64 = 0.25;
 
 /// How far each ellipse of a stacked wall reaches, in half pitches: its vertical
 /// semi-axis over half the distance between centres, so that at a joint the wall is
 /// still √(1 − 1/r²) of its width wide.
-const PIECE_REACH: f32 = std::f32::consts::SQRT_2;
+pub const PIECE_REACH: f32 = std::f32::consts::SQRT_2;
 
 /// The most ellipses in a stack: past it they grow wider than the spacing (at
 /// [`MIN_RATIO`]). Samples a few centimetres apart under a 100 m drop called for 287
 /// on the tile, a fuzzed cloud for 10¹⁰; 8 draws the tile's FLIP of no limit with 99,076
 /// wall splats instead of 128,670 (4: 0.0002 more).
-const MAX_PIECES: u32 = 8;
+pub const MAX_PIECES: u32 = 8;
 
 /// A wall below a terrain sample's edge, in the unit-scaled coordinates of the search:
 /// the slope from the edge down to the drop's foot, one ellipse or, where that would be
@@ -114,7 +115,7 @@ impl Wall {
             run,
             half_width,
             drop,
-            // NaN (a zero width) saturates to 0.
+            // A zero width with no slope gives NaN, which `as` saturates to 0.
             pieces: (pieces as u32).max(1),
             edge: true,
         }
@@ -162,9 +163,9 @@ impl Wall {
     }
 
     /// Where the splat of the upper sample at `p` (unit-scaled; its `shape`, unit
-    /// normal `n` and major radius `radius`, unit-scaled) ends: the line through the
-    /// wall's foot in its plane, perpendicular to the direction toward the wall. `None`
-    /// when that direction lies along the splat's normal.
+    /// normal `n` and major radius `radius`, unit-scaled) ends: the line in its plane
+    /// through the wall's middle (`top`, halfway out), perpendicular to the direction
+    /// toward it. `None` when that direction lies along the splat's normal.
     pub fn clip_of(&self, p: Vec3, (shape, n, radius): (&Shape, DVec3, f32)) -> Option<Clip> {
         let toward = (self.top - p).truncate().extend(0.0).as_dvec3();
         let d = DVec2::new(toward.dot(shape.axis), toward.dot(shape.minor_axis(n)));
