@@ -4,8 +4,9 @@
 //! triangulation rendered at 4×4 and averaged in linear light (`spt::apps::cloud_quality`).
 //!
 //! What this asserts is what holds today, so that it cannot get worse unnoticed: the
-//! bounds below sit just above the measured medians and worst views (kinect FLIP 0.298,
-//! holes 0.08 %, worst view 0.13 %; terrain FLIP 0.200, holes 0.014 %, worst view
+//! bounds below sit just above the measured medians and worst views (kinect FLIP 0.297,
+//! holes 0.023 %, worst view 0.067 %, since a normal on one depth step comes from the
+//! steps around it (`spt::surfel::levels`; 0.298, 0.08 % and 0.13 % before); terrain FLIP 0.200, holes 0.014 %, worst view
 //! 0.024 %, since its walls face across their edges and slope (`spt::surfel::walls`;
 //! 0.227, 0.22 % and 0.47 % before the walls, 0.215 before they faced across);
 //! before the surfels of issue 13: 0.37 / 8.9 % and 0.26 / 1.0 %). Issue 13's hole
@@ -82,7 +83,7 @@ fn kinect_frame_against_its_sensor_grid() {
         width: 640,
         height: 480,
     };
-    check("kinect_rgb.ply", grid, 0.31, [0.001, 0.002]);
+    check("kinect_rgb.ply", grid, 0.305, [0.0005, 0.001]);
 }
 
 #[test]

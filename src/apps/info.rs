@@ -287,7 +287,7 @@ impl ModelInfo {
         line(
             "",
             format!(
-                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}",
+                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, normals on a depth step from the steps around {}",
                 count(st.degenerate_triangles),
                 count(st.isolated_vertices),
                 count(st.redundant_vertices),
@@ -296,7 +296,8 @@ impl ModelInfo {
                 count(st.fallback_radii),
                 count(st.capped_radii),
                 count(st.clipped_boundaries),
-                count(st.wall_splats)
+                count(st.wall_splats),
+                count(st.step_treads)
             ),
         );
         let t = &self.timing;

@@ -12,6 +12,7 @@ pub mod cloud;
 pub mod covering;
 pub mod field;
 pub mod isolated;
+pub mod levels;
 pub mod mesh;
 pub mod octahedral;
 pub mod pca;
@@ -75,6 +76,9 @@ pub struct SurfelStats {
     /// A terrain's wall surfels, under the edges where its height drops steeply
     /// ([`walls`]): surfels that no sample of the file is.
     pub wall_splats: u64,
+    /// A quantised sensor frame's samples whose neighbourhood lies on one depth step:
+    /// normal from the neighbours' fits that span steps ([`levels`]).
+    pub step_treads: u64,
 }
 
 /// The leaf surfels of a model.
