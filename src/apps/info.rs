@@ -287,7 +287,7 @@ impl ModelInfo {
         line(
             "",
             format!(
-                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, normals on a depth step from the steps around {}",
+                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}",
                 count(st.degenerate_triangles),
                 count(st.isolated_vertices),
                 count(st.redundant_vertices),
@@ -297,7 +297,8 @@ impl ModelInfo {
                 count(st.capped_radii),
                 count(st.clipped_boundaries),
                 count(st.wall_splats),
-                count(st.step_treads)
+                count(st.step_treads),
+                count(st.footprint_capped)
             ),
         );
         let t = &self.timing;

@@ -11,6 +11,7 @@ pub mod clip;
 pub mod cloud;
 pub mod covering;
 pub mod field;
+pub mod footprint;
 pub mod isolated;
 pub mod levels;
 pub mod mesh;
@@ -79,6 +80,9 @@ pub struct SurfelStats {
     /// A quantised sensor frame's samples whose neighbourhood lies on one depth step:
     /// normal from the neighbours' fits that span steps ([`levels`]).
     pub step_treads: u64,
+    /// A sensor frame's splats shrunk to span at most a few of its pixels seen from
+    /// the sensor ([`footprint`]).
+    pub footprint_capped: u64,
 }
 
 /// The leaf surfels of a model.

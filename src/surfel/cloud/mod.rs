@@ -28,8 +28,8 @@ use rayon::prelude::*;
 use super::covering::{Covering, RadiusRule, covering};
 use super::pca::plane_normal;
 use super::shape::{Clip, Shape};
-use super::walls;
 use super::{Surfel, SurfelStats};
+use super::{footprint, walls};
 pub use orientation::{NormalsTurned, Orientation};
 use search::Search;
 use smoothed::{Smoothing, smoothed_disks};
@@ -107,6 +107,19 @@ pub fn neighbour_disks(
             })
             .collect()
     };
+    let disks = match orientation {
+        Orientation::Toward(sensor) if search.tree.is_some() => {
+            let sensor = sensor * scale;
+            let pitch = sensor_pitch(&search, (points, scale), which, sensor);
+            let mut disks = disks;
+            for (&i, (n, c)) in which.iter().zip(&mut disks) {
+                let p = points[i as usize] * scale;
+                stats.footprint_capped += footprint::cap(c, *n, p, sensor, pitch) as u64;
+            }
+            disks
+        }
+        _ => disks,
+    };
     // Each wall with its sample's index in `which`, ascending (none but on a terrain).
     let walls = if orientation == Orientation::Up && search.tree.is_some() {
         let queries: Vec<Vec3> = which.iter().map(|&i| points[i as usize] * scale).collect();
@@ -159,6 +172,29 @@ pub fn neighbour_disks(
     stats.wall_splats += walls.len() as u64;
     walls
 }
+
+/// The pixel pitch of a sensor frame seen from `sensor` ([`footprint::angular_pitch`]),
+/// over an evenly strided sample of at most [`PITCH_SAMPLE`] of the points `which`.
+fn sensor_pitch(
+    search: &Search,
+    (points, scale): (&[Vec3], f32),
+    which: &[u32],
+    sensor: Vec3,
+) -> f32 {
+    let stride = which.len().div_ceil(PITCH_SAMPLE).max(1);
+    let sample: Vec<u32> = which.iter().step_by(stride).copied().collect();
+    let pairs: Vec<(Vec3, Vec3)> = search
+        .neighbourhoods(&sample, &|&i| points[i as usize] * scale)
+        .filter_map(|(&i, found)| {
+            let nearest = found.get(1)?;
+            Some((points[i as usize] * scale, search.point(*nearest)))
+        })
+        .collect();
+    footprint::angular_pitch(sensor, pairs.into_iter())
+}
+
+/// How many samples [`sensor_pitch`] measures.
+const PITCH_SAMPLE: usize = 16_384;
 
 /// Where a boundary splat's kept side ends, major radii from its centre: at the
 /// sample itself, as a triangulation of the samples ends at its border vertices.
@@ -258,6 +294,48 @@ mod tests {
             "treads: {:.1} % of the frame's, {:.1} % of the fits",
             frame * 100.0,
             fits * 100.0
+        );
+    }
+
+    #[test]
+    fn a_sensor_frame_s_splats_span_at_most_a_few_of_its_pixels() {
+        // A wall z = 2 seen from the origin on rays 1/400 apart, with every row but
+        // one in eight missing on its right half (a sensor's dropouts): there the
+        // coverings reach across 8 rows, more than the sensor's pixels let them.
+        let pitch = 1.0 / 400.0;
+        let points: Vec<Vec3> = (0..200 * 200)
+            .filter(|i| i % 200 < 100 || (i / 200) % 8 == 0)
+            .map(|i| {
+                Vec3::new((i % 200) as f32 - 100.0, (i / 200) as f32 - 100.0, 400.0) * 2.0 * pitch
+            })
+            .collect();
+        let widest = |orientation: Orientation| {
+            let mut surfels = unset_surfels(&points);
+            let all: Vec<u32> = (0..points.len() as u32).collect();
+            let rule = (RadiusRule::Surrounding, orientation);
+            let mut stats = SurfelStats::default();
+            neighbour_disks(&points, 1.0, &all, rule, None, &mut surfels, &mut stats);
+            // Each semi-axis across the ray, in pitches at the sample's distance.
+            let across = |s: &Surfel| {
+                let (n, d) = (s.normal.as_dvec3(), s.position.as_dvec3().normalize());
+                let shape = s.shape.unpack(n);
+                let major = s.radius as f64 * shape.axis.cross(d).length();
+                let minor = s.radius as f64 * shape.ratio * shape.minor_axis(n).cross(d).length();
+                major.max(minor) / (pitch as f64 * s.position.length() as f64)
+            };
+            surfels.iter().map(across).fold(0.0, f64::max)
+        };
+        let (frame, cloud) = (
+            widest(Orientation::Toward(Vec3::ZERO)),
+            widest(Orientation::Unknown),
+        );
+        assert!(
+            cloud > 2.0 * footprint::MAX_PITCHES as f64,
+            "{cloud:.2} pitches"
+        );
+        assert!(
+            frame <= footprint::MAX_PITCHES as f64 * 1.01,
+            "{frame:.2} pitches"
         );
     }
 
