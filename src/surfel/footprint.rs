@@ -9,7 +9,9 @@
 //!
 //! * [`angular_pitch`]: the sensor's pixel pitch, as the median angle between a sample
 //!   and its nearest neighbour seen from the sensor (neighbouring pixels of one
-//!   surface lie one pitch apart);
+//!   surface lie one pitch apart), if the samples lie on a grid of rays at all: a
+//!   cloud that is no frame (a scanned mesh's vertices, whose file happens to leave
+//!   its origin outside the box) has no pitch and keeps its splats;
 //! * [`cap`]: each semi-axis of a splat's ellipse, projected across the ray from the
 //!   sensor, at most [`MAX_PITCHES`] pitches at the sample's distance. Along the ray a
 //!   splat is foreshortened, so a surface the sensor sees at a slant keeps its width
@@ -27,18 +29,29 @@ use super::shape::MIN_RATIO;
 /// is the tightest that keeps every view's holes under issue 13's 0.5 %.
 pub const MAX_PITCHES: f32 = 3.0;
 
+/// Largest ratio of the 90th to the 10th percentile of the angles between neighbours,
+/// seen from the sensor, of samples on a grid of rays: kinect_rgb's is 1.23 (each
+/// sample's nearest neighbour lies one pixel away, or a diagonal's √2 where rows
+/// drop out); the Stanford bunny's vertices seen from their file's origin, 3.2.
+pub const MAX_PITCH_SPREAD: f32 = 1.5;
+
 /// The median angle (radians) between each position of `pairs` (a sample and its
-/// nearest distinct neighbour) as seen from `sensor`; 0 when there are none.
-pub fn angular_pitch(sensor: Vec3, pairs: impl Iterator<Item = (Vec3, Vec3)>) -> f32 {
+/// nearest distinct neighbour) as seen from `sensor`: the pixel pitch of a sensor
+/// whose samples lie on a grid of rays. `None` when they do not (the angles' 90th
+/// percentile over [`MAX_PITCH_SPREAD`] times their 10th), or there are none.
+pub fn angular_pitch(sensor: Vec3, pairs: impl Iterator<Item = (Vec3, Vec3)>) -> Option<f32> {
     let direction = |p: Vec3| (p - sensor).normalize_or_zero();
     let mut angles: Vec<f32> = pairs
         .map(|(p, q)| 2.0 * (0.5 * direction(p).distance(direction(q))).min(1.0).asin())
         .collect();
-    if angles.is_empty() {
-        return 0.0;
-    }
-    let mid = angles.len() / 2;
-    *angles.select_nth_unstable_by(mid, f32::total_cmp).1
+    angles.sort_unstable_by(f32::total_cmp);
+    let at = |q: f32| {
+        angles
+            .get((q * (angles.len() - 1) as f32).round() as usize)
+            .copied()
+    };
+    let (low, median, high) = (at(0.1)?, at(0.5)?, at(0.9)?);
+    (high <= MAX_PITCH_SPREAD * low).then_some(median)
 }
 
 /// Shrinks the ellipse `c` of normal `n` at `p` so that, seen from `sensor`, each
@@ -88,16 +101,19 @@ mod tests {
     }
 
     #[test]
-    fn the_pitch_is_the_median_angle_between_neighbours() {
+    fn the_pitch_is_the_median_angle_between_neighbours_on_a_grid_of_rays() {
         // Samples 1 mrad apart on rays from the origin, one pair 10 mrad apart.
         let at = |angle: f32, depth: f32| Vec3::new(angle.sin(), 0.0, angle.cos()) * depth;
         let mut pairs: Vec<(Vec3, Vec3)> = (0..9)
             .map(|k| (at(k as f32 * 1e-3, 2.0), at((k + 1) as f32 * 1e-3, 2.5)))
             .collect();
         pairs.push((at(0.0, 1.0), at(0.01, 1.0)));
-        let pitch = angular_pitch(Vec3::ZERO, pairs.into_iter());
+        let pitch = angular_pitch(Vec3::ZERO, pairs.iter().copied()).unwrap();
         assert!((pitch - 1e-3).abs() < 1e-6, "{pitch}");
-        assert_eq!(angular_pitch(Vec3::ZERO, std::iter::empty()), 0.0);
+        assert_eq!(angular_pitch(Vec3::ZERO, std::iter::empty()), None);
+        // Neighbours 1 to 4 mrad apart: no grid of rays.
+        let spread = (0..10).map(|k| (at(0.0, 1.0), at(1e-3 * (1.0 + k as f32 / 3.0), 1.0)));
+        assert_eq!(angular_pitch(Vec3::ZERO, spread), None);
     }
 
     #[test]

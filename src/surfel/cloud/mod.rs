@@ -110,11 +110,12 @@ pub fn neighbour_disks(
     let disks = match orientation {
         Orientation::Toward(sensor) if search.tree.is_some() => {
             let sensor = sensor * scale;
-            let pitch = sensor_pitch(&search, (points, scale), which, sensor);
             let mut disks = disks;
-            for (&i, (n, c)) in which.iter().zip(&mut disks) {
-                let p = points[i as usize] * scale;
-                stats.footprint_capped += footprint::cap(c, *n, p, sensor, pitch) as u64;
+            if let Some(pitch) = sensor_pitch(&search, (points, scale), which, sensor) {
+                for (&i, (n, c)) in which.iter().zip(&mut disks) {
+                    let p = points[i as usize] * scale;
+                    stats.footprint_capped += footprint::cap(c, *n, p, sensor, pitch) as u64;
+                }
             }
             disks
         }
@@ -174,13 +175,14 @@ pub fn neighbour_disks(
 }
 
 /// The pixel pitch of a sensor frame seen from `sensor` ([`footprint::angular_pitch`]),
-/// over an evenly strided sample of at most [`PITCH_SAMPLE`] of the points `which`.
+/// over an evenly strided sample of at most [`PITCH_SAMPLE`] of the points `which`;
+/// `None` when they lie on no grid of rays.
 fn sensor_pitch(
     search: &Search,
     (points, scale): (&[Vec3], f32),
     which: &[u32],
     sensor: Vec3,
-) -> f32 {
+) -> Option<f32> {
     let stride = which.len().div_ceil(PITCH_SAMPLE).max(1);
     let sample: Vec<u32> = which.iter().step_by(stride).copied().collect();
     let pairs: Vec<(Vec3, Vec3)> = search
