@@ -77,50 +77,24 @@ pub fn neighbour_disks(
     }
     let search = Search::new(points, scale);
     let given_normal = |i: u32| given.map_or(Vec3::ZERO, |g| g[i as usize]);
-    let disks: Vec<(Vec3, Covering)> = if search.tree.is_none() {
-        vec![(Vec3::Z, covering(Vec3::ZERO, Vec3::Z, &[], rule)); which.len()]
-    } else if let Some(smoothing) = Smoothing::of(&search, scale, orientation) {
-        let disks = smoothed_disks(
+    let mut disks = disks(
+        &search,
+        (points, scale),
+        which,
+        (rule, orientation),
+        &given_normal,
+        stats,
+    );
+    if let Orientation::Toward(sensor) = orientation {
+        within_pixels(
             &search,
             (points, scale),
             which,
-            (rule, smoothing),
-            &given_normal,
+            sensor * scale,
+            &mut disks,
+            stats,
         );
-        if matches!(smoothing, Smoothing::Steps { .. }) {
-            stats.step_treads += disks.iter().filter(|d| d.0 != d.1).count() as u64;
-        }
-        disks
-            .into_iter()
-            .map(|(normal, _, covering)| (normal, covering))
-            .collect()
-    } else {
-        search
-            .neighbourhoods(which, &|&i| points[i as usize] * scale)
-            .map(|(&i, found)| {
-                let near: ArrayVec<Vec3, K> = found.iter().map(|&f| search.point(f)).collect();
-                let normal = Some(given_normal(i))
-                    .filter(|n| *n != Vec3::ZERO)
-                    .unwrap_or_else(|| plane_normal(near.iter().copied()));
-                let p = points[i as usize] * scale;
-                (normal, covering(p, normal, &near, rule))
-            })
-            .collect()
-    };
-    let disks = match orientation {
-        Orientation::Toward(sensor) if search.tree.is_some() => {
-            let sensor = sensor * scale;
-            let mut disks = disks;
-            if let Some(pitch) = sensor_pitch(&search, (points, scale), which, sensor) {
-                for (&i, (n, c)) in which.iter().zip(&mut disks) {
-                    let p = points[i as usize] * scale;
-                    stats.footprint_capped += footprint::cap(c, *n, p, sensor, pitch) as u64;
-                }
-            }
-            disks
-        }
-        _ => disks,
-    };
+    }
     // Each wall with its sample's index in `which`, ascending (none but on a terrain).
     let walls = if orientation == Orientation::Up && search.tree.is_some() {
         let queries: Vec<Vec3> = which.iter().map(|&i| points[i as usize] * scale).collect();
@@ -172,6 +146,70 @@ pub fn neighbour_disks(
         .collect();
     stats.wall_splats += walls.len() as u64;
     walls
+}
+
+/// Each of the points `which`'s normal (given, or fitted to its neighbourhood and, on a
+/// terrain or a quantised frame, smoothed: [`Smoothing`]) and covering, before the
+/// normal is turned.
+fn disks(
+    search: &Search,
+    (points, scale): (&[Vec3], f32),
+    which: &[u32],
+    (rule, orientation): (RadiusRule, Orientation),
+    given_normal: &(dyn Fn(u32) -> Vec3 + Sync),
+    stats: &mut SurfelStats,
+) -> Vec<(Vec3, Covering)> {
+    if search.tree.is_none() {
+        vec![(Vec3::Z, covering(Vec3::ZERO, Vec3::Z, &[], rule)); which.len()]
+    } else if let Some(smoothing) = Smoothing::of(search, scale, orientation) {
+        let disks = smoothed_disks(
+            search,
+            (points, scale),
+            which,
+            (rule, smoothing),
+            given_normal,
+        );
+        if matches!(smoothing, Smoothing::Steps { .. }) {
+            stats.step_treads += disks.iter().filter(|d| d.0 != d.1).count() as u64;
+        }
+        disks
+            .into_iter()
+            .map(|(normal, _, covering)| (normal, covering))
+            .collect()
+    } else {
+        search
+            .neighbourhoods(which, &|&i| points[i as usize] * scale)
+            .map(|(&i, found)| {
+                let near: ArrayVec<Vec3, K> = found.iter().map(|&f| search.point(f)).collect();
+                let normal = Some(given_normal(i))
+                    .filter(|n| *n != Vec3::ZERO)
+                    .unwrap_or_else(|| plane_normal(near.iter().copied()));
+                let p = points[i as usize] * scale;
+                (normal, covering(p, normal, &near, rule))
+            })
+            .collect()
+    }
+}
+
+/// Shrinks the `disks` of a sensor frame seen from `sensor` (unit-scaled) to its
+/// pixels ([`footprint::cap`]), if its samples lie on a grid of rays.
+fn within_pixels(
+    search: &Search,
+    (points, scale): (&[Vec3], f32),
+    which: &[u32],
+    sensor: Vec3,
+    disks: &mut [(Vec3, Covering)],
+    stats: &mut SurfelStats,
+) {
+    if search.tree.is_none() {
+        return;
+    }
+    if let Some(pitch) = sensor_pitch(search, (points, scale), which, sensor) {
+        for (&i, (n, c)) in which.iter().zip(disks) {
+            let p = points[i as usize] * scale;
+            stats.footprint_capped += footprint::cap(c, *n, p, sensor, pitch) as u64;
+        }
+    }
 }
 
 /// The pixel pitch of a sensor frame seen from `sensor` ([`footprint::angular_pitch`]),
