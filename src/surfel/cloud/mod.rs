@@ -279,11 +279,7 @@ mod tests {
             .collect();
         let slope = Vec3::new(-0.2, 0.0, 1.0).normalize();
         let mean_error = |orientation: Orientation| {
-            let mut surfels = unset_surfels(&points);
-            let all: Vec<u32> = (0..points.len() as u32).collect();
-            let rule = (RadiusRule::Surrounding, orientation);
-            let mut stats = SurfelStats::default();
-            neighbour_disks(&points, 0.05, &all, rule, None, &mut surfels, &mut stats);
+            let surfels = surfels_of(&points, 0.05, orientation);
             let angles = surfels
                 .iter()
                 .map(|s| s.normal.dot(slope).abs().min(1.0).acos());
@@ -316,11 +312,7 @@ mod tests {
             })
             .collect();
         let treads = |orientation: Orientation| {
-            let mut surfels = unset_surfels(&points);
-            let all: Vec<u32> = (0..points.len() as u32).collect();
-            let rule = (RadiusRule::Surrounding, orientation);
-            let mut stats = SurfelStats::default();
-            neighbour_disks(&points, 0.5, &all, rule, None, &mut surfels, &mut stats);
+            let surfels = surfels_of(&points, 0.5, orientation);
             let tread = |s: &Surfel| s.normal.z.abs() > 10f32.to_radians().cos();
             surfels.iter().filter(|s| tread(s)).count() as f64 / surfels.len() as f64
         };
@@ -350,11 +342,7 @@ mod tests {
             })
             .collect();
         let widest = |orientation: Orientation| {
-            let mut surfels = unset_surfels(&points);
-            let all: Vec<u32> = (0..points.len() as u32).collect();
-            let rule = (RadiusRule::Surrounding, orientation);
-            let mut stats = SurfelStats::default();
-            neighbour_disks(&points, 1.0, &all, rule, None, &mut surfels, &mut stats);
+            let surfels = surfels_of(&points, 1.0, orientation);
             // Each semi-axis across the ray, in pitches at the sample's distance.
             let across = |s: &Surfel| {
                 let (n, d) = (s.normal.as_dvec3(), s.position.as_dvec3().normalize());
@@ -379,8 +367,10 @@ mod tests {
         );
     }
 
-    fn unset_surfels(points: &[Vec3]) -> Vec<Surfel> {
-        points
+    /// The surfels of the cloud `points` (unit-scaled by `scale`) with its normals
+    /// turned by `orientation`.
+    fn surfels_of(points: &[Vec3], scale: f32, orientation: Orientation) -> Vec<Surfel> {
+        let mut surfels: Vec<Surfel> = points
             .iter()
             .map(|&position| Surfel {
                 position,
@@ -390,6 +380,11 @@ mod tests {
                 shape: bytemuck::Zeroable::zeroed(),
                 attributes: Default::default(),
             })
-            .collect()
+            .collect();
+        let all: Vec<u32> = (0..points.len() as u32).collect();
+        let rule = (RadiusRule::Surrounding, orientation);
+        let mut stats = SurfelStats::default();
+        neighbour_disks(points, scale, &all, rule, None, &mut surfels, &mut stats);
+        surfels
     }
 }
