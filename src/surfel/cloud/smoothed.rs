@@ -24,6 +24,9 @@ pub(super) enum Smoothing {
 }
 
 impl Smoothing {
+    /// How a cloud turned by `orientation` smooths its fits: a terrain always, a
+    /// sensor frame where its depth is quantised ([`levels::quantised_axis`], in the
+    /// search's unit-scaled coordinates), any other cloud not at all.
     pub fn of(search: &Search, scale: f32, orientation: Orientation) -> Option<Smoothing> {
         match orientation {
             Orientation::Up => Some(Smoothing::Terrain),
