@@ -149,8 +149,8 @@ pub fn neighbour_disks(
 }
 
 /// Each of the points `which`'s normal (given, or fitted to its neighbourhood and, on a
-/// terrain or a quantised frame, smoothed: [`Smoothing`]) and covering, before the
-/// normal is turned.
+/// terrain or a quantised frame, smoothed: [`Smoothing`], which turns its fits before
+/// their means) and covering; [`neighbour_disks`] turns every estimated normal after.
 fn disks(
     search: &Search,
     (points, scale): (&[Vec3], f32),

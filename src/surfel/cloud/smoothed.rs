@@ -64,10 +64,11 @@ impl Smoothing {
 }
 
 /// Disks whose normals are smoothed over the neighbourhood ([`Smoothing`],
-/// [`smoothed_normals`]), with the plane each was measured in: a sample's normal is the mean of its neighbours' fitted
-/// normals (each the plane of its own neighbourhood, turned), on a terrain always, on
-/// a quantised frame where its own neighbourhood lies on one step; its covering is
-/// measured in the plane of its own fit, where its sampling's gaps lie.
+/// [`fitted_normals`]), with the plane each was measured in: a sample's normal is the
+/// mean of its neighbours' fitted normals (each the plane of its own neighbourhood,
+/// turned), on a terrain always, on a quantised frame where its own neighbourhood lies
+/// on one step; its covering is measured in the plane of its own fit, where its
+/// sampling's gaps lie.
 ///
 /// A quantised frame's step treads (`kinect_rgb`, issue 13, `cloud_quality --grid
 /// 640x480`, 4 views, medians): FLIP 0.2983 → 0.2966, holes 0.082 % → 0.023 % (worst
@@ -82,9 +83,10 @@ impl Smoothing {
 /// (issue 13, `cloud_quality --terrain`, 4 views, medians): FLIP 0.2572 → 0.2280, SSIM
 /// 0.172 → 0.242, holes 0.167 % → 0.221 % (worst view 0.483 % → 0.468 %). On the
 /// RGB-D frame the same mean of all fits (turned toward the sensor) raised FLIP
-/// (0.2983 → 0.3299) and opened holes (up to 2.8 % on a view). Each sample's neighbourhood is
-/// kept between the two steps (K indices, 100 bytes a sample) rather than searched
-/// twice (+35 % of the surfels' time on the tile, for 27 MB less at its peak).
+/// (0.2983 → 0.3299) and opened holes (up to 2.8 % on a view). Each sample's
+/// neighbourhood is kept between the two steps (K indices, 100 bytes a sample) rather
+/// than searched twice (+35 % of the surfels' time on the tile, for 27 MB less at its
+/// peak).
 pub(super) fn smoothed_disks(
     search: &Search,
     (points, scale): (&[Vec3], f32),
