@@ -65,14 +65,27 @@ fn kinect_frame_drops_its_nan_rows_and_keeps_colours() {
     assert_eq!(leaves.surfels.len(), 307_200 - 47_353);
     assert!(leaves.has_colors);
     // Colours follow their rows: the k-th finite row of the file is the k-th surfel.
+    // Its colour is the centre of the colour field fitted over its pixel grid's
+    // triangles (`spt::surfel::grid`): near the pixel's own, not equal (measured over
+    // these 261 rows: median 1 level, 95th percentile 5, largest 18).
     let rows = other_reader(&path);
     let finite = rows.iter().filter(|r| number(r, "x").is_finite());
+    let mut offsets = Vec::new();
     for (k, row) in finite.enumerate().step_by(997) {
-        let want = ["red", "green", "blue"].map(|c| number(row, c) as u8);
-        assert_eq!(leaves.surfels[k].color[..3], want, "surfel {k}");
+        let want = ["red", "green", "blue"].map(|c| number(row, c) as i32);
+        let got = leaves.surfels[k].color.map(i32::from);
+        offsets.push((0..3).map(|c| (got[c] - want[c]).abs()).max().unwrap());
         let p = leaves.surfels[k].position.as_dvec3() + leaves.origin;
         assert!((p.x - number(row, "x")).abs() < 1e-6, "surfel {k} position");
     }
+    offsets.sort_unstable();
+    let at = |q: f64| offsets[(q * (offsets.len() - 1) as f64) as usize];
+    eprintln!(
+        "kinect: splat colours off their pixels' by {} (median), {} (95th percentile)",
+        at(0.5),
+        at(0.95)
+    );
+    assert!(at(0.5) <= 2 && at(0.95) <= 8, "colours {offsets:?}");
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! `--error-px E` with level of detail), FLIP of the
 //! triangulation at 1×, hole rate (see `spt::apps::cloud_quality`); for a sensor frame,
 //! FLIP of the same triangulation over the points moved within their depth step. With `--images DIR`,
-//! each view's splats, triangulation and reference as PNG. With `--bounds`, also the
+//! each view's splats, triangulation, reference and the splats' FLIP heat map as PNG. With `--bounds`, also the
 //! triangulation's own splats and the triangulation shaded with the cloud's normals.
 //!
 //! ```text
@@ -16,6 +16,7 @@ use std::path::PathBuf;
 use clap::Parser;
 use spt::apps::cloud_quality::{CloudAndReference, Triangulation, ViewImages, measure};
 use spt::apps::stats::quantile;
+use spt::render::perceptual::flip_heat_map;
 use spt::render::{Gpu, Renderer, Settings};
 
 #[derive(Parser)]
@@ -42,7 +43,8 @@ struct Args {
     /// Level of detail's error bound in pixels (0: leaves only).
     #[arg(long, default_value_t = 0.0)]
     error_px: f64,
-    /// Write each view's images (splats, triangulation at 1×, reference) into DIR.
+    /// Write each view's images (splats, triangulation at 1×, reference, and the splats' FLIP
+    /// error as a heat map) into DIR.
     #[arg(long)]
     images: Option<PathBuf>,
     /// Also score the triangulation's own splats (the mesh pipeline) and the
@@ -90,6 +92,10 @@ fn main() -> anyhow::Result<()> {
                 if let Err(e) = image.save_png(&dir.join(format!("view{k}_{name}.png"))) {
                     eprintln!("view {k}: {e:#}");
                 }
+            }
+            let heat = flip_heat_map(&images.splats, &images.reference);
+            if let Err(e) = heat.save_png(&dir.join(format!("view{k}_flip.png"))) {
+                eprintln!("view {k}: {e:#}");
             }
         }
     };

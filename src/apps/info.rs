@@ -284,6 +284,23 @@ impl ModelInfo {
             ),
         );
         let st = &s.stats;
+        if let Some(grid) = st.pixel_grid {
+            // The grid's last rows may have no sample (the reader dropped them); the
+            // file's row count tells its height when it is whole rows.
+            let rows = self.geometry.vertices_in_file;
+            let height = match rows % grid.width as u64 {
+                0 => rows / grid.width as u64,
+                _ => grid.height as u64,
+            };
+            line(
+                "pixel grid",
+                format!(
+                    "{} × {height} in the file's row order: splats of the grid's triangles \
+                     (neighbouring pixels joined, not across a depth edge)",
+                    grid.width
+                ),
+            );
+        }
         line(
             "",
             format!(

@@ -50,6 +50,33 @@ pub fn flip_map(test: &Image, reference: &Image) -> Vec<f32> {
     nv_flip::flip(r, t, FLIP_PIXELS_PER_DEGREE).to_vec()
 }
 
+/// `test`'s FLIP error against `reference` as a picture, in the magma colours FLIP's own
+/// tool uses (black: none … pale yellow: 1), white where neither image is covered.
+pub fn flip_heat_map(test: &Image, reference: &Image) -> Image {
+    let (w, h) = (test.width, test.height);
+    let errors = nv_flip::FlipImageFloat::with_data(w, h, &flip_map(test, reference));
+    let colours = errors.apply_color_lut(&nv_flip::magma_lut()).to_vec();
+    let covered = union(test, reference);
+    let rgba = colours
+        .chunks_exact(3)
+        .zip(&covered)
+        .flat_map(|(c, &on)| {
+            if on {
+                [c[0], c[1], c[2], 255]
+            } else {
+                [255; 4]
+            }
+        })
+        .collect();
+    Image {
+        width: w,
+        height: h,
+        rgba,
+        covered,
+        depth: vec![0.0; (w * h) as usize],
+    }
+}
+
 /// Mean FLIP error of `test` against `reference` over the pixels either covers.
 pub fn flip_mean(test: &Image, reference: &Image) -> f64 {
     masked_mean(&flip_map(test, reference), &union(test, reference))

@@ -12,6 +12,7 @@ pub mod cloud;
 pub mod covering;
 pub mod field;
 pub mod footprint;
+pub mod grid;
 pub mod isolated;
 pub mod levels;
 pub mod mesh;
@@ -83,6 +84,10 @@ pub struct SurfelStats {
     /// A sensor frame's splats shrunk to span at most a few of its pixels seen from
     /// the sensor ([`footprint`]).
     pub footprint_capped: u64,
+    /// The pixel grid a sensor frame's samples lie on in their file's order
+    /// ([`grid`]): its surfels are then those of the grid's triangulation, as a mesh's,
+    /// and the rules for frames without one (depth steps, footprint) do not run.
+    pub pixel_grid: Option<grid::PixelGrid>,
 }
 
 /// The leaf surfels of a model.
@@ -275,9 +280,33 @@ fn leaf_surfels_among(
     let mut surfels = initial_surfels(g);
     let (mut redundant, mut vertex_normals, mut vote) = (Vec::new(), Vec::new(), None);
     let (mut normals_turned, mut walls) = (NormalsTurned::No, Vec::new());
-    let oriented = if g.triangles.is_empty() {
+    let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
+    let frame = match orientation {
+        cloud::Orientation::Toward(sensor)
+            if g.triangles.is_empty() && own == g.positions.len() =>
+        {
+            grid::frame_triangles(g, sensor)
+        }
+        _ => None,
+    };
+    let oriented = if let Some((frame_grid, triangles)) = &frame {
+        let disks = mesh::vertex_disks(
+            &g.positions,
+            scale,
+            triangles,
+            (given, g.colors.is_some(), Outward::AsWound),
+            &mut surfels,
+            &mut stats,
+        );
+        redundant = disks.redundant;
+        stats.pixel_grid = Some(*frame_grid);
+        let oriented = given.is_some() && stats.given_normals == own as u64;
+        if !oriented {
+            normals_turned = NormalsTurned::of(orientation);
+        }
+        oriented
+    } else if g.triangles.is_empty() {
         let all: Vec<u32> = (0..own as u32).collect();
-        let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
         walls = cloud::neighbour_disks(
             &g.positions,
             scale,

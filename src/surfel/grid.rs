@@ -1,0 +1,235 @@
+//! An organised frame's pixel grid, found from its file's row order (DESIGN.md §2).
+//!
+//! An RGB-D camera (PCL's organised clouds, a depth map written out as points) writes
+//! one row per pixel, row-major, with NaN where the pixel saw nothing; the reader drops
+//! those rows and keeps each sample's file row ([`Geometry::rows`]). Seen from the
+//! sensor, file rows r and r + 1 are then horizontal neighbours and r and r + W
+//! vertical ones, one pixel pitch apart, where W is the grid's width. The grid is the
+//! frame's own neighbourhood: it joins the samples each pixel saw to those its
+//! neighbours saw, which no nearest-neighbour search over a quantised depth can tell
+//! apart from the next depth step's (issue 13).
+//!
+//! [`pixel_grid`] finds W as the row offset of most sampled pixels' nearest ray beyond
+//! their right-hand neighbour, and accepts it only where most horizontal and vertical
+//! neighbours alike lie about one pitch apart: a cloud written in any other order (a
+//! scanned mesh's vertices, a tile sorted in space) has no grid.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::io::Geometry;
+use crate::io::triangulate::sensor_grid;
+
+/// The triangles of frame `g`'s pixel grid seen from `sensor` (relative to the model
+/// origin; the file's origin, from which [`sensor_grid`] takes depths), if it lies on
+/// one ([`pixel_grid`]), all wound to face the sensor: neighbouring pixels joined, but
+/// not across a depth edge (an edge longer than 5 % of the depth).
+pub fn frame_triangles(g: &Geometry, sensor: Vec3) -> Option<(PixelGrid, Vec<[u32; 3]>)> {
+    let grid = pixel_grid(g, sensor)?;
+    let mut triangles = sensor_grid(g, grid.width, grid.height).ok()?;
+    if facing_away(&g.positions, &triangles, sensor) {
+        triangles.par_iter_mut().for_each(|t| t.swap(1, 2));
+    }
+    Some((grid, triangles))
+}
+
+/// Whether `triangles` face away from `sensor`, by area. One grid's triangles all wind
+/// the same way on the image, so they all face the sensor or all face away (but those
+/// seen edge-on, whose sign the sum outweighs).
+fn facing_away(points: &[Vec3], triangles: &[[u32; 3]], sensor: Vec3) -> bool {
+    let at = |v: u32| points[v as usize].as_dvec3();
+    let toward: f64 = triangles
+        .par_iter()
+        .map(|&[a, b, c]| {
+            let n = (at(b) - at(a)).cross(at(c) - at(a));
+            n.dot(sensor.as_dvec3() - at(a)).signum() * n.length()
+        })
+        .sum();
+    toward < 0.0
+}
+
+/// A frame's pixel grid: file row r is pixel (r mod `width`, r / `width`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct PixelGrid {
+    pub width: u32,
+    pub height: u32,
+}
+
+/// The widest grid looked for (a 16 K-pixel-wide sensor).
+pub const MAX_WIDTH: usize = 16_384;
+
+/// How many pixels [`pixel_grid`] samples.
+const SAMPLE: usize = 256;
+
+/// Least share of the sampled pixels whose horizontal and whose vertical neighbours
+/// (where present) must each lie within [`PITCH_TOLERANCE`] of the median pitch.
+const MIN_ON_GRID: f64 = 0.75;
+
+/// How far from the median pitch a neighbour on the grid may lie: a factor either way.
+const PITCH_TOLERANCE: f32 = 2.0;
+
+/// The pixel grid of a frame `g` seen from `sensor` (relative to the model origin), if
+/// its samples lie on one in their file's row order.
+pub fn pixel_grid(g: &Geometry, sensor: Vec3) -> Option<PixelGrid> {
+    let n = g.positions.len();
+    let row_of = |i: usize| g.rows.as_ref().map_or(i, |r| r[i] as usize);
+    let rows = row_of(n.checked_sub(1)?) + 1;
+    let mut vertex_at = vec![u32::MAX; rows];
+    for i in 0..n {
+        vertex_at[row_of(i)] = i as u32;
+    }
+    let ray = |r: usize| {
+        let v = *vertex_at.get(r)?;
+        (v != u32::MAX).then(|| (g.positions[v as usize] - sensor).normalize_or_zero())
+    };
+    let angle = |a: Vec3, b: Vec3| 2.0 * (0.5 * a.distance(b)).min(1.0).asin();
+    let sample: Vec<usize> = (0..n)
+        .step_by(n.div_ceil(SAMPLE).max(1))
+        .map(row_of)
+        .collect();
+    let width = likeliest_width(&sample, rows, &ray, &angle)?;
+    let spacing = |d: usize| -> Vec<Option<f32>> {
+        let same_line = |r: usize| d != 1 || !(r + 1).is_multiple_of(width);
+        sample
+            .iter()
+            .map(|&r| Some(angle(ray(r)?, ray(r + d).filter(|_| same_line(r))?)))
+            .collect()
+    };
+    let (across, down) = (spacing(1), spacing(width));
+    let (pitch_across, pitch_down) = (median(&across)?, median(&down)?);
+    let tolerable = pitch_across.max(pitch_down) <= PITCH_TOLERANCE * pitch_across.min(pitch_down);
+    let on_grid = |angles: &[Option<f32>], pitch: f32| {
+        let near = |a: &f32| *a <= PITCH_TOLERANCE * pitch && *a >= pitch / PITCH_TOLERANCE;
+        let present: Vec<f32> = angles.iter().flatten().copied().collect();
+        present.iter().filter(|a| near(a)).count() as f64 >= MIN_ON_GRID * present.len() as f64
+    };
+    (tolerable && on_grid(&across, pitch_across) && on_grid(&down, pitch_down)).then(|| PixelGrid {
+        width: width as u32,
+        height: rows.div_ceil(width) as u32,
+    })
+}
+
+/// The row offset d (2 ≤ d ≤ [`MAX_WIDTH`]) of the ray nearest each sampled row's,
+/// taken by the most sampled rows: the grid's width, where there is one. `None` when
+/// fewer than half the rows that found one agree.
+fn likeliest_width(
+    sample: &[usize],
+    rows: usize,
+    ray: &dyn Fn(usize) -> Option<Vec3>,
+    angle: &dyn Fn(Vec3, Vec3) -> f32,
+) -> Option<usize> {
+    let mut votes = std::collections::BTreeMap::<usize, usize>::new();
+    for &r in sample {
+        let Some(here) = ray(r) else { continue };
+        let nearest = (2..=MAX_WIDTH.min(rows.saturating_sub(r + 1)))
+            .filter_map(|d| Some((angle(here, ray(r + d)?), d)))
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((_, d)) = nearest {
+            *votes.entry(d).or_default() += 1;
+        }
+    }
+    let cast: usize = votes.values().sum();
+    let (width, count) = votes
+        .into_iter()
+        .max_by_key(|&(d, c)| (c, std::cmp::Reverse(d)))?;
+    (2 * count >= cast && cast > 0).then_some(width)
+}
+
+/// The median of the present values.
+fn median(values: &[Option<f32>]) -> Option<f32> {
+    let mut v: Vec<f32> = values.iter().flatten().copied().collect();
+    v.sort_unstable_by(f32::total_cmp);
+    v.get(v.len() / 2).copied()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Pitch of the test frames' pixels, radians.
+    const PITCH: f64 = 0.002;
+
+    /// A `width` × `height` frame seen from the file's origin, row-major: pixel (x, y)
+    /// sees depth `depth(x, y)` (NaN: nothing) along its ray.
+    fn frame(width: usize, height: usize, depth: impl Fn(usize, usize) -> f64) -> Vec<[f64; 3]> {
+        let mut points = Vec::new();
+        for y in 0..height {
+            for x in 0..width {
+                let u = (x as f64 - width as f64 / 2.0) * PITCH;
+                let v = (y as f64 - height as f64 / 2.0) * PITCH;
+                let z = depth(x, y);
+                points.push([u * z, v * z, z]);
+            }
+        }
+        points
+    }
+
+    fn geometry(points: &[[f64; 3]]) -> (Geometry, Vec3) {
+        let g = Geometry::from_points(points).unwrap().0;
+        let sensor = (-g.origin).as_vec3();
+        (g, sensor)
+    }
+
+    /// A floor-like slope, every 7th pixel and the last 5 rows without depth.
+    fn sloped(x: usize, y: usize) -> f64 {
+        if (x + 3 * y).is_multiple_of(7) || y >= 43 {
+            f64::NAN
+        } else {
+            2.0 + 0.004 * y as f64 + 0.001 * x as f64
+        }
+    }
+
+    #[test]
+    fn a_frame_written_row_by_row_lies_on_its_grid() {
+        let (g, sensor) = geometry(&frame(64, 48, sloped));
+        let grid = pixel_grid(&g, sensor).expect("a grid");
+        assert_eq!((grid.width, grid.height), (64, 43));
+    }
+
+    #[test]
+    fn the_same_samples_in_another_order_lie_on_no_grid() {
+        let points = frame(64, 48, sloped);
+        let n = points.len();
+        // 1009 is prime to n = 3072: a permutation.
+        let shuffled: Vec<[f64; 3]> = (0..n).map(|i| points[i * 1009 % n]).collect();
+        let (g, sensor) = geometry(&shuffled);
+        assert_eq!(pixel_grid(&g, sensor), None);
+    }
+
+    #[test]
+    fn a_depth_edge_is_not_joined_and_every_triangle_faces_the_sensor() {
+        let near = |x: usize| x < 32;
+        let (g, sensor) = geometry(&frame(64, 48, |x, _| if near(x) { 1.0 } else { 2.0 }));
+        let (_, triangles) = frame_triangles(&g, sensor).expect("a grid");
+        let at = |v: u32| g.positions[v as usize];
+        let depth = |v: u32| (at(v) - sensor).length();
+        assert_eq!(triangles.len(), 2 * 2 * 31 * 47);
+        for &[a, b, c] in &triangles {
+            let sides = [a, b, c].map(|v| depth(v) < 1.5);
+            assert!(
+                sides.iter().all(|s| *s == sides[0]),
+                "{a} {b} {c} join the edge"
+            );
+            let n = (at(b) - at(a)).cross(at(c) - at(a));
+            assert!(n.dot(sensor - at(a)) > 0.0, "{a} {b} {c} faces away");
+        }
+    }
+
+    #[test]
+    fn a_frame_s_splats_do_not_bridge_its_depth_edge() {
+        let points = frame(64, 48, |x, _| if x < 32 { 1.0 } else { 2.0 });
+        let g = Geometry::from_points(&points).unwrap().0;
+        let leaves = crate::surfel::leaf_surfels(&g);
+        assert_eq!(leaves.stats.pixel_grid.map(|p| p.width), Some(64));
+        let sensor = (-g.origin).as_vec3();
+        for s in &leaves.surfels {
+            let depth = (s.position - sensor).length() as f64;
+            // A pixel's neighbours lie one pitch away, its diagonal ones √2.
+            assert!(
+                (s.radius as f64) < 2.0 * PITCH * depth,
+                "radius {} at depth {depth}",
+                s.radius
+            );
+        }
+    }
+}
