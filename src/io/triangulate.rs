@@ -21,9 +21,19 @@ pub const GRID_MAX_EDGE: f64 = 0.05;
 pub const TERRAIN_MAX_EDGE: f64 = 4.0;
 
 /// Triangles of `geometry` as a `width` × `height` sensor grid, the vertex of file row
-/// `row` at pixel (row mod width, row / width). Fails when the file has more rows than
-/// the grid has pixels.
+/// `row` at pixel (row mod width, row / width), none with an edge longer than
+/// [`GRID_MAX_EDGE`] of its depth. Fails when the file has more rows than the grid has
+/// pixels.
 pub fn sensor_grid(geometry: &Geometry, width: u32, height: u32) -> Result<Vec<[u32; 3]>, String> {
+    sensor_grid_within(geometry, (width, height), GRID_MAX_EDGE)
+}
+
+/// [`sensor_grid`], with no edge longer than `max_edge` of its triangle's depth.
+pub fn sensor_grid_within(
+    geometry: &Geometry,
+    (width, height): (u32, u32),
+    max_edge: f64,
+) -> Result<Vec<[u32; 3]>, String> {
     let pixels = width as usize * height as usize;
     let n = geometry.positions.len();
     let row_of = |i: usize| geometry.rows.as_ref().map_or(i, |r| r[i] as usize);
@@ -40,7 +50,7 @@ pub fn sensor_grid(geometry: &Geometry, width: u32, height: u32) -> Result<Vec<[
     let position = |v: u32| geometry.origin + geometry.positions[v as usize].as_dvec3();
     let short_enough = |t: &[u32; 3]| {
         let depth = t.iter().map(|&v| position(v).length()).sum::<f64>() / 3.0;
-        (0..3).all(|k| position(t[k]).distance(position(t[(k + 1) % 3])) <= GRID_MAX_EDGE * depth)
+        (0..3).all(|k| position(t[k]).distance(position(t[(k + 1) % 3])) <= max_edge * depth)
     };
     let mut triangles = Vec::new();
     for y in 0..height as usize - 1 {
