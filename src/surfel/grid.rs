@@ -65,13 +65,18 @@ pub struct PixelGrid {
 /// the angle between the surface's normal and the ray; a longer edge than 17.5 p·z
 /// joins pixels that see a surface within 3.3° of edge-on, which the sensor does not
 /// resolve, or two surfaces across a depth edge. `cloud_quality
-/// ../shared/data/kinect_rgb.ply --grid 640x480` (4 views, medians; its pitch 1.71 mrad,
+/// ../shared/data/kinect_rgb.ply --grid 640x480` (4 views, medians; its pitch 1.72 mrad,
 /// so 17.5 pitches are 3 % of the depth): FLIP 0.1948 at 14 pitches (worst view's holes
 /// 1.09 %), 0.1954 at 17.5 (0.27 %), 0.1980 at 21 (0.10 %), 0.2061 at the reference
 /// triangulation's own 5 % of the depth (29 pitches; 0.004 %), 0.2264 at 8 %: the
 /// reference's long, near edge-on triangles, drawn as splats, are ellipses wider than
 /// the pixels that saw them.
 pub const MAX_EDGE_PITCHES: f64 = 17.5;
+
+/// Largest ratio of a grid's vertical to its horizontal pitch, or the reverse (a
+/// sensor's pixels are about square; kinect_rgb's 1.01). One scan line written sample
+/// after sample, whose second neighbours lie 2 pitches away, is no grid of width 2.
+const MAX_PITCH_RATIO: f32 = 1.5;
 
 /// The widest grid looked for (a 16 K-pixel-wide sensor).
 pub const MAX_WIDTH: usize = 16_384;
@@ -116,7 +121,9 @@ pub fn pixel_grid(g: &Geometry, sensor: Vec3) -> Option<(PixelGrid, f32)> {
     };
     let (across, down) = (spacing(1), spacing(width));
     let (pitch_across, pitch_down) = (median(&across)?, median(&down)?);
-    let tolerable = pitch_across.max(pitch_down) <= PITCH_TOLERANCE * pitch_across.min(pitch_down);
+    // Samples along one ray (a pitch of 0) or pitches far apart make no grid.
+    let tolerable = pitch_across.min(pitch_down) > 0.0
+        && pitch_across.max(pitch_down) <= MAX_PITCH_RATIO * pitch_across.min(pitch_down);
     let on_grid = |angles: &[Option<f32>], pitch: f32| {
         let near = |a: &f32| *a <= PITCH_TOLERANCE * pitch && *a >= pitch / PITCH_TOLERANCE;
         let present: Vec<f32> = angles.iter().flatten().copied().collect();
@@ -215,6 +222,19 @@ mod tests {
         // 1009 is prime to n = 3072: a permutation.
         let shuffled: Vec<[f64; 3]> = (0..n).map(|i| points[i * 1009 % n]).collect();
         let (g, sensor) = geometry(&shuffled);
+        assert_eq!(pixel_grid(&g, sensor), None);
+    }
+
+    #[test]
+    fn samples_along_one_ray_or_one_line_lie_on_no_grid() {
+        // Every pixel on the optical axis, at its own depth.
+        let on_axis: Vec<[f64; 3]> = (0..3072)
+            .map(|i| [0.0, 0.0, 1.0 + i as f64 * 1e-3])
+            .collect();
+        let (g, sensor) = geometry(&on_axis);
+        assert_eq!(pixel_grid(&g, sensor), None);
+        // One scan line, written pixel after pixel.
+        let (g, sensor) = geometry(&frame(3072, 1, |_, _| 2.0));
         assert_eq!(pixel_grid(&g, sensor), None);
     }
 
