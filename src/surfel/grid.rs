@@ -57,6 +57,9 @@ fn facing_away(points: &[Vec3], triangles: &[[u32; 3]], sensor: Vec3) -> bool {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub struct PixelGrid {
     pub width: u32,
+    /// Rows up to the last that holds a sample: a frame whose last rows saw nothing
+    /// (dropped by the reader, and not counted here) is taller; `spt info` tells its
+    /// height from the file's row count.
     pub height: u32,
 }
 
