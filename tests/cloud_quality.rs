@@ -4,9 +4,9 @@
 //! triangulation rendered at 4×4 and averaged in linear light (`spt::apps::cloud_quality`).
 //!
 //! What this asserts is what holds today, so that it cannot get worse unnoticed: the
-//! bounds below sit just above the measured medians and worst views (kinect FLIP 0.195,
-//! holes 0.10 %, worst view 0.27 %, since its splats are those of its pixel grid's
-//! triangles (`spt::surfel::grid`); 0.259, 0.22 % and 0.38 % when they were fitted to
+//! bounds below sit just above the measured medians and worst views (kinect FLIP 0.189,
+//! holes 0.13 %, worst view 0.37 %, since its splats are those of its pixel grid's
+//! triangles, clipped at its borders (`spt::surfel::grid`); 0.259, 0.22 % and 0.38 % when they were fitted to
 //! their nearest neighbours and spanned at most 3 of its pixels seen from the sensor,
 //! `spt::surfel::footprint`; 0.297, 0.023 % and 0.067 % before that, 0.298,
 //! 0.08 % and 0.13 % before a normal on one depth step came from the steps around it,
@@ -16,7 +16,7 @@
 //! before the surfels of issue 13: 0.37 / 8.9 % and 0.26 / 1.0 %). Issue 13's hole
 //! bound (0.5 %) holds on every view of both, and is asserted on the worst; its FLIP
 //! target (0.12) is not reached. Level of detail at ε = 1 px stays within
-//! [`MAX_LOD_COST`] of the leaves' FLIP (measured: kinect 1.11, terrain 1.08), so that
+//! [`MAX_LOD_COST`] of the leaves' FLIP (measured: kinect 1.12, terrain 1.08), so that
 //! work on the meshes' inner nodes cannot blur or blot a cloud's level of detail
 //! unnoticed.
 //! The display modes of clouds (EDL, elevation) are checked on the tile.
@@ -87,7 +87,7 @@ fn kinect_frame_against_its_sensor_grid() {
         width: 640,
         height: 480,
     };
-    check("kinect_rgb.ply", grid, 0.2, [0.0015, 0.003]);
+    check("kinect_rgb.ply", grid, 0.2, [0.0015, 0.004]);
 }
 
 #[test]

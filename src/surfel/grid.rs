@@ -18,8 +18,11 @@
 //! neighbours alike lie about one pitch apart: a cloud written in any other order (a
 //! scanned mesh's vertices, a tile sorted in space) has no grid.
 
-use glam::Vec3;
+use glam::{DVec2, Vec3};
 use rayon::prelude::*;
+
+use super::Surfel;
+use super::clip::Clip;
 
 use crate::io::Geometry;
 use crate::io::triangulate::sensor_grid_within;
@@ -36,6 +39,77 @@ pub fn frame_triangles(g: &Geometry, sensor: Vec3) -> Option<(PixelGrid, Vec<[u3
         triangles.par_iter_mut().for_each(|t| t.swap(1, 2));
     }
     Some((grid, triangles))
+}
+
+/// Clips each splat of a vertex inside the grid's mesh (`surfels`, one per point, sized
+/// by the mesh's rules) whose ring holds a border edge (an edge of one triangle only)
+/// at that edge's line, and returns how many it clipped. A border vertex's splat ends
+/// at its fan (`super::ring`), but its neighbour's ellipse, which covers the ring's
+/// triangles, reaches past the border edge opposite it: along every hole and outline of
+/// the frame that made a rim a pixel wide that the reference leaves empty. Where a ring
+/// holds several border edges, the nearest one's line clips.
+pub fn clip_at_border(points: &[Vec3], triangles: &[[u32; 3]], surfels: &mut [Surfel]) -> u64 {
+    let key = |a: u32, b: u32| (a.min(b), a.max(b));
+    let mut uses = std::collections::HashMap::<(u32, u32), u8>::new();
+    for t in triangles {
+        for k in 0..3 {
+            let e = uses.entry(key(t[k], t[(k + 1) % 3])).or_default();
+            *e = e.saturating_add(1);
+        }
+    }
+    let on_border: std::collections::HashSet<u32> = uses
+        .iter()
+        .filter(|(_, n)| **n == 1)
+        .flat_map(|((a, b), _)| [*a, *b])
+        .collect();
+    let mut nearest: Vec<Option<Clip>> = vec![None; surfels.len()];
+    for t in triangles {
+        for k in 0..3 {
+            let (v, a, b) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            if on_border.contains(&v) || uses[&key(a, b)] != 1 {
+                continue;
+            }
+            let line = edge_clip(&surfels[v as usize], points[a as usize], points[b as usize]);
+            let offset = |c: &Option<Clip>| match c {
+                Some(Clip::Line { offset, .. }) => *offset,
+                _ => f64::INFINITY,
+            };
+            if offset(&line) < offset(&nearest[v as usize]) {
+                nearest[v as usize] = line;
+            }
+        }
+    }
+    let mut clipped = 0;
+    for (s, clip) in surfels.iter_mut().zip(nearest) {
+        if let Some(c @ Clip::Line { offset, .. }) = clip
+            && offset < 1.0
+        {
+            s.shape.clip = Clip::pack(Some(c));
+            clipped += 1;
+        }
+    }
+    clipped
+}
+
+/// The line through `a` and `b` as a clip of splat `s` (kept: its centre's side), in
+/// its ellipse's plane coordinates ([`Clip::Line`]); `None` when the line is degenerate
+/// or passes through the centre.
+fn edge_clip(s: &Surfel, a: Vec3, b: Vec3) -> Option<Clip> {
+    let n = s.normal.as_dvec3();
+    let shape = s.shape.unpack(n);
+    let (u, v) = (shape.axis, shape.minor_axis(n));
+    let r = s.radius as f64;
+    let plane = |p: Vec3| {
+        let d = (p - s.position).as_dvec3();
+        DVec2::new(d.dot(u), d.dot(v)) / r
+    };
+    let (pa, pb) = (plane(a), plane(b));
+    let mut normal = (pb - pa).perp().try_normalize()?;
+    if normal.dot(pa) < 0.0 {
+        normal = -normal;
+    }
+    let offset = normal.dot(pa);
+    (offset > 0.0).then_some(Clip::Line { normal, offset })
 }
 
 /// Whether `triangles` face away from `sensor`, by area. One grid's triangles all wind
@@ -276,5 +350,57 @@ mod tests {
                 s.radius
             );
         }
+    }
+
+    /// Whether surfel `s`'s clipped ellipse covers `p` (in its plane, to first order).
+    fn covers(s: &Surfel, p: Vec3) -> bool {
+        let n = s.normal.as_dvec3();
+        let shape = s.shape.unpack(n);
+        let d = (p - s.position).as_dvec3() / s.radius as f64;
+        let xy = DVec2::new(d.dot(shape.axis), d.dot(shape.minor_axis(n)));
+        let inside = xy.x * xy.x + (xy.y / shape.ratio).powi(2) < 1.0;
+        inside && shape.clip.is_none_or(|c| c.keeps(xy))
+    }
+
+    #[test]
+    fn an_inner_splat_is_clipped_at_the_border_edge_of_its_ring() {
+        // Pixels of a 3 × 3 block, 1 apart: every edge of the centre's ring is on the
+        // border. The centre's splat, a circle reaching 1.5 pixels, passes the border
+        // edges (at 1) until it is clipped at the nearest one's line.
+        let points: Vec<Vec3> = (0..9)
+            .map(|i| Vec3::new((i % 3) as f32 - 1.0, (i / 3) as f32 - 1.0, 0.0))
+            .collect();
+        let triangles = [
+            [0, 4, 1],
+            [0, 3, 4],
+            [1, 5, 2],
+            [1, 4, 5],
+            [3, 7, 4],
+            [3, 6, 7],
+        ];
+        let triangles = [&triangles[..], &[[4, 8, 5], [4, 7, 8]]].concat();
+        let mut surfels: Vec<Surfel> = points
+            .iter()
+            .map(|&position| Surfel {
+                position,
+                radius: 1.5,
+                normal: Vec3::Z,
+                color: crate::surfel::DEFAULT_COLOR,
+                shape: crate::surfel::shape::SplatShape::circle(Vec3::Z),
+                attributes: Default::default(),
+            })
+            .collect();
+        assert!(covers(&surfels[4], Vec3::new(1.25, 0.0, 0.0)));
+        assert_eq!(clip_at_border(&points, &triangles, &mut surfels), 1);
+        let kept = |x: f32, y: f32| covers(&surfels[4], Vec3::new(x, y, 0.0));
+        assert!(kept(0.0, 0.0) && kept(0.9, 0.0) && kept(-0.9, 0.0) && kept(0.0, 0.9));
+        let past = [(1.1, 0.0), (-1.1, 0.0), (0.0, 1.1), (0.0, -1.1)];
+        assert_eq!(past.iter().filter(|&&(x, y)| kept(x, y)).count(), 3);
+        // The border vertices keep their own clips (none here).
+        assert!(
+            surfels[..4]
+                .iter()
+                .all(|s| s.shape.clip == surfels[0].shape.clip)
+        );
     }
 }

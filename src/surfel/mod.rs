@@ -299,6 +299,7 @@ fn leaf_surfels_among(
             &mut stats,
         );
         redundant = disks.redundant;
+        stats.clipped_boundaries += grid::clip_at_border(&g.positions, triangles, &mut surfels);
         stats.pixel_grid = Some(*frame_grid);
         let oriented = given.is_some() && stats.given_normals == own as u64;
         if !oriented {
