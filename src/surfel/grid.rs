@@ -47,26 +47,31 @@ pub fn frame_triangles(g: &Geometry, sensor: Vec3) -> Option<(PixelGrid, Vec<[u3
 /// at its fan (`super::ring`), but its neighbour's ellipse, which covers the ring's
 /// triangles, reaches past the border edge opposite it: along every hole and outline of
 /// the frame that made a rim a pixel wide that the reference leaves empty. Where a ring
-/// holds several border edges, the nearest one's line clips.
+/// holds several border edges, the nearest one's line clips. Edges are counted by
+/// sorting them (a hash map over kinect_rgb's 1.5 M edges took 0.3 s).
 pub fn clip_at_border(points: &[Vec3], triangles: &[[u32; 3]], surfels: &mut [Surfel]) -> u64 {
     let key = |a: u32, b: u32| (a.min(b), a.max(b));
-    let mut uses = std::collections::HashMap::<(u32, u32), u8>::new();
-    for t in triangles {
-        for k in 0..3 {
-            let e = uses.entry(key(t[k], t[(k + 1) % 3])).or_default();
-            *e = e.saturating_add(1);
-        }
-    }
-    let on_border: std::collections::HashSet<u32> = uses
-        .iter()
-        .filter(|(_, n)| **n == 1)
-        .flat_map(|((a, b), _)| [*a, *b])
+    let mut edges: Vec<(u32, u32)> = triangles
+        .par_iter()
+        .flat_map_iter(|t| (0..3).map(move |k| key(t[k], t[(k + 1) % 3])))
         .collect();
+    edges.par_sort_unstable();
+    // Sorted: an edge of one triangle is a run of one.
+    let border_edges: Vec<(u32, u32)> = edges
+        .chunk_by(|a, b| a == b)
+        .filter(|run| run.len() == 1)
+        .map(|run| run[0])
+        .collect();
+    let mut on_border = vec![false; surfels.len()];
+    for &(a, b) in &border_edges {
+        on_border[a as usize] = true;
+        on_border[b as usize] = true;
+    }
     let mut nearest: Vec<Option<Clip>> = vec![None; surfels.len()];
     for t in triangles {
         for k in 0..3 {
             let (v, a, b) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            if on_border.contains(&v) || uses[&key(a, b)] != 1 {
+            if on_border[v as usize] || border_edges.binary_search(&key(a, b)).is_err() {
                 continue;
             }
             let line = edge_clip(&surfels[v as usize], points[a as usize], points[b as usize]);
