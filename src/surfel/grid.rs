@@ -387,12 +387,10 @@ mod tests {
         let mut surfels: Vec<Surfel> = points
             .iter()
             .map(|&position| Surfel {
-                position,
                 radius: 1.5,
                 normal: Vec3::Z,
-                color: crate::surfel::DEFAULT_COLOR,
                 shape: crate::surfel::shape::SplatShape::circle(Vec3::Z),
-                attributes: Default::default(),
+                ..Surfel::unsized_at(position)
             })
             .collect();
         assert!(covers(&surfels[4], Vec3::new(1.25, 0.0, 0.0)));

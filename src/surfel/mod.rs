@@ -48,6 +48,21 @@ pub struct Surfel {
 /// Colour of surfels of a model without colours.
 pub const DEFAULT_COLOR: [u8; 4] = [180, 180, 180, 255];
 
+impl Surfel {
+    /// A surfel at `position` with [`DEFAULT_COLOR`], not yet sized (radius 0, zero
+    /// normal and shape, no attributes).
+    pub fn unsized_at(position: Vec3) -> Surfel {
+        Surfel {
+            position,
+            radius: 0.0,
+            normal: Vec3::ZERO,
+            color: DEFAULT_COLOR,
+            shape: SplatShape::zeroed(),
+            attributes: PointAttributes::default(),
+        }
+    }
+}
+
 /// How the leaf surfels were made.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
 pub struct SurfelStats {
@@ -250,15 +265,12 @@ fn initial_surfels(g: &Geometry) -> Vec<Surfel> {
         .par_iter()
         .enumerate()
         .map(|(i, &position)| Surfel {
-            position,
-            radius: 0.0,
-            normal: Vec3::ZERO,
             color: g.colors.as_ref().map_or(DEFAULT_COLOR, |c| c[i]),
-            shape: SplatShape::zeroed(),
             attributes: g
                 .attributes
                 .as_ref()
                 .map_or_else(PointAttributes::default, |a| a[i]),
+            ..Surfel::unsized_at(position)
         })
         .collect()
 }

@@ -370,17 +370,7 @@ mod tests {
     /// The surfels of the cloud `points` (unit-scaled by `scale`) with its normals
     /// turned by `orientation`.
     fn surfels_of(points: &[Vec3], scale: f32, orientation: Orientation) -> Vec<Surfel> {
-        let mut surfels: Vec<Surfel> = points
-            .iter()
-            .map(|&position| Surfel {
-                position,
-                radius: 0.0,
-                normal: Vec3::ZERO,
-                color: super::super::DEFAULT_COLOR,
-                shape: bytemuck::Zeroable::zeroed(),
-                attributes: Default::default(),
-            })
-            .collect();
+        let mut surfels: Vec<Surfel> = points.iter().map(|&p| Surfel::unsized_at(p)).collect();
         let all: Vec<u32> = (0..points.len() as u32).collect();
         let rule = (RadiusRule::Surrounding, orientation);
         let mut stats = SurfelStats::default();
