@@ -2,7 +2,7 @@
 #import fullscreen
 #import surrounded
 
-// Pass 3: normalize the blended attributes and shade each pixel (Blinn-Phong with a
+// Pass 3: divide the blended attributes by their weight and shade each pixel (Blinn-Phong with a
 // movable light); background where no splat contributed, unless the pixel is a gap
 // between two pixels of one surface, and a surface's front where only its hidden side
 // shows through a slit in it (`fill_between`). Writes an sRGB target and the mask of
@@ -53,15 +53,25 @@ fn fs_shade(@builtin(position) frag: vec4<f32>) -> Shaded {
     if sums.c.w <= 0.0 {
         return Shaded(vec4<f32>(frame.background.rgb, 1.0), 0.0);
     }
-    let alpha = select(coverage_alpha(texel, samples), 1.0, filled);
-    return Shaded(vec4<f32>(shade(frag.xy, texel, sums, alpha), 1.0), f32(covered));
+    let inside = surrounded(depth, texel);
+    let alpha = select(coverage_alpha(samples, inside), 1.0, filled);
+    return Shaded(vec4<f32>(shade(frag.xy, texel, sums, alpha, inside), 1.0), f32(covered));
 }
 
 // The colour of a pixel whose G-buffer sums are `sums`, blended over the background
-// by `alpha`.
-fn shade(frag: vec2<f32>, texel: vec2<i32>, sums: Sums, alpha: f32) -> vec3<f32> {
+// by `alpha`; `inside`: the pixel and its four neighbours show a surface.
+//
+// The diffuse term is linear in the normal, so the mean of the blended fragments'
+// n·l is l·n̄ with n̄ = Σ w n / Σ w, the weighted mean normal, not normalized: where
+// the splats' normals disagree within the pixel's filter (the one-pixel ridges of a
+// quantised depth frame), |n̄| < 1 darkens the pixel as averaging the reference's
+// shaded supersamples does. Beside the background the blended fragments are a rim's,
+// whose normals turn edge-on and flip to face the eye where the reference shows one
+// front side: there the diffuse term takes the normalized n̄ (README, issue 13).
+fn shade(frag: vec2<f32>, texel: vec2<i32>, sums: Sums, alpha: f32, inside: bool) -> vec3<f32> {
     let color = sums.c.rgb / sums.c.w;
-    let n = normalize(sums.nz.xyz);
+    let mean_n = sums.nz.xyz / sums.c.w;
+    let n = normalize(mean_n);
     if frame.mode == MODE_NORMALS {
         return n * 0.5 + 0.5;
     }
@@ -72,16 +82,16 @@ fn shade(frag: vec2<f32>, texel: vec2<i32>, sums: Sums, alpha: f32) -> vec3<f32>
     let l = normalize(frame.light_dir);
     let v = normalize(-q);
     let h = normalize(l + v);
-    let diffuse = max(dot(n, l), 0.0);
+    let diffuse = max(dot(select(n, mean_n, inside), l), 0.0);
     let specular = frame.specular * pow(max(dot(n, h), 0.0), 32.0) * select(0.0, 1.0, diffuse > 0.0);
     let shaded = color * (0.25 + 0.75 * diffuse) + vec3<f32>(specular);
     return mix(frame.background.rgb, shaded, alpha);
 }
 
 // The share of the pixel's coverage `samples` that the splats cover (all of it where
-// the pixel and its neighbours show a surface at their centres).
-fn coverage_alpha(texel: vec2<i32>, samples: vec4<f32>) -> f32 {
-    return select(dot(samples, vec4<f32>(0.25)), 1.0, surrounded(depth, texel));
+// the pixel and its neighbours show a surface at their centres: `inside`).
+fn coverage_alpha(samples: vec4<f32>, inside: bool) -> f32 {
+    return select(dot(samples, vec4<f32>(0.25)), 1.0, inside);
 }
 
 // The eight unit directions eye-dome lighting looks in, every 45°.
@@ -146,7 +156,7 @@ fn front_at_centre(marked: vec4<f32>) -> bool {
 
 // Fills a pixel when, along GAP_MIN_DIRECTIONS or more of x, y and the diagonals, the
 // pixels on both sides within two pixels show one surface (pass 1's depth at their
-// centres, within GAP_DEPTH_RATIO). Returns the sums of the two sides' normalized
+// centres, within GAP_DEPTH_RATIO). Returns the sums of the two sides' mean
 // attributes, for every direction across which the pixel is such a gap (w = the
 // number of pixels summed; w = 0: not a gap). Two kinds of pixel are filled:
 // - a gap of a cloud's sampling, whose centre no splat covers (`fills_gaps`);
@@ -174,8 +184,8 @@ fn fill_between(texel: vec2<i32>, slit: bool) -> Sums {
         } else {
             continue;
         }
-        add_normalized(&sums, texel + sides.x * d);
-        add_normalized(&sums, texel - sides.y * d);
+        add_mean(&sums, texel + sides.x * d);
+        add_mean(&sums, texel - sides.y * d);
         across += 1;
     }
     if across < GAP_MIN_DIRECTIONS {
@@ -201,13 +211,14 @@ fn one_surface(a: f32, b: f32) -> bool {
     return min(a, b) > 0.0 && max(a, b) <= GAP_DEPTH_RATIO * min(a, b);
 }
 
-// Adds a texel's normalized colour, unit normal and view distance to `sums`, weight 1.
-fn add_normalized(sums: ptr<function, Sums>, texel: vec2<i32>) {
+// Adds a texel's mean colour, normal and view distance (its sums over their weight) to
+// `sums`, weight 1.
+fn add_mean(sums: ptr<function, Sums>, texel: vec2<i32>) {
     let c = textureLoad(color_sum, texel, 0);
     if c.w <= 0.0 {
         return;
     }
     let nz = textureLoad(normal_sum, texel, 0);
     (*sums).c += vec4<f32>(c.rgb / c.w, 1.0);
-    (*sums).nz += vec4<f32>(normalize(nz.xyz), nz.w / c.w);
+    (*sums).nz += nz / c.w;
 }

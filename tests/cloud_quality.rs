@@ -4,9 +4,10 @@
 //! triangulation rendered at 4×4 and averaged in linear light (`spt::apps::cloud_quality`).
 //!
 //! What this asserts is what holds today, so that it cannot get worse unnoticed: the
-//! bounds below sit just above the measured medians and worst views (kinect FLIP 0.189,
-//! holes 0.13 %, worst view 0.37 %, since its splats are those of its pixel grid's
-//! triangles, clipped at its borders (`spt::surfel::grid`); 0.259, 0.22 % and 0.38 % when they were fitted to
+//! bounds below sit just above the measured medians and worst views (kinect FLIP 0.175,
+//! holes 0.13 %, worst view 0.37 %, since pass 3's diffuse term takes the blended
+//! normals' mean unnormalized; 0.189 before that, since its splats are those of its
+//! pixel grid's triangles, clipped at its borders (`spt::surfel::grid`); 0.259, 0.22 % and 0.38 % when they were fitted to
 //! their nearest neighbours and spanned at most 3 of its pixels seen from the sensor,
 //! `spt::surfel::footprint`; 0.297, 0.023 % and 0.067 % before that, 0.298,
 //! 0.08 % and 0.13 % before a normal on one depth step came from the steps around it,
@@ -16,7 +17,7 @@
 //! before the surfels of issue 13: 0.37 / 8.9 % and 0.26 / 1.0 %). Issue 13's hole
 //! bound (0.5 %) holds on every view of both, and is asserted on the worst; its FLIP
 //! target (0.12) is not reached. Level of detail at ε = 1 px stays within
-//! [`MAX_LOD_COST`] of the leaves' FLIP (measured: kinect 1.12, terrain 1.08), so that
+//! [`MAX_LOD_COST`] of the leaves' FLIP (measured: kinect 1.15, terrain 1.08), so that
 //! work on the meshes' inner nodes cannot blur or blot a cloud's level of detail
 //! unnoticed.
 //! The display modes of clouds (EDL, elevation) are checked on the tile.
@@ -27,8 +28,12 @@ use spt::apps::cloud_quality::{CloudAndReference, Triangulation, ViewFigures, me
 use spt::apps::stats::quantile;
 use spt::render::{Camera, Settings, settings::Mode};
 
-/// Largest median FLIP at ε = 1 px over the leaves' median FLIP.
-const MAX_LOD_COST: f64 = 1.15;
+/// Largest median FLIP at ε = 1 px over the leaves' median FLIP. 1.15 until pass 3's
+/// diffuse term took the mean of the blended normals unnormalized: on the frame's
+/// one-pixel ridges the leaves' disagreeing normals now darken as the reference's
+/// supersamples do (0.189 → 0.175), while an inner node carries one normal field and
+/// no spread of its children's normals (ε = 1 px: 0.212 → 0.202, 1.12 → 1.15×).
+const MAX_LOD_COST: f64 = 1.2;
 
 fn median(figures: &[ViewFigures], get: fn(&ViewFigures) -> f64) -> f64 {
     quantile(&mut figures.iter().map(get).collect::<Vec<_>>(), 0.5).unwrap()
@@ -87,7 +92,7 @@ fn kinect_frame_against_its_sensor_grid() {
         width: 640,
         height: 480,
     };
-    check("kinect_rgb.ply", grid, 0.2, [0.0015, 0.004]);
+    check("kinect_rgb.ply", grid, 0.18, [0.0015, 0.004]);
 }
 
 #[test]
