@@ -2,7 +2,7 @@
 //!
 //! Pass 2 blends the overlapping splats' fields, each weighted by its kernel; the mesh
 //! shades with the barycentric blend of its vertex normals. A field anchored at the
-//! vertex normal, its gradient the one-ring's least-squares [`Fit`](super::shape::Fit),
+//! vertex normal, its gradient the one-ring's least-squares [`Fit`],
 //! matches the mesh at the vertex only: where the splat's weight lies (within about half
 //! its radius) the mesh's field is piecewise linear, peaked at a scanner's striations,
 //! and the blend of such fields was 0.99° from the mesh's normals on average over the

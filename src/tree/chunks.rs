@@ -22,8 +22,8 @@
 //! own record (e, e_parent, δ), so the exact test of DESIGN.md §5 draws the same nodes
 //! whatever the chunks are, and that set covers every leaf. What the chunks change is
 //! only what the CPU hands over: in chunk c, the nodes past the first i with
-//! e_parent[i] ≤ ε · (d_min(c) − Δ_c[i]) cannot pass the test, because d_min(c), the
-//! distance from the eye to the chunk's box, is at most any of its nodes' d, and Δ_c[i]
+//! `e_parent[i] ≤ ε · (d_min(c) − Δ_c[i])` cannot pass the test, because d_min(c), the
+//! distance from the eye to the chunk's box, is at most any of its nodes' d, and `Δ_c[i]`
 //! is the largest δ from i to the chunk's end. The chunk is sorted, so the predicate is
 //! monotone and its binary search exact. A chunk whose box, grown by its largest splat
 //! radius, lies outside the view cone holds only splats the GPU's frustum test would
@@ -213,7 +213,7 @@ pub fn cut(h: &Hierarchy, max_nodes: usize) -> Cut {
 /// The order of chunks in the list, coarse first: by the binary octave of the chunk's
 /// largest parent error (f16 bits, non-negative: the exponent field), descending, then
 /// by its least level. A view at ε needs chunk c only if that largest parent error
-/// exceeds ε · (d_min(c) − Δ_c[0]) (module doc), so over chunks at similar distances
+/// exceeds `ε · (d_min(c) − Δ_c[0])` (module doc), so over chunks at similar distances
 /// what a view needs is a prefix of this order, within an octave: a viewer streaming
 /// slices of consecutive nodes fetches few for a coarse view.
 pub fn coarse_first(largest_parent_error: u16, level: u32) -> (u16, u32) {

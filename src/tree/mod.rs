@@ -184,7 +184,7 @@ pub fn error_scale(surfels: &[Surfel]) -> f32 {
 }
 
 /// The record and shape of an internal node from its children's (already computed):
-/// the parent disk and colour, its ellipse and normal field ([`parent_shape`]), its
+/// the parent disk and colour, its ellipse and normal field ([`parent_shape()`]), its
 /// radius (the ellipse's major semi-axis) rounded up from f64 so that it still reaches
 /// every child, and its error rounded up and never below a child's.
 fn internal_record(

@@ -14,8 +14,8 @@
 //! Every leaf then has a drawn ancestor-or-self: the first node on its path from the
 //! root that is fine enough is drawn, because its parent's distance is at least
 //! d_n − δ_n. Each chunk of the list ([`super::chunks`]) is sorted by e_parent
-//! descending; nodes past the first i with e_parent[i] ≤ ε · (d_min − Δ[i]) cannot pass
-//! the second test (d_min: eye to the box of the chunk's node centres, Δ[i]: the
+//! descending; nodes past the first i with `e_parent[i] ≤ ε · (d_min − Δ[i])` cannot pass
+//! the second test (d_min: eye to the box of the chunk's node centres, `Δ[i]`: the
 //! largest δ from i to the chunk's end), and that predicate is monotone in i, so a
 //! binary search finds the chunk's prefix. Δ is kept per block of [`BLOCK`] nodes of a
 //! chunk (the largest δ from the block's start on): a prefix may include up to a block

@@ -47,7 +47,7 @@
 //! attributes (what the attribute display modes read; a model without pays nothing),
 //! the chunk table ([`Chunk`]: each chunk's range of the list, box and largest radius;
 //! the chunks follow each other and cover the list), the δ suffix maxima of the prefix
-//! search (u16 each, [`chunk_delta_suffix`], chunk after chunk) and the block heads
+//! search (u16 each, [`chunk_delta_suffix`](super::select::chunk_delta_suffix), chunk after chunk) and the block heads
 //! (u16 each, [`block_heads`], as many), so that a file opens to its first frame, and
 //! finds what a view needs, without reading its nodes.
 

@@ -28,7 +28,7 @@ pub struct Field {
 }
 
 /// The vertex fields used, in a fixed order: x y z, then nx ny nz if all three are
-/// present, then red green blue [alpha] if the three colours are present.
+/// present, then red green blue \[alpha\] if the three colours are present.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct VertexFields {
     pub fields: Vec<Field>,
