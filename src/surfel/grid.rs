@@ -18,7 +18,7 @@
 //! neighbours alike lie about one pitch apart: a cloud written in any other order (a
 //! scanned mesh's vertices, a tile sorted in space) has no grid.
 
-use glam::{DVec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
 use super::Surfel;
@@ -102,12 +102,8 @@ pub fn clip_at_border(points: &[Vec3], triangles: &[[u32; 3]], surfels: &mut [Su
 fn edge_clip(s: &Surfel, a: Vec3, b: Vec3) -> Option<Clip> {
     let n = s.normal.as_dvec3();
     let shape = s.shape.unpack(n);
-    let (u, v) = (shape.axis, shape.minor_axis(n));
     let r = s.radius as f64;
-    let plane = |p: Vec3| {
-        let d = (p - s.position).as_dvec3();
-        DVec2::new(d.dot(u), d.dot(v)) / r
-    };
+    let plane = |p: Vec3| shape.along_axes(n, (p - s.position).as_dvec3()) / r;
     let (pa, pb) = (plane(a), plane(b));
     let mut normal = (pb - pa).perp().try_normalize()?;
     if normal.dot(pa) < 0.0 {
@@ -362,7 +358,7 @@ mod tests {
         let n = s.normal.as_dvec3();
         let shape = s.shape.unpack(n);
         let d = (p - s.position).as_dvec3() / s.radius as f64;
-        let xy = DVec2::new(d.dot(shape.axis), d.dot(shape.minor_axis(n)));
+        let xy = shape.along_axes(n, d);
         let inside = xy.x * xy.x + (xy.y / shape.ratio).powi(2) < 1.0;
         inside && shape.clip.is_none_or(|c| c.keeps(xy))
     }

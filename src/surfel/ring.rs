@@ -82,7 +82,7 @@ fn border_normal(chord: DVec2, fit: &Fit) -> DVec2 {
 fn to_plane(normal: DVec3, d: DVec2, shape: &Shape) -> Option<DVec2> {
     let (t1, t2) = tangent_frame(normal);
     let o = t1 * d.x + t2 * d.y;
-    DVec2::new(o.dot(shape.axis), o.dot(shape.minor_axis(normal))).try_normalize()
+    shape.along_axes(normal, o).try_normalize()
 }
 
 /// The clip of a border vertex on an ellipse of major radius `r`: the wedge of its
@@ -386,7 +386,7 @@ mod tests {
             let r = s.radius as f64;
             let at = |px: f64, py: f64| {
                 let d = DVec3::new(px - x, py - y, 0.0);
-                DVec2::new(d.dot(shape.axis), d.dot(shape.minor_axis(DVec3::Z))) / r
+                shape.along_axes(DVec3::Z, d) / r
             };
             let kept = |px, py| clip.keeps(at(px, py) * (1.0 - 1e-9));
             // Every point of the grid (so every triangle of the ring) is kept; a point

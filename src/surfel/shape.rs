@@ -98,6 +98,12 @@ impl Shape {
         normal.cross(self.axis)
     }
 
+    /// An offset `d` from the splat's centre along u and v: its plane coordinates times
+    /// the radius R (divide by R for the module doc's x, y).
+    pub fn along_axes(&self, normal: DVec3, d: DVec3) -> DVec2 {
+        DVec2::new(d.dot(self.axis), d.dot(self.minor_axis(normal)))
+    }
+
     /// The normal at plane coordinates (x, y) (in radii along u, v).
     pub fn normal_at(&self, normal: DVec3, x: f64, y: f64) -> DVec3 {
         let [a, b, c] = self.gradient;

@@ -168,7 +168,7 @@ impl Wall {
     /// toward it. `None` when that direction lies along the splat's normal.
     pub fn clip_of(&self, p: Vec3, (shape, n, radius): (&Shape, DVec3, f32)) -> Option<Clip> {
         let toward = (self.top - p).truncate().extend(0.0).as_dvec3();
-        let d = DVec2::new(toward.dot(shape.axis), toward.dot(shape.minor_axis(n)));
+        let d = shape.along_axes(n, toward);
         let normal = d.try_normalize()?;
         Some(Clip::Line {
             normal,
@@ -483,7 +483,7 @@ mod tests {
             let covered = |q: Vec3| {
                 splats.iter().zip(&shapes).any(|(s, shape)| {
                     let (d, n) = ((q - s.position).as_dvec3(), s.normal.as_dvec3());
-                    let (u, v) = (d.dot(shape.axis), d.dot(shape.minor_axis(n)));
+                    let [u, v] = shape.along_axes(n, d).to_array();
                     let r = s.radius as f64;
                     d.dot(n).abs() < 1e-4 * r
                         && (u / r).powi(2) + (v / (r * shape.ratio)).powi(2) <= 1.0 + 1e-4

@@ -249,7 +249,7 @@ pub const BOUNDARY_CLIP_OFFSET: f64 = 0.0;
 /// (`cloud_quality --terrain`: 0.2183 → 0.2164).
 fn boundary_clip(shape: &Shape, n: glam::DVec3, open: Vec3) -> Clip {
     let d = open.as_dvec3();
-    let normal = glam::DVec2::new(d.dot(shape.axis), d.dot(shape.minor_axis(n)));
+    let normal = shape.along_axes(n, d);
     Clip::Line {
         normal: normal.normalize_or(glam::DVec2::X),
         offset: BOUNDARY_CLIP_OFFSET,
