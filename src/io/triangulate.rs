@@ -28,6 +28,18 @@ pub fn sensor_grid(geometry: &Geometry, width: u32, height: u32) -> Result<Vec<[
     sensor_grid_within(geometry, (width, height), GRID_MAX_EDGE)
 }
 
+/// The vertex of each of the first `rows` file rows (`Geometry::rows`: the reader drops
+/// rows without a position, so a frame's pixel is the row it came from), `u32::MAX`
+/// where the file's row was dropped. Every vertex's row must be below `rows`.
+pub fn vertex_at_rows(geometry: &Geometry, rows: usize) -> Vec<u32> {
+    let row_of = |i: usize| geometry.rows.as_ref().map_or(i, |r| r[i] as usize);
+    let mut vertex_at = vec![u32::MAX; rows];
+    for i in 0..geometry.positions.len() {
+        vertex_at[row_of(i)] = i as u32;
+    }
+    vertex_at
+}
+
 /// [`sensor_grid`], with no edge longer than `max_edge` of its triangle's depth.
 pub fn sensor_grid_within(
     geometry: &Geometry,
@@ -43,10 +55,7 @@ pub fn sensor_grid_within(
             row_of(n.saturating_sub(1))
         ));
     }
-    let mut vertex_at = vec![u32::MAX; pixels];
-    for i in 0..n {
-        vertex_at[row_of(i)] = i as u32;
-    }
+    let vertex_at = vertex_at_rows(geometry, pixels);
     let position = |v: u32| geometry.origin + geometry.positions[v as usize].as_dvec3();
     let short_enough = |t: &[u32; 3]| {
         let depth = t.iter().map(|&v| position(v).length()).sum::<f64>() / 3.0;

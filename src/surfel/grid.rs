@@ -25,7 +25,7 @@ use super::Surfel;
 use super::clip::Clip;
 
 use crate::io::Geometry;
-use crate::io::triangulate::sensor_grid_within;
+use crate::io::triangulate::{sensor_grid_within, vertex_at_rows};
 
 /// The triangles of frame `g`'s pixel grid seen from `sensor` (relative to the model
 /// origin; the file's origin, from which [`sensor_grid_within`] takes depths), if it
@@ -176,10 +176,7 @@ pub fn pixel_grid(g: &Geometry, sensor: Vec3) -> Option<(PixelGrid, f32)> {
     let n = g.positions.len();
     let row_of = |i: usize| g.rows.as_ref().map_or(i, |r| r[i] as usize);
     let rows = row_of(n.checked_sub(1)?) + 1;
-    let mut vertex_at = vec![u32::MAX; rows];
-    for i in 0..n {
-        vertex_at[row_of(i)] = i as u32;
-    }
+    let vertex_at = vertex_at_rows(g, rows);
     let ray = |r: usize| {
         let v = *vertex_at.get(r)?;
         (v != u32::MAX).then(|| (g.positions[v as usize] - sensor).normalize_or_zero())
