@@ -102,6 +102,9 @@ pub struct Covering {
     /// unit tangent direction of the middle of their widest angular gap, where the
     /// sampled surface ends. `None` elsewhere.
     pub open: Option<Vec3>,
+    /// The neighbourhood's spacing ([`median_spacing`]) that the caps are counted in;
+    /// 0 by [`RadiusRule::Ranked`] and where every neighbour coincides with the point.
+    pub spacing: f32,
 }
 
 /// The ellipse's metric: offsets in (major, minor / ratio, normal) coordinates.
@@ -148,19 +151,20 @@ pub fn covering(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> Cover
         .take(MAX_NEIGHBOURS)
         .collect();
     let circle = Metric::circle(normal);
-    let round = |radius: f32, capped: bool| Covering {
+    let round = |radius: f32, capped: bool, spacing: f32| Covering {
         radius,
         axis: circle.u,
         ratio: 1.0,
         capped,
         open: None,
+        spacing,
     };
     let Some(nearest) = offsets.first().map(|o| o.length()) else {
-        return round(0.0, false);
+        return round(0.0, false, 0.0);
     };
     let rank = |k: usize| offsets[k.min(offsets.len()) - 1].length();
     if rule == RadiusRule::Ranked {
-        return round(rank(RADIUS_RANK), false);
+        return round(rank(RADIUS_RANK), false, 0.0);
     }
     let ranked = rank(BOUNDARY_RANK);
     let spacing = median_spacing(near);
@@ -175,12 +179,13 @@ pub fn covering(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> Cover
             ratio: metric.ratio,
             capped: false,
             open: None,
+            spacing,
         },
         Some(Err((start, width))) => Covering {
             open: Some(metric.direction(start + 0.5 * width)),
-            ..round(ranked.min(cap), ranked > cap)
+            ..round(ranked.min(cap), ranked > cap, spacing)
         },
-        _ => round(ranked.min(cap), ranked > cap),
+        _ => round(ranked.min(cap), ranked > cap, spacing),
     }
 }
 

@@ -97,6 +97,7 @@ mod tests {
             ratio,
             capped: false,
             open: None,
+            spacing: 0.0,
         }
     }
 

@@ -82,7 +82,8 @@ pub struct SurfelStats {
     /// Surfels whose neighbours all coincide with them: radius from the other surfels.
     pub fallback_radii: u64,
     /// Cloud surfels that close no gap (a boundary, a stray sample) whose radius was
-    /// capped at a few neighbourhood spacings ([`covering::MAX_SPACINGS`]).
+    /// capped at a few neighbourhood spacings ([`covering::MAX_SPACINGS`]), and a
+    /// terrain's held to its tile's spacing ([`cloud::TILE_SPACINGS`]).
     pub capped_radii: u64,
     /// Cloud surfels on a boundary of their sampling, clipped where it ends
     /// ([`cloud::BOUNDARY_CLIP_OFFSET`]); a terrain's are left whole.

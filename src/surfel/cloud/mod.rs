@@ -85,6 +85,9 @@ pub fn neighbour_disks(
         &given_normal,
         stats,
     );
+    if orientation == Orientation::Up {
+        cap_to_tile_spacing(&mut disks);
+    }
     if let Orientation::Toward(sensor) = orientation {
         within_pixels(
             &search,
@@ -188,6 +191,37 @@ fn disks(
                 (normal, covering(p, normal, &near, rule))
             })
             .collect()
+    }
+}
+
+/// Longest semi-axis of a terrain's splat, in the tile's spacing s (the median of its
+/// samples' neighbourhood spacings, [`Covering::spacing`]). The covering gives a sample
+/// of a square grid of spacing s a circle of √2 s; 1.5 s leaves 6 % over that.
+pub const TILE_SPACINGS: f32 = 1.5;
+
+/// Holds every semi-axis of a terrain's `disks` within [`TILE_SPACINGS`] of the tile's
+/// spacing, counting each disk so capped. An airborne scanner samples the ground
+/// evenly, so a sample far sparser than the tile is a return off water or amid a scan
+/// shadow, whose own neighbourhood spacing is large: the covering, counted in that
+/// spacing, closes its gaps with disks tens of spacings wide (autzen_trim's river, one
+/// sheet of 160-foot disks where the reference's triangles, no longer than 4 median
+/// edges, leave it open). A minor semi-axis already within the cap is kept.
+fn cap_to_tile_spacing(disks: &mut [(Vec3, Covering)]) {
+    let mut spacings: Vec<f32> = disks
+        .iter()
+        .map(|(_, c)| c.spacing)
+        .filter(|s| *s > 0.0)
+        .collect();
+    if spacings.is_empty() {
+        return;
+    }
+    let mid = spacings.len() / 2;
+    let cap = TILE_SPACINGS * *spacings.select_nth_unstable_by(mid, f32::total_cmp).1;
+    for (_, c) in disks.iter_mut().filter(|(_, c)| c.radius > cap) {
+        let minor = c.ratio * c.radius;
+        c.ratio = (minor.min(cap) / cap).max(c.ratio);
+        c.radius = cap;
+        c.capped = true;
     }
 }
 
@@ -365,6 +399,35 @@ mod tests {
             frame <= footprint::MAX_PITCHES as f64 * 1.01,
             "{frame:.2} pitches"
         );
+    }
+
+    #[test]
+    fn a_terrain_s_sparse_returns_get_splats_of_the_tile_s_spacing() {
+        // Ground sampled every 1 on a 60 × 60 grid, and beside it a 'river' sampled
+        // every 8: its samples' own coverings reach about 8√2, the tile's cap 1.5.
+        let ground = (0..60 * 60).map(|i| Vec3::new((i % 60) as f32, (i / 60) as f32, 0.0));
+        let river =
+            (0..8 * 8).map(|i| Vec3::new(64.0 + (i % 8) as f32 * 8.0, (i / 8) as f32 * 8.0, 0.0));
+        let points: Vec<Vec3> = ground.chain(river).collect();
+        let largest = |orientation: Orientation, range: std::ops::Range<usize>| {
+            let surfels = surfels_of(&points, 0.01, orientation);
+            surfels[range].iter().map(|s| s.radius).fold(0.0, f32::max)
+        };
+        let (inner, sparse) = (0..60 * 60, 60 * 60..points.len());
+        let cloud = largest(Orientation::Unknown, sparse.clone());
+        let terrain = largest(Orientation::Up, sparse);
+        assert!(cloud > 6.0, "an unknown cloud's river splats reach {cloud}");
+        assert!(
+            terrain <= TILE_SPACINGS * 1.0001,
+            "a terrain's river splats reach {terrain}"
+        );
+        let ground_cloud = largest(Orientation::Unknown, inner.clone());
+        let ground_terrain = largest(Orientation::Up, inner);
+        assert!(
+            ground_terrain <= TILE_SPACINGS * 1.0001 && ground_terrain >= 1.0,
+            "{ground_terrain}"
+        );
+        assert!(ground_cloud >= 1.0, "{ground_cloud}");
     }
 
     /// The surfels of the cloud `points` (unit-scaled by `scale`) with its normals
