@@ -304,7 +304,7 @@ impl ModelInfo {
         line(
             "",
             format!(
-                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}",
+                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}, a terrain's splats held to its tile's spacing {}",
                 count(st.degenerate_triangles),
                 count(st.isolated_vertices),
                 count(st.redundant_vertices),
@@ -315,7 +315,8 @@ impl ModelInfo {
                 count(st.clipped_boundaries),
                 count(st.wall_splats),
                 count(st.step_treads),
-                count(st.footprint_capped)
+                count(st.footprint_capped),
+                count(st.tile_capped)
             ),
         );
         let t = &self.timing;

@@ -82,8 +82,7 @@ pub struct SurfelStats {
     /// Surfels whose neighbours all coincide with them: radius from the other surfels.
     pub fallback_radii: u64,
     /// Cloud surfels that close no gap (a boundary, a stray sample) whose radius was
-    /// capped at a few neighbourhood spacings ([`covering::MAX_SPACINGS`]), and a
-    /// terrain's held to its tile's spacing ([`cloud::TILE_SPACINGS`]).
+    /// capped at a few neighbourhood spacings ([`covering::MAX_SPACINGS`]).
     pub capped_radii: u64,
     /// Cloud surfels on a boundary of their sampling, clipped where it ends
     /// ([`cloud::BOUNDARY_CLIP_OFFSET`]); a terrain's are left whole.
@@ -100,6 +99,9 @@ pub struct SurfelStats {
     /// A sensor frame's splats shrunk to span at most a few of its pixels seen from
     /// the sensor ([`footprint`]).
     pub footprint_capped: u64,
+    /// A terrain's splats whose axes were held within a few of its tile's spacings
+    /// ([`cloud::TILE_SPACINGS`]).
+    pub tile_capped: u64,
     /// The pixel grid a sensor frame's samples lie on in their file's order
     /// ([`grid`]): its surfels are then those of the grid's triangulation, as a mesh's,
     /// and the rules for frames without one (depth steps, footprint) do not run.

@@ -8,7 +8,8 @@
 //!   lies on one depth step ([`super::levels`]) the mean of theirs that span steps
 //!   (`smoothed`); oriented afterwards where a direction is known ([`Orientation`]);
 //! * radius and ellipse: the covering of [`super::covering`], from the same
-//!   neighbourhood; a capped one is counted ([`SurfelStats::capped_radii`]);
+//!   neighbourhood; a capped one is counted ([`SurfelStats::capped_radii`]); on a
+//!   terrain held within [`TILE_SPACINGS`] of the tile's spacing;
 //! * clip: a splat on a boundary of the sampling ends there ([`boundary_clip`]), a
 //!   terrain's edge sample at its wall (counted: [`SurfelStats::clipped_boundaries`]);
 //! * walls: a terrain's steep edges stand on wall surfels of their own ([`walls`]).
@@ -86,7 +87,7 @@ pub fn neighbour_disks(
         stats,
     );
     if orientation == Orientation::Up {
-        cap_to_tile_spacing(&mut disks);
+        stats.tile_capped += cap_to_tile_spacing(&mut disks);
     }
     if let Orientation::Toward(sensor) = orientation {
         within_pixels(
@@ -200,29 +201,38 @@ fn disks(
 pub const TILE_SPACINGS: f32 = 1.5;
 
 /// Holds every semi-axis of a terrain's `disks` within [`TILE_SPACINGS`] of the tile's
-/// spacing, counting each disk so capped. An airborne scanner samples the ground
-/// evenly, so a sample far sparser than the tile is a return off water or amid a scan
-/// shadow, whose own neighbourhood spacing is large: the covering, counted in that
-/// spacing, closes its gaps with disks tens of spacings wide (autzen_trim's river, one
-/// sheet of 160-foot disks where the reference's triangles, no longer than 4 median
-/// edges, leave it open). A minor semi-axis already within the cap is kept.
-fn cap_to_tile_spacing(disks: &mut [(Vec3, Covering)]) {
+/// spacing; returns how many it shortened. A minor semi-axis
+/// already within the cap is kept.
+///
+/// An airborne scanner samples the ground evenly, and its triangulation (issue 13's
+/// reference) joins no samples further apart than 4 median edges. The covering, counted
+/// in each sample's own neighbourhood, does not know the tile: where the returns thin
+/// out (water, scan shadows) their neighbourhood spacing grows with them, and their
+/// disks closed those gaps by the tens of spacings (autzen_trim's river: one sheet of
+/// disks up to 164 feet across, where the reference leaves it open); on the scan lines
+/// its major semi-axes reach a median 2.3 s across them (terrain_utm; minor 1.4 s), and
+/// blur what the samples resolve. Held to 1.5 s, both tiles' FLIP fell (README, issue 13)
+/// while their holes stayed under 0.4 %: neighbouring splats and pass 3's gap fill close
+/// what the shortened axes open.
+fn cap_to_tile_spacing(disks: &mut [(Vec3, Covering)]) -> u64 {
     let mut spacings: Vec<f32> = disks
         .iter()
         .map(|(_, c)| c.spacing)
         .filter(|s| *s > 0.0)
         .collect();
     if spacings.is_empty() {
-        return;
+        return 0;
     }
     let mid = spacings.len() / 2;
     let cap = TILE_SPACINGS * *spacings.select_nth_unstable_by(mid, f32::total_cmp).1;
+    let mut shortened = 0;
     for (_, c) in disks.iter_mut().filter(|(_, c)| c.radius > cap) {
         let minor = c.ratio * c.radius;
         c.ratio = (minor.min(cap) / cap).max(c.ratio);
         c.radius = cap;
-        c.capped = true;
+        shortened += 1;
     }
+    shortened
 }
 
 /// Shrinks the `disks` of a sensor frame seen from `sensor` (unit-scaled) to its
