@@ -21,9 +21,8 @@
 //! bound (0.5 %) holds on every view of both, and is asserted on the worst; its FLIP
 //! target (0.12) is not reached. Level of detail at ε = 1 px stays within
 //! [`MAX_LOD_COST`] of the leaves' FLIP (measured: kinect 1.15, terrain 1.02, autzen
-//! 1.08), so that
-//! work on the meshes' inner nodes cannot blur or blot a cloud's level of detail
-//! unnoticed.
+//! 1.08), so that work on the meshes' inner nodes cannot blur or blot a cloud's level
+//! of detail unnoticed.
 //! The display modes of clouds (EDL, elevation) are checked on the tile.
 
 mod common;

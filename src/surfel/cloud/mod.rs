@@ -201,8 +201,8 @@ fn disks(
 pub const TILE_SPACINGS: f32 = 1.5;
 
 /// Holds every semi-axis of a terrain's `disks` within [`TILE_SPACINGS`] of the tile's
-/// spacing; returns how many it shortened. A minor semi-axis
-/// already within the cap is kept.
+/// spacing; returns how many it shortened. A minor semi-axis already within the cap is
+/// kept.
 ///
 /// An airborne scanner samples the ground evenly, and its triangulation (issue 13's
 /// reference) joins no samples further apart than 4 median edges. The covering, counted
