@@ -44,16 +44,17 @@ pub const K: usize = 24;
 /// Radius for surfels without a measured one: the median of the measured radii, or
 /// 1/1024 of the model's extent (of one unit for a model without extent) when none was.
 pub fn fallback_radius(radii: &[f32], scale: f32) -> f32 {
-    let mut measured: Vec<f32> = radii
-        .iter()
-        .copied()
-        .filter(|r| *r > 0.0 && r.is_finite())
-        .collect();
-    if measured.is_empty() {
-        return 1.0 / 1024.0 / scale;
+    median_of_positive(radii.iter().copied()).unwrap_or(1.0 / 1024.0 / scale)
+}
+
+/// The (upper) median of the positive, finite `values`; `None` when there are none.
+fn median_of_positive(values: impl Iterator<Item = f32>) -> Option<f32> {
+    let mut kept: Vec<f32> = values.filter(|v| *v > 0.0 && v.is_finite()).collect();
+    if kept.is_empty() {
+        return None;
     }
-    let mid = measured.len() / 2;
-    *measured.select_nth_unstable_by(mid, f32::total_cmp).1
+    let mid = kept.len() / 2;
+    Some(*kept.select_nth_unstable_by(mid, f32::total_cmp).1)
 }
 
 /// Normal, radius and ellipse from the neighbours of each point listed in `which`, searching
@@ -215,16 +216,10 @@ pub const TILE_SPACINGS: f32 = 1.5;
 /// while their holes stayed under 0.4 %: neighbouring splats and pass 3's gap fill close
 /// what the shortened axes open.
 fn cap_to_tile_spacing(disks: &mut [(Vec3, Covering)]) -> u64 {
-    let mut spacings: Vec<f32> = disks
-        .iter()
-        .map(|(_, c)| c.spacing)
-        .filter(|s| *s > 0.0)
-        .collect();
-    if spacings.is_empty() {
+    let Some(spacing) = median_of_positive(disks.iter().map(|(_, c)| c.spacing)) else {
         return 0;
-    }
-    let mid = spacings.len() / 2;
-    let cap = TILE_SPACINGS * *spacings.select_nth_unstable_by(mid, f32::total_cmp).1;
+    };
+    let cap = TILE_SPACINGS * spacing;
     let mut shortened = 0;
     for (_, c) in disks.iter_mut().filter(|(_, c)| c.radius > cap) {
         let minor = c.ratio * c.radius;
