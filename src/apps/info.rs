@@ -304,7 +304,7 @@ impl ModelInfo {
         line(
             "",
             format!(
-                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}, a terrain's splats held to its tile's spacing {}",
+                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}, a terrain's splats held to its tile's spacing {}, shaded by its triangulation {}",
                 count(st.degenerate_triangles),
                 count(st.isolated_vertices),
                 count(st.redundant_vertices),
@@ -316,7 +316,8 @@ impl ModelInfo {
                 count(st.wall_splats),
                 count(st.step_treads),
                 count(st.footprint_capped),
-                count(st.tile_capped)
+                count(st.tile_capped),
+                count(st.tin_shaded)
             ),
         );
         let t = &self.timing;

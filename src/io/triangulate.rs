@@ -9,7 +9,8 @@
 //!   discontinuity and is dropped.
 //! * [`terrain`]: an airborne tile is a height field: Delaunay in x–y, triangles with an
 //!   edge (in x–y) longer than [`TERRAIN_MAX_EDGE`] × the median edge dropped (gaps,
-//!   water, the hull's slivers).
+//!   water, the hull's slivers). A terrain's splats shade with the same triangles'
+//!   normals (`surfel::cloud::tin`).
 
 use glam::{DVec3, Vec3};
 
@@ -94,14 +95,20 @@ fn block_triangles([a, b, c, d]: [u32; 4], distance: impl Fn(u32, u32) -> f64) -
 /// Triangles of `geometry` as a height field over x–y (its 2.5D Delaunay triangulation),
 /// long triangles dropped.
 pub fn terrain(geometry: &Geometry) -> Vec<[u32; 3]> {
+    height_field(&geometry.positions)
+}
+
+/// [`terrain`] of bare `positions`.
+pub fn height_field(positions: &[Vec3]) -> Vec<[u32; 3]> {
     let xy = |p: &Vec3| delaunator::Point {
         x: p.x as f64,
         y: p.y as f64,
     };
-    let points: Vec<delaunator::Point> = geometry.positions.iter().map(xy).collect();
+    let points: Vec<delaunator::Point> = positions.iter().map(xy).collect();
     let found = delaunator::triangulate(&points);
+    drop(points);
     let length = |a: usize, b: usize| {
-        let (p, q) = (&geometry.positions[a], &geometry.positions[b]);
+        let (p, q) = (&positions[a], &positions[b]);
         DVec3::new((p.x - q.x) as f64, (p.y - q.y) as f64, 0.0).length()
     };
     let mut edges: Vec<f64> = found

@@ -189,7 +189,10 @@ fn covering_radius(
 /// vertex gathers its terms in the order a pass over the triangles would add them.
 /// `start` first holds each row's end (the running count); the corners, placed last
 /// to first, each move their row's end down one, which leaves it at the row's start.
-fn corners_by_vertex(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
+pub(super) fn corners_by_vertex(
+    vertex_count: usize,
+    triangles: &[[u32; 3]],
+) -> (Vec<u32>, Vec<u32>) {
     let mut start = vec![0u32; vertex_count + 1];
     for &v in triangles.iter().flatten() {
         start[v as usize] += 1;

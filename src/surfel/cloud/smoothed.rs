@@ -1,6 +1,6 @@
 //! Normals smoothed over a cloud's neighbourhoods where one neighbourhood's fit is not
-//! to be trusted: a terrain's scan lines and height steps, a sensor frame's depth steps
-//! ([`super::super::levels`]).
+//! to be trusted: a sensor frame's depth steps ([`super::super::levels`]). (A terrain's
+//! normals come from its triangulation: [`super::tin`].)
 
 use arrayvec::ArrayVec;
 use glam::Vec3;
@@ -12,63 +12,49 @@ use super::super::pca::plane_normal;
 use super::search::Search;
 use super::{K, Orientation};
 
-/// The clouds whose fitted normals [`smoothed_disks`] replaces by their neighbours'.
+/// A sensor frame whose depth is quantised along `axis` ([`levels`]): [`smoothed_disks`]
+/// replaces the fit of a neighbourhood on one step by the mean of its neighbours' fits
+/// that span steps (all turned toward the `sensor`, here in unit-scaled coordinates).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) enum Smoothing {
-    /// A terrain: every fit, by the mean of its neighbours' (all turned up).
-    Terrain,
-    /// A sensor frame whose depth is quantised along this axis ([`levels`]): a fit of
-    /// a neighbourhood on one step, by the mean of its neighbours' fits that span
-    /// steps (all turned toward the sensor, here in unit-scaled coordinates).
-    Steps { axis: usize, sensor: Vec3 },
+pub(super) struct Steps {
+    axis: usize,
+    sensor: Vec3,
 }
 
-impl Smoothing {
-    /// How a cloud turned by `orientation` smooths its fits: a terrain always, a
-    /// sensor frame where its depth is quantised ([`levels::quantised_axis`], in the
-    /// search's unit-scaled coordinates), any other cloud not at all.
-    pub fn of(search: &Search, scale: f32, orientation: Orientation) -> Option<Smoothing> {
-        match orientation {
-            Orientation::Up => Some(Smoothing::Terrain),
-            Orientation::Toward(sensor) => {
-                let sensor = sensor * scale;
-                let axis = levels::quantised_axis(&search.coords, sensor)?;
-                Some(Smoothing::Steps { axis, sensor })
-            }
-            Orientation::Unknown => None,
-        }
+impl Steps {
+    /// The steps of a cloud turned by `orientation`: a sensor frame's where its depth
+    /// is quantised ([`levels::quantised_axis`], in the search's unit-scaled
+    /// coordinates), no other cloud's.
+    pub fn of(search: &Search, scale: f32, orientation: Orientation) -> Option<Steps> {
+        let Orientation::Toward(sensor) = orientation else {
+            return None;
+        };
+        let sensor = sensor * scale;
+        let axis = levels::quantised_axis(&search.coords, sensor)?;
+        Some(Steps { axis, sensor })
     }
 
     /// The fit of a neighbourhood `found` (of positions in `coords`, its own first),
     /// turned.
     fn fit(self, coords: &[[f32; 3]], found: &[u32]) -> Vec3 {
         let n = plane_normal(found.iter().map(|&f| Vec3::from(coords[f as usize])));
-        match self {
-            Smoothing::Terrain => Orientation::Up.apply(Vec3::ZERO, n),
-            Smoothing::Steps { sensor, .. } => {
-                let own = found
-                    .first()
-                    .map_or(Vec3::ZERO, |&f| Vec3::from(coords[f as usize]));
-                Orientation::Toward(sensor).apply(own, n)
-            }
-        }
+        let own = found
+            .first()
+            .map_or(Vec3::ZERO, |&f| Vec3::from(coords[f as usize]));
+        Orientation::Toward(self.sensor).apply(own, n)
     }
 
     /// Whether the fit of `found` counts in the neighbours' means: not on one step.
     fn spans_steps(self, coords: &[[f32; 3]], found: &[u32]) -> bool {
-        match self {
-            Smoothing::Terrain => true,
-            Smoothing::Steps { axis, .. } => !levels::one_level(coords, axis, found),
-        }
+        !levels::one_level(coords, self.axis, found)
     }
 }
 
-/// Disks whose normals are smoothed over the neighbourhood ([`Smoothing`],
-/// [`fitted_normals`]), with the plane each was measured in: a sample's normal is the
-/// mean of its neighbours' fitted normals (each the plane of its own neighbourhood,
-/// turned), on a terrain always, on a quantised frame where its own neighbourhood lies
-/// on one step; its covering is measured in the plane of its own fit, where its
-/// sampling's gaps lie.
+/// Disks of a quantised frame whose normals are smoothed over the neighbourhood
+/// ([`Steps`], [`fitted_normals`]), with the plane each was measured in: where a
+/// sample's own neighbourhood lies on one step, its normal is the mean of its
+/// neighbours' fitted normals (each the plane of its own neighbourhood, turned); its
+/// covering is measured in the plane of its own fit, where its sampling's gaps lie.
 ///
 /// A quantised frame's step treads (`kinect_rgb`, issue 13, `cloud_quality --grid
 /// 640x480`, 4 views, medians): FLIP 0.2983 → 0.2966, holes 0.082 % → 0.023 % (worst
@@ -76,22 +62,15 @@ impl Smoothing {
 /// seen from behind, lit from above) are gone. Replacing every fit of the frame by the
 /// mean of those that span steps gave 0.3493: its reference shades the steps' ridges.
 ///
-/// An airborne scan's lines and quantised steps turn one neighbourhood's plane at
-/// random, and at 1–2 pixels a splat such planes read as dark blotches across the
-/// roofs and streets, where the 2.5D triangulation of the same samples shades with
-/// vertex normals averaged over each one-ring. Averaged once over the neighbourhood
-/// (issue 13, `cloud_quality --terrain`, 4 views, medians): FLIP 0.2572 → 0.2280, SSIM
-/// 0.172 → 0.242, holes 0.167 % → 0.221 % (worst view 0.483 % → 0.468 %). On the
-/// RGB-D frame the same mean of all fits (turned toward the sensor) raised FLIP
-/// (0.2983 → 0.3299) and opened holes (up to 2.8 % on a view). Each sample's
-/// neighbourhood is kept between the two steps (K indices, 100 bytes a sample) rather
-/// than searched twice (+35 % of the surfels' time on the tile, for 27 MB less at its
-/// peak).
+/// The same mean of all fits (turned toward the sensor) raised the frame's FLIP (0.2983
+/// → 0.3299) and opened holes (up to 2.8 % on a view). Each sample's neighbourhood is
+/// kept between the fits and the means (K indices, 100 bytes a sample) rather than
+/// searched twice.
 pub(super) fn smoothed_disks(
     search: &Search,
     (points, scale): (&[Vec3], f32),
     which: &[u32],
-    (rule, smoothing): (RadiusRule, Smoothing),
+    (rule, steps): (RadiusRule, Steps),
     given_normal: &(dyn Fn(u32) -> Vec3 + Sync),
 ) -> Vec<(Vec3, Vec3, Covering)> {
     // Every sample's neighbourhood, halo included, in the samples' own order (which
@@ -101,22 +80,17 @@ pub(super) fn smoothed_disks(
         .map(|(_, found)| found)
         .collect();
     let near = |i: usize| neighbourhoods[i].iter().map(|&f| search.point(f));
-    let fitted = fitted_normals(&search.coords, &neighbourhoods, smoothing);
+    let fitted = fitted_normals(&search.coords, &neighbourhoods, steps);
     which
         .par_iter()
         .map(|&i| {
             let found = &neighbourhoods[i as usize];
             let own = found.first().map_or(Fitted::NONE, |&c| fitted[c as usize]);
-            let smoothed = match smoothing {
-                // The mean over this sample's own neighbourhood.
-                Smoothing::Terrain => counted_sum(&found[1..], &fitted).normalize_or(own.fit),
-                Smoothing::Steps { .. } => own.normal,
-            };
             let given = given_normal(i);
             let (normal, plane) = if given != Vec3::ZERO {
                 (given, given)
             } else {
-                (smoothed, own.fit)
+                (own.normal, own.fit)
             };
             let near: ArrayVec<Vec3, K> = near(i as usize).collect();
             let covering = covering(points[i as usize] * scale, plane, &near, rule);
@@ -156,15 +130,14 @@ fn counted_sum(near: &[u32], fitted: &[Fitted]) -> Vec3 {
 const STEP_ROUNDS: usize = 4;
 
 /// Each distinct position's fit, from the samples' `neighbourhoods` (each its own
-/// position first; a position's samples share one but for ties). On a terrain every
-/// fit counts in the means. On a quantised frame a fit that spans steps counts; one on
-/// a single step takes the mean of its neighbours' that count, and then counts
-/// itself, in each of [`STEP_ROUNDS`] rounds: a tread's middle lies further than one
-/// neighbourhood from any step.
+/// position first; a position's samples share one but for ties). A fit that spans steps
+/// counts; one on a single step takes the mean of its neighbours' that count, and then
+/// counts itself, in each of [`STEP_ROUNDS`] rounds: a tread's middle lies further than
+/// one neighbourhood from any step.
 fn fitted_normals(
     coords: &[[f32; 3]],
     neighbourhoods: &[ArrayVec<u32, K>],
-    smoothing: Smoothing,
+    steps: Steps,
 ) -> Vec<Fitted> {
     // Each distinct position's neighbourhood: its last sample's.
     let mut hood = vec![None; coords.len()];
@@ -177,8 +150,8 @@ fn fitted_normals(
         .par_iter()
         .map(|found| match found {
             Some(f) => {
-                let fit = smoothing.fit(coords, f);
-                let counts = smoothing.spans_steps(coords, f);
+                let fit = steps.fit(coords, f);
+                let counts = steps.spans_steps(coords, f);
                 Fitted {
                     fit,
                     normal: fit,
@@ -188,11 +161,7 @@ fn fitted_normals(
             None => Fitted::NONE,
         })
         .collect();
-    let rounds = match smoothing {
-        Smoothing::Terrain => 0,
-        Smoothing::Steps { .. } => STEP_ROUNDS,
-    };
-    for _ in 0..rounds {
+    for _ in 0..STEP_ROUNDS {
         let next: Vec<Fitted> = (0..coords.len())
             .into_par_iter()
             .map(|c| {
