@@ -125,7 +125,7 @@ pub fn neighbour_disks(
         let from_tin = tin_splats.get(k).copied().flatten();
         let estimated = given_normal(i) == Vec3::ZERO;
         s.normal = match from_tin {
-            Some((n, _)) => n,
+            Some(t) => t.normal,
             None if estimated => orientation.apply(s.position, normal),
             None => normal,
         };
@@ -135,7 +135,7 @@ pub fn neighbour_disks(
             let n = s.normal.as_dvec3();
             let mut shape = from_tin.map_or_else(
                 || Shape::ellipse(n, c.axis.as_dvec3(), c.ratio as f64),
-                |(_, shape)| shape,
+                |t| t.shape(c.ratio as f64),
             );
             let p = points[i as usize] * scale;
             shape.clip = match wall {
