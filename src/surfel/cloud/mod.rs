@@ -60,12 +60,12 @@ fn median_of_positive(values: impl Iterator<Item = f32>) -> Option<f32> {
     Some(*kept.select_nth_unstable_by(mid, f32::total_cmp).1)
 }
 
-/// Normal, radius and ellipse from the neighbours of each point listed in `which`, searching
-/// among all `points` (unit-scaled by `scale` for the search), written into `surfels`.
-/// Non-zero `given` normals are kept, the estimated ones turned by `orientation` (on a
-/// quantised frame, smoothed first: `smoothed_disks`; on a terrain, its [`Tin`]'s where
-/// a triangle holds the sample); a radius already
-/// set (from faces) is only grown. A boundary splat ends where its sampling does ([`boundary_clip`]), a
+/// Normal, radius and ellipse from the neighbours of each point listed in `which`,
+/// searching among all `points` (unit-scaled by `scale` for the search), written into
+/// `surfels`. Non-zero `given` normals are kept, the estimated ones turned by
+/// `orientation` (on a quantised frame, smoothed first: `smoothed_disks`; on a terrain,
+/// its [`Tin`]'s where a triangle holds the sample); a radius already set (from faces)
+/// is only grown. A boundary splat ends where its sampling does ([`boundary_clip`]), a
 /// terrain's edge sample where its wall stands ([`walls`]). Afterwards every listed
 /// surfel whose radius is still 0 gets [`fallback_radius`]. Returns a terrain's wall
 /// surfels (none for any other cloud).
@@ -111,8 +111,9 @@ pub fn neighbour_disks(
     } else {
         Vec::new()
     };
-    let tin_splats = if orientation == Orientation::Up && search.tree.is_some() {
-        let estimated = |i: u32| given_normal(i) == Vec3::ZERO;
+    let estimated = |i: u32| given_normal(i) == Vec3::ZERO;
+    let shaded = orientation == Orientation::Up && which.iter().any(|&i| estimated(i));
+    let tin_splats = if shaded && search.tree.is_some() {
         Tin::of(points).splats(which, (points, scale), &disks, estimated)
     } else {
         Vec::new()
