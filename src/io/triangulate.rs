@@ -105,14 +105,14 @@ pub fn height_field(positions: &[Vec3]) -> Vec<[u32; 3]> {
         y: p.y as f64,
     };
     let points: Vec<delaunator::Point> = positions.iter().map(xy).collect();
-    let found = delaunator::triangulate(&points);
+    // Only the triangles are kept (their half-edges and hull would double the peak).
+    let delaunator::Triangulation { triangles, .. } = delaunator::triangulate(&points);
     drop(points);
     let length = |a: usize, b: usize| {
         let (p, q) = (&positions[a], &positions[b]);
         DVec3::new((p.x - q.x) as f64, (p.y - q.y) as f64, 0.0).length()
     };
-    let mut edges: Vec<f64> = found
-        .triangles
+    let mut edges: Vec<f64> = triangles
         .chunks_exact(3)
         .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
         .map(|(a, b)| length(a, b))
@@ -122,8 +122,8 @@ pub fn height_field(positions: &[Vec3]) -> Vec<[u32; 3]> {
     }
     let mid = edges.len() / 2;
     let median = *edges.select_nth_unstable_by(mid, f64::total_cmp).1;
-    found
-        .triangles
+    drop(edges);
+    triangles
         .chunks_exact(3)
         .filter(|t| (0..3).all(|k| length(t[k], t[(k + 1) % 3]) <= TERRAIN_MAX_EDGE * median))
         .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])

@@ -111,9 +111,11 @@ pub fn neighbour_disks(
     } else {
         Vec::new()
     };
+    let searched = search.tree.is_some();
+    drop(search); // before the triangulation's peak
     let estimated = |i: u32| given_normal(i) == Vec3::ZERO;
     let shaded = orientation == Orientation::Up && which.iter().any(|&i| estimated(i));
-    let tin_splats = if shaded && search.tree.is_some() {
+    let tin_splats = if shaded && searched {
         Tin::of(points).splats(which, (points, scale), &disks, estimated)
     } else {
         Vec::new()
