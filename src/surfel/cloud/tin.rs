@@ -15,8 +15,9 @@
 //! Why (`cloud_quality --terrain`, 4 views, medians, lavapipe): a normal fitted to 24
 //! neighbours and averaged over 24 more shades a tile's trees and roof edges as one
 //! smooth slope, where the TIN shades each sample's own bumps; FLIP terrain_utm 0.1783 →
-//! 0.1674 with the vertex normals, 0.1610 with their fields; autzen_trim 0.1728 → 0.1607
-//! and 0.1622. Smoothing the vertex normals over their one-rings first (1–5 rounds)
+//! 0.1674 with the vertex normals, 0.1610 with their fields, 0.1542 with the samples
+//! of a shared x–y on the kept one's vertex ([`Tin::vertex`]); autzen_trim 0.1728 →
+//! 0.1607, 0.1622 and 0.1624. Smoothing the vertex normals over their one-rings first (1–5 rounds)
 //! gave 0.1663–0.1667 on terrain_utm and 0.1681–0.1737 on autzen_trim.
 
 use glam::{DVec3, Vec3};
@@ -31,7 +32,7 @@ use crate::io::triangulate::height_field;
 
 /// A terrain splat's shading from its [`Tin`]: its normal, and its ellipse's major axis
 /// (⟂ the normal) and normal field's gradient ([`Shape`]'s), kept in f32 (a [`Shape`]
-/// is 150 bytes: 80 MB more at terrain_utm's peak).
+/// is 150 bytes: about 50 MB more at terrain_utm's peak).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct TinSplat {
     pub normal: Vec3,
