@@ -36,7 +36,6 @@ use super::{footprint, walls};
 pub use orientation::{NormalsTurned, Orientation};
 use search::Search;
 use smoothed::{Steps, smoothed_disks};
-use tin::Tin;
 
 /// Neighbourhood size, the point itself included. An RGB-D frame's quantised depth
 /// puts a 16-neighbourhood at its far wall on one step of one row, whose normal faces
@@ -64,7 +63,7 @@ fn median_of_positive(values: impl Iterator<Item = f32>) -> Option<f32> {
 /// searching among all `points` (unit-scaled by `scale` for the search), written into
 /// `surfels`. Non-zero `given` normals are kept, the estimated ones turned by
 /// `orientation` (on a quantised frame, smoothed first: `smoothed_disks`; on a terrain,
-/// its [`Tin`]'s where a triangle holds the sample); a radius already set (from faces)
+/// its [`tin::Tin`]'s where a triangle holds the sample); a radius already set (from faces)
 /// is only grown. A boundary splat ends where its sampling does ([`boundary_clip`]), a
 /// terrain's edge sample where its wall stands ([`walls`]). Afterwards every listed
 /// surfel whose radius is still 0 gets [`fallback_radius`]. Returns a terrain's wall
@@ -114,11 +113,9 @@ pub fn neighbour_disks(
     let searched = search.tree.is_some();
     drop(search); // before the triangulation's peak
     let estimated = |i: u32| given_normal(i) == Vec3::ZERO;
-    let shaded = orientation == Orientation::Up && which.iter().any(|&i| estimated(i));
-    let tin_splats = if shaded && searched {
-        Tin::of(points).splats(which, (points, scale), &disks, estimated)
-    } else {
-        Vec::new()
+    let tin_splats = match orientation {
+        Orientation::Up if searched => tin::splats(which, (points, scale), &disks, estimated),
+        _ => Vec::new(),
     };
     stats.tin_shaded += tin_splats.iter().flatten().count() as u64;
     let mut next_wall = walls.iter().peekable();
@@ -174,7 +171,7 @@ pub fn neighbour_disks(
 /// Each of the points `which`'s normal (given, or fitted to its neighbourhood and, on a
 /// quantised frame, smoothed: [`Steps`], which turns its fits before their means) and
 /// covering; [`neighbour_disks`] turns every estimated normal after (or, on a terrain,
-/// takes its triangulation's: [`Tin`]).
+/// takes its triangulation's: [`tin::Tin`]).
 fn disks(
     search: &Search,
     (points, scale): (&[Vec3], f32),

@@ -150,6 +150,20 @@ impl Tin {
     }
 }
 
+/// [`Tin::splats`] of a terrain's `points`, which it triangulates; none at all when no
+/// sample's normal is `estimated` (the file gives them all).
+pub(super) fn splats(
+    which: &[u32],
+    (points, scale): (&[Vec3], f32),
+    disks: &[(Vec3, Covering)],
+    estimated: impl Fn(u32) -> bool + Sync,
+) -> Vec<Option<TinSplat>> {
+    if !which.iter().any(|&i| estimated(i)) {
+        return Vec::new();
+    }
+    Tin::of(points).splats(which, (points, scale), disks, estimated)
+}
+
 /// Each of `points`' vertex in a triangulation where `held(v)` says whether a triangle
 /// holds v: v itself if one does or no sample at its x–y is held, else the first held
 /// sample at its x–y.
