@@ -6,8 +6,10 @@
 //! What this asserts is what holds today, so that it cannot get worse unnoticed: the
 //! bounds below sit just above the measured medians and worst views (lavapipe,
 //! 2026-11-24; the README's issue 13 section holds their history):
-//! * kinect_rgb: FLIP 0.175, holes 0.13 %, worst view 0.37 % (splats of its pixel
-//!   grid's triangles, `spt::surfel::grid`);
+//! * kinect_rgb: FLIP 0.118, holes 0.20 %, worst view 0.39 % (splats of its pixel
+//!   grid's triangles, `spt::surfel::grid`, a long triangle's its own,
+//!   `spt::surfel::long_triangles`; 0.175 when the vertices' ellipses reached along
+//!   them);
 //! * terrain_utm: FLIP 0.154, holes 0.073 %, worst view 0.106 % (splats within 1.5 of
 //!   its tile's spacings, `spt::surfel::cloud::TILE_SPACINGS`, shaded by its
 //!   triangulation; 0.178 with normals fitted to 24 neighbours and averaged over 24);
@@ -16,10 +18,10 @@
 //!
 //! Before the surfels of issue 13: 0.37 / 8.9 % and 0.26 / 1.0 %. Issue 13's hole
 //! bound (0.5 %) holds on every view, and is asserted on the worst; its FLIP target
-//! (0.12) is not reached. Level of detail at ε = 1 px stays within [`MAX_LOD_COST`]
-//! of the leaves' FLIP (measured: kinect 1.15, terrain 1.01, autzen 1.07), so that
-//! work on the meshes' inner nodes cannot blur or blot a cloud's level of detail
-//! unnoticed.
+//! (0.12) is reached on the frame, not on the tiles. Level of detail at ε = 1 px stays
+//! within [`MAX_LOD_COST`] of the leaves' FLIP on the tiles (measured: terrain 1.01,
+//! autzen 1.07) and within [`FRAME_LOD_COST`] on the frame, so that work on the
+//! meshes' inner nodes cannot blur or blot a cloud's level of detail unnoticed.
 //! The display modes of clouds (EDL, elevation) are checked on the tile.
 
 mod common;
@@ -35,12 +37,24 @@ use spt::render::{Camera, Settings, settings::Mode};
 /// no spread of its children's normals (ε = 1 px: 0.212 → 0.202, 1.12 → 1.15×).
 const MAX_LOD_COST: f64 = 1.2;
 
+/// [`MAX_LOD_COST`] for the sensor frame: 1.48 measured (0.175 over 0.118). Its long triangles' own
+/// splats took the leaves from 0.175 to 0.118 and level of detail from 0.202 to 0.175;
+/// an inner node merges a riser's splats with the steps' into one ellipse, and its
+/// outline spills into the slits between the risers that the leaves keep open.
+const FRAME_LOD_COST: f64 = 1.55;
+
 fn median(figures: &[ViewFigures], get: fn(&ViewFigures) -> f64) -> f64 {
     quantile(&mut figures.iter().map(get).collect::<Vec<_>>(), 0.5).unwrap()
 }
 
 /// Asserts the median FLIP over the views, and the median and worst views' hole rates.
-fn check(file: &str, triangulation: Triangulation, max_flip: f64, max_holes: [f64; 2]) {
+/// And the median FLIP at ε = 1 px, within `lod_cost` of the leaves'.
+fn check(
+    file: &str,
+    triangulation: Triangulation,
+    (max_flip, lod_cost): (f64, f64),
+    max_holes: [f64; 2],
+) {
     let Some(dir) = common::shared_data() else {
         return;
     };
@@ -73,7 +87,7 @@ fn check(file: &str, triangulation: Triangulation, max_flip: f64, max_holes: [f6
     );
     assert!(flip <= max_flip, "{file}: FLIP {flip} over {max_flip}");
     assert!(
-        lod_flip <= MAX_LOD_COST * flip,
+        lod_flip <= lod_cost * flip,
         "{file}: FLIP {lod_flip} at ε = 1 px, {flip} for the leaves"
     );
     assert!(
@@ -92,7 +106,12 @@ fn kinect_frame_against_its_sensor_grid() {
         width: 640,
         height: 480,
     };
-    check("kinect_rgb.ply", grid, 0.18, [0.0015, 0.004]);
+    check(
+        "kinect_rgb.ply",
+        grid,
+        (0.12, FRAME_LOD_COST),
+        [0.0025, 0.0045],
+    );
 }
 
 #[test]
@@ -100,7 +119,7 @@ fn terrain_tile_against_its_delaunay_terrain() {
     check(
         "terrain_utm.ply",
         Triangulation::Terrain,
-        0.165,
+        (0.165, MAX_LOD_COST),
         [0.0015, 0.002],
     );
 }
@@ -112,7 +131,7 @@ fn lidar_tile_with_a_sparse_river_against_its_delaunay_terrain() {
     check(
         "autzen_trim.laz",
         Triangulation::Terrain,
-        0.175,
+        (0.175, MAX_LOD_COST),
         [0.002, 0.005],
     );
 }

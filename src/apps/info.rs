@@ -296,7 +296,8 @@ impl ModelInfo {
                 "pixel grid",
                 format!(
                     "{} × {height} in the file's row order: splats of the grid's triangles \
-                     (neighbouring pixels joined, not across a depth edge)",
+                     (neighbouring pixels joined, not across a depth edge; a long one \
+                     drawn by a splat of its own)",
                     grid.width
                 ),
             );
@@ -304,7 +305,7 @@ impl ModelInfo {
         line(
             "",
             format!(
-                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}, a terrain's splats held to its tile's spacing {}, shaded by its triangulation {}",
+                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, splats of a frame's long triangles {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}, a terrain's splats held to its tile's spacing {}, shaded by its triangulation {}",
                 count(st.degenerate_triangles),
                 count(st.isolated_vertices),
                 count(st.redundant_vertices),
@@ -314,6 +315,7 @@ impl ModelInfo {
                 count(st.capped_radii),
                 count(st.clipped_boundaries),
                 count(st.wall_splats),
+                count(st.triangle_splats),
                 count(st.step_treads),
                 count(st.footprint_capped),
                 count(st.tile_capped),

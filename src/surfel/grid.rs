@@ -21,25 +21,81 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::Surfel;
 use super::clip::Clip;
+use super::isolated;
+use super::long_triangles;
+use super::mesh::face_disks;
+use super::ring::ring_shapes;
+use super::{Surfel, SurfelStats};
 
 use crate::io::Geometry;
 use crate::io::triangulate::{sensor_grid_within, vertex_at_rows};
+
+/// A frame's pixel grid and the mesh of its neighbouring pixels ([`frame_triangles`]).
+pub struct FrameMesh {
+    pub grid: PixelGrid,
+    /// The grid's pitch, radians ([`pixel_grid`]).
+    pub pitch: f32,
+    pub triangles: Vec<[u32; 3]>,
+}
 
 /// The triangles of frame `g`'s pixel grid seen from `sensor` (relative to the model
 /// origin; the file's origin, from which [`sensor_grid_within`] takes depths), if it
 /// lies on one ([`pixel_grid`]), all wound to face the sensor: neighbouring pixels
 /// joined, but not by an edge longer than [`MAX_EDGE_PITCHES`] at its depth.
-pub fn frame_triangles(g: &Geometry, sensor: Vec3) -> Option<(PixelGrid, Vec<[u32; 3]>)> {
+pub fn frame_triangles(g: &Geometry, sensor: Vec3) -> Option<FrameMesh> {
     let (grid, pitch) = pixel_grid(g, sensor)?;
     let max_edge = MAX_EDGE_PITCHES * pitch as f64;
     let mut triangles = sensor_grid_within(g, (grid.width, grid.height), max_edge).ok()?;
     if facing_away(&g.positions, &triangles, sensor) {
         triangles.par_iter_mut().for_each(|t| t.swap(1, 2));
     }
-    Some((grid, triangles))
+    Some(FrameMesh {
+        grid,
+        pitch,
+        triangles,
+    })
 }
+
+/// The splats of frame `g`'s mesh seen from `sensor` (see `super::long_triangles`):
+/// each vertex's normal from all its triangles, its ellipse and fields from its short
+/// ones, clipped at their border; returns the redundant isolated vertices and the long
+/// triangles' own splats. A vertex on long triangles only keeps a circle of its pixel's
+/// footprint.
+pub fn frame_disks(
+    g: &Geometry,
+    (mesh, sensor, scale): (&FrameMesh, Vec3, f32),
+    given: Option<&[Vec3]>,
+    surfels: &mut [Surfel],
+    stats: &mut SurfelStats,
+) -> (Vec<u32>, Vec<Surfel>) {
+    let points = &g.positions;
+    let isolated = face_disks(points, scale, &mesh.triangles, given, surfels, stats);
+    let (short, long) = long_triangles::split(points, sensor, mesh.pitch, &mesh.triangles);
+    let mut in_short = vec![false; points.len()];
+    short
+        .iter()
+        .flatten()
+        .for_each(|&v| in_short[v as usize] = true);
+    // The vertices keep their own colours, without fields: fitted over a ring cut at a
+    // step's edge, a field ran on across the step in saturated specks.
+    let normals = ring_shapes(points, scale, &short, surfels, false);
+    for (v, s) in surfels.iter_mut().enumerate() {
+        if !in_short[v] && s.radius > 0.0 {
+            let depth = (s.position - sensor).length();
+            s.radius = s.radius.min(FRAGMENT_OF_PIXEL * mesh.pitch * depth);
+        }
+    }
+    let redundant = isolated::redundant(points, scale, &isolated, surfels);
+    stats.redundant_vertices = redundant.len() as u64;
+    stats.clipped_boundaries += clip_at_border(points, &short, surfels);
+    let splats = long_triangles::splats(points, scale, &long, &normals, g.colors.as_deref());
+    stats.triangle_splats = splats.len() as u64;
+    (redundant, splats)
+}
+
+/// A pixel's half-diagonal, in pitches.
+const FRAGMENT_OF_PIXEL: f32 = std::f32::consts::FRAC_1_SQRT_2;
 
 /// Clips each splat of a vertex inside the grid's mesh (`surfels`, one per point, sized
 /// by the mesh's rules) whose ring holds a border edge (an edge of one triangle only)
@@ -317,7 +373,7 @@ mod tests {
     fn a_depth_edge_is_not_joined_and_every_triangle_faces_the_sensor() {
         let near = |x: usize| x < 32;
         let (g, sensor) = geometry(&frame(64, 48, |x, _| if near(x) { 1.0 } else { 2.0 }));
-        let (_, triangles) = frame_triangles(&g, sensor).expect("a grid");
+        let triangles = frame_triangles(&g, sensor).expect("a grid").triangles;
         let at = |v: u32| g.positions[v as usize];
         let depth = |v: u32| (at(v) - sensor).length();
         assert_eq!(triangles.len(), 2 * 2 * 31 * 47);
@@ -347,6 +403,47 @@ mod tests {
                 "radius {} at depth {depth}",
                 s.radius
             );
+        }
+    }
+
+    #[test]
+    fn a_depth_step_s_riser_is_drawn_by_its_own_splats_and_no_vertex_s_reaches_along_it() {
+        // A floor whose depth is quantised: every 4 rows it steps 4 cm back, 10 pixel
+        // footprints at its depth (over long_triangles::LONG_PITCHES). A vertex's
+        // ellipse that covered its riser triangles would reach 5 footprints.
+        let points = frame(64, 48, |_, y| 2.0 + 0.04 * (y / 4) as f64);
+        let g = Geometry::from_points(&points).unwrap().0;
+        let leaves = crate::surfel::leaf_surfels(&g);
+        let sensor = (-g.origin).as_vec3();
+        let mesh = frame_triangles(&g, sensor).unwrap();
+        let (_, long) = long_triangles::split(&g.positions, sensor, mesh.pitch, &mesh.triangles);
+        // 11 risers of 63 pixel pairs, two triangles each.
+        assert_eq!(long.len(), 11 * 63 * 2);
+        assert_eq!(leaves.stats.triangle_splats, long.len() as u64);
+        assert_eq!(leaves.surfels.len(), points.len() + long.len());
+        for s in &leaves.surfels[..points.len()] {
+            let depth = (s.position - sensor).length() as f64;
+            assert!(
+                (s.radius as f64) < 2.5 * PITCH * depth,
+                "a vertex's radius {} at depth {depth}",
+                s.radius
+            );
+        }
+        let at = |v: u32| g.positions[v as usize];
+        for t in &long {
+            let [a, b, c] = t.map(at);
+            for p in [
+                (a + b + c) / 3.0,
+                (a + b) / 2.0,
+                (b + c) / 2.0,
+                (c + a) / 2.0,
+            ] {
+                let p = p + ((a + b + c) / 3.0 - p) * 0.01;
+                assert!(
+                    leaves.surfels.iter().any(|s| covers(s, p)),
+                    "{p} on a riser left uncovered"
+                );
+            }
         }
     }
 

@@ -15,6 +15,7 @@ pub mod footprint;
 pub mod grid;
 pub mod isolated;
 pub mod levels;
+pub mod long_triangles;
 pub mod mesh;
 pub mod octahedral;
 pub mod pca;
@@ -93,6 +94,9 @@ pub struct SurfelStats {
     /// A terrain's wall surfels, under the edges where its height drops steeply
     /// ([`walls`]): surfels that no sample of the file is.
     pub wall_splats: u64,
+    /// A sensor frame's splats of its long triangles ([`long_triangles`]): surfels that
+    /// no sample of the file is.
+    pub triangle_splats: u64,
     /// A quantised sensor frame's samples whose neighbourhood lies on one depth step:
     /// normal from the neighbours' fits that span steps ([`levels`]).
     pub step_treads: u64,
@@ -110,6 +114,14 @@ pub struct SurfelStats {
     /// ([`grid`]): its surfels are then those of the grid's triangulation, as a mesh's,
     /// and the rules for frames without one (depth steps, footprint) do not run.
     pub pixel_grid: Option<grid::PixelGrid>,
+}
+
+impl SurfelStats {
+    /// The surfels that are no sample of the file: a terrain's walls and a frame's
+    /// long triangles' splats.
+    pub fn added_splats(&self) -> u64 {
+        self.wall_splats + self.triangle_splats
+    }
 }
 
 /// The leaf surfels of a model.
@@ -308,18 +320,10 @@ fn leaf_surfels_among(
         }
         _ => None,
     };
-    let oriented = if let Some((frame_grid, triangles)) = &frame {
-        let disks = mesh::vertex_disks(
-            &g.positions,
-            scale,
-            triangles,
-            (given, g.colors.is_some(), Outward::AsWound),
-            &mut surfels,
-            &mut stats,
-        );
-        redundant = disks.redundant;
-        stats.clipped_boundaries += grid::clip_at_border(&g.positions, triangles, &mut surfels);
-        stats.pixel_grid = Some(*frame_grid);
+    let oriented = if let (Some(mesh), cloud::Orientation::Toward(sensor)) = (&frame, orientation) {
+        (redundant, walls) =
+            grid::frame_disks(g, (mesh, sensor, scale), given, &mut surfels, &mut stats);
+        stats.pixel_grid = Some(mesh.grid);
         let oriented = given.is_some() && stats.given_normals == own as u64;
         if !oriented {
             normals_turned = NormalsTurned::of(orientation);

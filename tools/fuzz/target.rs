@@ -83,7 +83,7 @@ fn build(geometry: &Geometry, path: &Path) -> Result<Outcome, Outcome> {
     geometry.check().map_err(violation("geometry"))?;
     let leaves = leaf_surfels(geometry);
     leaves.check().map_err(violation("surfels"))?;
-    let walls = leaves.stats.wall_splats;
+    let walls = leaves.stats.added_splats();
     let list = build_sequential_list(leaves);
     check_meta(&list.meta).map_err(violation("tree meta"))?;
     check_nodes(&list.meta, &list.nodes, &list.parents).map_err(violation("tree nodes"))?;

@@ -146,7 +146,7 @@ pub fn build_leaves(
     part: &Path,
 ) -> anyhow::Result<Part> {
     leaves.drop_redundant();
-    let (leaf_count, walls) = (leaves.surfels.len() as u64, leaves.stats.wall_splats);
+    let (leaf_count, walls) = (leaves.surfels.len() as u64, leaves.stats.added_splats());
     let disk_extent = crate::tree::error_scale(&leaves.surfels);
     let (oriented, normals_turned) = (leaves.oriented_normals, leaves.normals_turned);
     let hierarchy = build_hierarchy(&mut leaves, &Silent);
