@@ -61,6 +61,17 @@ fn turns(d: DVec2) -> f64 {
 }
 
 impl Clip {
+    /// The line through plane points `a` and `b` (major radii) as a clip that keeps the
+    /// splat's centre; None when the line is degenerate or passes through the centre.
+    pub fn line_through(a: DVec2, b: DVec2) -> Option<Clip> {
+        let mut normal = (b - a).perp().try_normalize()?;
+        if normal.dot(a) < 0.0 {
+            normal = -normal;
+        }
+        let offset = normal.dot(a);
+        (offset > 0.0).then_some(Clip::Line { normal, offset })
+    }
+
     /// Whether the clip keeps plane point `p` (major radii).
     pub fn keeps(&self, p: DVec2) -> bool {
         match *self {

@@ -160,13 +160,7 @@ fn edge_clip(s: &Surfel, a: Vec3, b: Vec3) -> Option<Clip> {
     let shape = s.shape.unpack(n);
     let r = s.radius as f64;
     let plane = |p: Vec3| shape.along_axes(n, (p - s.position).as_dvec3()) / r;
-    let (pa, pb) = (plane(a), plane(b));
-    let mut normal = (pb - pa).perp().try_normalize()?;
-    if normal.dot(pa) < 0.0 {
-        normal = -normal;
-    }
-    let offset = normal.dot(pa);
-    (offset > 0.0).then_some(Clip::Line { normal, offset })
+    Clip::line_through(plane(a), plane(b))
 }
 
 /// Whether `triangles` face away from `sensor`, by area. One grid's triangles all wind

@@ -168,13 +168,7 @@ fn shortest_edge_clip(
         .map(|k| (corners[k], corners[(k + 1) % 3]))
         .min_by(|x, y| x.0.distance(x.1).total_cmp(&y.0.distance(y.1)))?;
     let plane = |p: DVec3| shape.along_axes(n, p - g) / r;
-    let (pa, pb) = (plane(edge.0), plane(edge.1));
-    let mut normal = (pb - pa).perp().try_normalize()?;
-    if normal.dot(pa) < 0.0 {
-        normal = -normal;
-    }
-    let offset = normal.dot(pa);
-    (offset > 0.0).then_some(Clip::Line { normal, offset })
+    Clip::line_through(plane(edge.0), plane(edge.1))
 }
 
 #[cfg(test)]
