@@ -11,7 +11,9 @@
 //!
 //! [`frame_triangles`] joins the grid's neighbouring pixels ([`sensor_grid_within`]) but
 //! not across a depth edge, or a surface seen nearly edge-on ([`MAX_EDGE_PITCHES`]);
-//! the frame's splats are then those of this mesh's vertices (`super::mesh`).
+//! the frame's splats are then those of this mesh's vertices (`super::mesh`,
+//! [`frame_disks`]), over its short triangles, and its long triangles' own
+//! (`super::long_triangles`).
 //!
 //! [`pixel_grid`] finds W as the row offset of most sampled pixels' nearest ray beyond
 //! their right-hand neighbour, and accepts it only where most horizontal and vertical
@@ -58,10 +60,10 @@ pub fn frame_triangles(g: &Geometry, sensor: Vec3) -> Option<FrameMesh> {
 }
 
 /// The splats of frame `g`'s mesh seen from `sensor` (see `super::long_triangles`):
-/// each vertex's normal from all its triangles, its ellipse and fields from its short
-/// ones, clipped at their border; returns the redundant isolated vertices and the long
-/// triangles' own splats. A vertex on long triangles only keeps a circle of its pixel's
-/// footprint.
+/// each vertex's normal from all its triangles (wound to face the sensor), its ellipse
+/// and shading field from its short ones, clipped at their border, and no colour field;
+/// returns the redundant isolated vertices and the long triangles' own splats. A vertex
+/// on long triangles only keeps a circle of its pixel's half-diagonal.
 pub fn frame_disks(
     g: &Geometry,
     (mesh, sensor, scale): (&FrameMesh, Vec3, f32),
@@ -83,7 +85,7 @@ pub fn frame_disks(
     for (v, s) in surfels.iter_mut().enumerate() {
         if !in_short[v] && s.radius > 0.0 {
             let depth = (s.position - sensor).length();
-            s.radius = s.radius.min(FRAGMENT_OF_PIXEL * mesh.pitch * depth);
+            s.radius = s.radius.min(PIXEL_HALF_DIAGONAL * mesh.pitch * depth);
         }
     }
     let redundant = isolated::redundant(points, scale, &isolated, surfels);
@@ -95,7 +97,7 @@ pub fn frame_disks(
 }
 
 /// A pixel's half-diagonal, in pitches.
-const FRAGMENT_OF_PIXEL: f32 = std::f32::consts::FRAC_1_SQRT_2;
+const PIXEL_HALF_DIAGONAL: f32 = std::f32::consts::FRAC_1_SQRT_2;
 
 /// Clips each splat of a vertex inside the grid's mesh (`surfels`, one per point, sized
 /// by the mesh's rules) whose ring holds a border edge (an edge of one triangle only)

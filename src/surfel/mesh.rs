@@ -142,9 +142,6 @@ pub enum Outward {
     /// (its first `own`) give their terms of the model's vote about its mean vertex
     /// `mean` ([`outward_flux`]), taken before the normals turn.
     Piece { turn: bool, own: usize, mean: DVec3 },
-    /// As its triangles wind: a sensor frame's grid, wound to face the sensor
-    /// ([`super::grid::frame_triangles`]).
-    AsWound,
 }
 
 /// What [`vertex_disks`] returns besides the surfels.
@@ -180,7 +177,6 @@ pub fn vertex_disks(
             }
             turn
         }
-        Outward::AsWound => false,
     };
     let normals = super::ring::ring_shapes(points, scale, triangles, surfels, colored);
     let redundant = super::isolated::redundant(points, scale, &isolated, surfels);
