@@ -18,14 +18,14 @@
 //! ([`fit_field`], [`fit_color_field`]), so that it shades as the reference
 //! interpolates. The vertices' ellipses then cover only their short triangles.
 
-use glam::{DMat2, DVec2, DVec3, Vec3};
+use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::Surfel;
 use super::clip::Clip;
 use super::field::{fit_color_field, fit_field, unit_rgb};
-use super::mesh::{DEGENERATE, RADIUS_MARGIN};
-use super::shape::{Shape, tangent_frame};
+use super::mesh::{RADIUS_MARGIN, triangle_terms};
+use super::shape::{Fit, Shape, tangent_frame};
 use crate::io::PointAttributes;
 
 /// Longest edge, in pixel footprints (pitch × depth), beyond which a frame's triangle
@@ -91,14 +91,11 @@ struct Corner {
 }
 
 /// The splat of one triangle (see the module doc), in the corners' unit; None when it
-/// is degenerate ([`DEGENERATE`]).
+/// is degenerate ([`super::mesh::DEGENERATE`]).
 fn triangle_splat(corners: [Corner; 3], colored: bool) -> Option<Surfel> {
     let [a, b, c] = corners.map(|k| k.position);
-    let cross = (b - a).cross(c - a);
-    let longest = [a.distance(b), b.distance(c), c.distance(a)]
-        .into_iter()
-        .fold(0.0, f64::max);
-    if cross.length() <= DEGENERATE * longest * longest {
+    let (cross, _, degenerate) = triangle_terms(a, b, c);
+    if degenerate {
         return None;
     }
     let face = cross.normalize();
@@ -140,21 +137,17 @@ fn triangle_splat(corners: [Corner; 3], colored: bool) -> Option<Surfel> {
 /// The Steiner circumellipse of triangle `[a, b, c]` in its plane (normal `face`): its
 /// major axis (unit), major semi-axis and minor / major ratio. With f₁ = c − g and f₂ =
 /// (a − b) / √3 its conjugate semi-diameters, the ellipse is {f₁ cos t + f₂ sin t}, whose
-/// semi-axes are the square roots of the eigenvalues of f₁f₁ᵀ + f₂f₂ᵀ.
+/// semi-axes are the square roots of the eigenvalues of f₁f₁ᵀ + f₂f₂ᵀ (the second
+/// moment of the two, [`Fit::axes`]).
 fn steiner_ellipse(face: DVec3, [a, b, c]: [DVec3; 3]) -> (DVec3, f64, f64) {
     let g = (a + b + c) / 3.0;
     let (t1, t2) = tangent_frame(face);
     let plane = |d: DVec3| DVec2::new(d.dot(t1), d.dot(t2));
-    let f1 = plane(c - g);
-    let f2 = plane(a - b) / 3f64.sqrt();
-    let m = DMat2::from_cols(f1 * f1.x + f2 * f2.x, f1 * f1.y + f2 * f2.y);
-    let (xx, xy, yy) = (m.x_axis.x, m.x_axis.y, m.y_axis.y);
-    let mean = 0.5 * (xx + yy);
-    let spread = (0.25 * (xx - yy) * (xx - yy) + xy * xy).sqrt();
-    let (l1, l2) = (mean + spread, (mean - spread).max(0.0));
-    let angle = 0.5 * (2.0 * xy).atan2(xx - yy);
-    let major = t1 * angle.cos() + t2 * angle.sin();
-    (major, l1.sqrt(), (l2 / l1).sqrt())
+    let mut moments = Fit::default();
+    moments.add(plane(c - g), DVec2::ZERO);
+    moments.add(plane(a - b) / 3f64.sqrt(), DVec2::ZERO);
+    let (dir, l1, l2) = moments.axes();
+    (t1 * dir.x + t2 * dir.y, l1.sqrt(), (l2 / l1).sqrt())
 }
 
 /// The line through the triangle's shortest edge as a clip of its splat (centre g,
