@@ -10,17 +10,18 @@
 //!   grid's triangles, `spt::surfel::grid`, a long triangle's its own,
 //!   `spt::surfel::long_triangles`; 0.175 when the vertices' ellipses reached along
 //!   them);
-//! * terrain_utm: FLIP 0.154, holes 0.073 %, worst view 0.106 % (splats within 1.5 of
-//!   its tile's spacings, `spt::surfel::cloud::TILE_SPACINGS`, shaded by its
-//!   triangulation; 0.178 with normals fitted to 24 neighbours and averaged over 24);
-//! * autzen_trim.laz: FLIP 0.162, holes 0.078 %, worst view 0.34 % (0.173 before the
-//!   triangulation's shading, 0.286 before the tile's spacing).
+//! * terrain_utm: FLIP 0.124, holes 0.013 %, worst view 0.025 % (splats of its TIN, a
+//!   long triangle's its own, `spt::surfel::terrain`; 0.153 with the cloud's coverings
+//!   shaded by the TIN and walls guessed from each sample's steepest drop, 0.178 with
+//!   normals fitted to 24 neighbours);
+//! * autzen_trim.laz: FLIP 0.127, holes 0.024 %, worst view 0.074 % (0.162 before the
+//!   TIN's splats, 0.286 before the tile's spacing bounded the coverings).
 //!
 //! Before the surfels of issue 13: 0.37 / 8.9 % and 0.26 / 1.0 %. Issue 13's hole
 //! bound (0.5 %) holds on every view, and is asserted on the worst; its FLIP target
-//! (0.12) is reached on the frame, not on the tiles. Level of detail at ε = 1 px stays
-//! within [`MAX_LOD_COST`] of the leaves' FLIP on the tiles (measured: terrain 1.01,
-//! autzen 1.07) and within [`FRAME_LOD_COST`] on the frame, so that work on the
+//! (0.12) is reached on the frame, not on terrain_utm. Level of detail at ε = 1 px stays
+//! within [`MAX_LOD_COST`] of the leaves' FLIP on the tiles (measured: terrain 1.11,
+//! autzen 1.20) and within [`FRAME_LOD_COST`] on the frame, so that work on the
 //! meshes' inner nodes cannot blur or blot a cloud's level of detail unnoticed.
 //! The display modes of clouds (EDL, elevation) are checked on the tile.
 
@@ -30,12 +31,14 @@ use spt::apps::cloud_quality::{CloudAndReference, Triangulation, ViewFigures, me
 use spt::apps::stats::quantile;
 use spt::render::{Camera, Settings, settings::Mode};
 
-/// Largest median FLIP at ε = 1 px over the leaves' median FLIP. 1.15 until pass 3's
+/// Largest median FLIP at ε = 1 px over the leaves' median FLIP on a tile. 1.2 until
+/// its TIN's splats took autzen's leaves from 0.162 to 0.127 and ε = 1 px from 0.173 to
+/// 0.152 (1.07 → 1.20×): an inner node merges a wall's splats with its roof's. 1.15 until pass 3's
 /// diffuse term took the mean of the blended normals unnormalized: on the frame's
 /// one-pixel ridges the leaves' disagreeing normals now darken as the reference's
 /// supersamples do (0.189 → 0.175), while an inner node carries one normal field and
 /// no spread of its children's normals (ε = 1 px: 0.212 → 0.202, 1.12 → 1.15×).
-const MAX_LOD_COST: f64 = 1.2;
+const MAX_LOD_COST: f64 = 1.25;
 
 /// [`MAX_LOD_COST`] for the sensor frame: 1.48 measured (0.175 over 0.118). Its long triangles' own
 /// splats took the leaves from 0.175 to 0.118 and level of detail from 0.202 to 0.175;
@@ -119,19 +122,20 @@ fn terrain_tile_against_its_delaunay_terrain() {
     check(
         "terrain_utm.ply",
         Triangulation::Terrain,
-        (0.165, MAX_LOD_COST),
+        (0.13, MAX_LOD_COST),
         [0.0015, 0.002],
     );
 }
 
 /// Autzen's river, sampled by a few returns off the water, is where its reference leaves
-/// gaps and its splats once closed them with one sheet (`spt::surfel::cloud::TILE_SPACINGS`).
+/// gaps and its splats once closed them with one sheet; its TIN drops the triangles
+/// across them (`spt::io::triangulate::height_field`).
 #[test]
 fn lidar_tile_with_a_sparse_river_against_its_delaunay_terrain() {
     check(
         "autzen_trim.laz",
         Triangulation::Terrain,
-        (0.175, MAX_LOD_COST),
+        (0.135, MAX_LOD_COST),
         [0.002, 0.005],
     );
 }

@@ -23,11 +23,8 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::clip::Clip;
 use super::isolated;
-use super::long_triangles;
-use super::mesh::face_disks;
-use super::ring::ring_shapes;
+use super::long_triangles::{self, Reach};
 use super::{Surfel, SurfelStats};
 
 use crate::io::Geometry;
@@ -59,11 +56,11 @@ pub fn frame_triangles(g: &Geometry, sensor: Vec3) -> Option<FrameMesh> {
     })
 }
 
-/// The splats of frame `g`'s mesh seen from `sensor` (see `super::long_triangles`):
-/// each vertex's normal from all its triangles (wound to face the sensor), its ellipse
-/// and shading field from its short ones, clipped at their border, and no colour field;
-/// returns the redundant isolated vertices and the long triangles' own splats. A vertex
-/// on long triangles only keeps a circle of its pixel's half-diagonal.
+/// The splats of frame `g`'s mesh seen from `sensor` ([`long_triangles::disks`]): a
+/// triangle is long beyond [`long_triangles::LONG_PITCHES`] pixel footprints at its
+/// depth, and a vertex on long triangles only keeps a circle of its pixel's
+/// half-diagonal. Returns the redundant isolated vertices and the long triangles' own
+/// splats.
 pub fn frame_disks(
     g: &Geometry,
     (mesh, sensor, scale): (&FrameMesh, Vec3, f32),
@@ -72,98 +69,41 @@ pub fn frame_disks(
     stats: &mut SurfelStats,
 ) -> (Vec<u32>, Vec<Surfel>) {
     let points = &g.positions;
-    let isolated = face_disks(points, scale, &mesh.triangles, given, surfels, stats);
-    let (short, long) = long_triangles::split(points, sensor, mesh.pitch, &mesh.triangles);
-    let mut in_short = vec![false; points.len()];
-    short
-        .iter()
-        .flatten()
-        .for_each(|&v| in_short[v as usize] = true);
-    // The vertices keep their own colours, without fields: fitted over a ring cut at a
-    // step's edge, a field ran on across the step in saturated specks.
-    let normals = ring_shapes(points, scale, &short, surfels, false);
-    for (v, s) in surfels.iter_mut().enumerate() {
-        if !in_short[v] && s.radius > 0.0 {
-            let depth = (s.position - sensor).length();
-            s.radius = s.radius.min(PIXEL_HALF_DIAGONAL * mesh.pitch * depth);
-        }
-    }
-    let redundant = isolated::redundant(points, scale, &isolated, surfels);
+    let is_long = is_long_in(points, sensor, mesh.pitch);
+    let lone_radius = |p: Vec3| PIXEL_HALF_DIAGONAL * mesh.pitch * (p - sensor).length();
+    let split = long_triangles::disks(
+        (points, scale),
+        &mesh.triangles,
+        (is_long, lone_radius),
+        given,
+        surfels,
+        stats,
+    );
+    let redundant = isolated::redundant(points, scale, &split.isolated, surfels);
     stats.redundant_vertices = redundant.len() as u64;
-    stats.clipped_boundaries += clip_at_border(points, &short, surfels);
-    let splats = long_triangles::splats(points, scale, &long, &normals, g.colors.as_deref());
+    let colors = g.colors.as_deref();
+    let (long, normals) = (&split.long, &split.normals);
+    let splats = long_triangles::splats(points, scale, long, normals, (colors, Reach::Corners));
     stats.triangle_splats = splats.len() as u64;
     (redundant, splats)
 }
 
+/// Whether a triangle of a frame seen from `sensor` with pixel `pitch` is long: its
+/// longest edge over [`long_triangles::LONG_PITCHES`] pixel footprints (pitch × depth)
+/// at the mean depth of its corners.
+fn is_long_in(points: &[Vec3], sensor: Vec3, pitch: f32) -> impl Fn(&[u32; 3]) -> bool + Sync {
+    move |t| {
+        let depth = t
+            .iter()
+            .map(|&v| (points[v as usize] - sensor).length())
+            .sum::<f32>()
+            / 3.0;
+        long_triangles::longest_edge(points, t) > long_triangles::LONG_PITCHES * pitch * depth
+    }
+}
+
 /// A pixel's half-diagonal, in pitches.
 const PIXEL_HALF_DIAGONAL: f32 = std::f32::consts::FRAC_1_SQRT_2;
-
-/// Clips each splat of a vertex inside the grid's mesh (`surfels`, one per point, sized
-/// by the mesh's rules) whose ring holds a border edge (an edge of one triangle only)
-/// at that edge's line, and returns how many it clipped. A border vertex's splat ends
-/// at its fan (`super::ring`), but its neighbour's ellipse, which covers the ring's
-/// triangles, reaches past the border edge opposite it: along every hole and outline of
-/// the frame that made a rim a pixel wide that the reference leaves empty. Where a ring
-/// holds several border edges, the nearest one's line clips. Edges are counted by
-/// sorting them (a hash map over kinect_rgb's 1.5 M edges took 0.3 s).
-pub fn clip_at_border(points: &[Vec3], triangles: &[[u32; 3]], surfels: &mut [Surfel]) -> u64 {
-    let key = |a: u32, b: u32| (a.min(b), a.max(b));
-    let mut edges: Vec<(u32, u32)> = triangles
-        .par_iter()
-        .flat_map_iter(|t| (0..3).map(move |k| key(t[k], t[(k + 1) % 3])))
-        .collect();
-    edges.par_sort_unstable();
-    // Sorted: an edge of one triangle is a run of one.
-    let border_edges: Vec<(u32, u32)> = edges
-        .chunk_by(|a, b| a == b)
-        .filter(|run| run.len() == 1)
-        .map(|run| run[0])
-        .collect();
-    let mut on_border = vec![false; surfels.len()];
-    for &(a, b) in &border_edges {
-        on_border[a as usize] = true;
-        on_border[b as usize] = true;
-    }
-    let mut nearest: Vec<Option<Clip>> = vec![None; surfels.len()];
-    for t in triangles {
-        for k in 0..3 {
-            let (v, a, b) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            if on_border[v as usize] || border_edges.binary_search(&key(a, b)).is_err() {
-                continue;
-            }
-            let line = edge_clip(&surfels[v as usize], points[a as usize], points[b as usize]);
-            let offset = |c: &Option<Clip>| match c {
-                Some(Clip::Line { offset, .. }) => *offset,
-                _ => f64::INFINITY,
-            };
-            if offset(&line) < offset(&nearest[v as usize]) {
-                nearest[v as usize] = line;
-            }
-        }
-    }
-    let mut clipped = 0;
-    for (s, clip) in surfels.iter_mut().zip(nearest) {
-        if let Some(c @ Clip::Line { offset, .. }) = clip
-            && offset < 1.0
-        {
-            s.shape.clip = Clip::pack(Some(c));
-            clipped += 1;
-        }
-    }
-    clipped
-}
-
-/// The line through `a` and `b` as a clip of splat `s` (kept: its centre's side), in
-/// its ellipse's plane coordinates ([`Clip::Line`]); `None` when the line is degenerate
-/// or passes through the centre.
-fn edge_clip(s: &Surfel, a: Vec3, b: Vec3) -> Option<Clip> {
-    let n = s.normal.as_dvec3();
-    let shape = s.shape.unpack(n);
-    let r = s.radius as f64;
-    let plane = |p: Vec3| shape.along_axes(n, (p - s.position).as_dvec3()) / r;
-    Clip::line_through(plane(a), plane(b))
-}
 
 /// Whether `triangles` face away from `sensor`, by area. One grid's triangles all wind
 /// the same way on the image, so they all face the sensor or all face away (but those
@@ -412,7 +352,8 @@ mod tests {
         let leaves = crate::surfel::leaf_surfels(&g);
         let sensor = (-g.origin).as_vec3();
         let mesh = frame_triangles(&g, sensor).unwrap();
-        let (_, long) = long_triangles::split(&g.positions, sensor, mesh.pitch, &mesh.triangles);
+        let is_long = is_long_in(&g.positions, sensor, mesh.pitch);
+        let long: Vec<&[u32; 3]> = mesh.triangles.iter().filter(|t| is_long(t)).collect();
         // 11 risers of 63 pixel pairs, two triangles each.
         assert_eq!(long.len(), 11 * 63 * 2);
         assert_eq!(leaves.stats.triangle_splats, long.len() as u64);
@@ -436,60 +377,10 @@ mod tests {
             ] {
                 let p = p + ((a + b + c) / 3.0 - p) * 0.01;
                 assert!(
-                    leaves.surfels.iter().any(|s| covers(s, p)),
+                    leaves.surfels.iter().any(|s| s.covers(p)),
                     "{p} on a riser left uncovered"
                 );
             }
         }
-    }
-
-    /// Whether surfel `s`'s clipped ellipse covers `p` (in its plane, to first order).
-    fn covers(s: &Surfel, p: Vec3) -> bool {
-        let n = s.normal.as_dvec3();
-        let shape = s.shape.unpack(n);
-        let d = (p - s.position).as_dvec3() / s.radius as f64;
-        let xy = shape.along_axes(n, d);
-        let inside = xy.x * xy.x + (xy.y / shape.ratio).powi(2) < 1.0;
-        inside && shape.clip.is_none_or(|c| c.keeps(xy))
-    }
-
-    #[test]
-    fn an_inner_splat_is_clipped_at_the_border_edge_of_its_ring() {
-        // Pixels of a 3 × 3 block, 1 apart: every edge of the centre's ring is on the
-        // border. The centre's splat, a circle reaching 1.5 pixels, passes the border
-        // edges (at 1) until it is clipped at the nearest one's line.
-        let points: Vec<Vec3> = (0..9)
-            .map(|i| Vec3::new((i % 3) as f32 - 1.0, (i / 3) as f32 - 1.0, 0.0))
-            .collect();
-        let triangles = [
-            [0, 4, 1],
-            [0, 3, 4],
-            [1, 5, 2],
-            [1, 4, 5],
-            [3, 7, 4],
-            [3, 6, 7],
-        ];
-        let triangles = [&triangles[..], &[[4, 8, 5], [4, 7, 8]]].concat();
-        let mut surfels: Vec<Surfel> = points
-            .iter()
-            .map(|&position| Surfel {
-                radius: 1.5,
-                normal: Vec3::Z,
-                shape: crate::surfel::shape::SplatShape::circle(Vec3::Z),
-                ..Surfel::unsized_at(position)
-            })
-            .collect();
-        assert!(covers(&surfels[4], Vec3::new(1.25, 0.0, 0.0)));
-        assert_eq!(clip_at_border(&points, &triangles, &mut surfels), 1);
-        let kept = |x: f32, y: f32| covers(&surfels[4], Vec3::new(x, y, 0.0));
-        assert!(kept(0.0, 0.0) && kept(0.9, 0.0) && kept(-0.9, 0.0) && kept(0.0, 0.9));
-        let past = [(1.1, 0.0), (-1.1, 0.0), (0.0, 1.1), (0.0, -1.1)];
-        assert_eq!(past.iter().filter(|&&(x, y)| kept(x, y)).count(), 3);
-        // The border vertices keep their own clips (none here).
-        assert!(
-            surfels[..4]
-                .iter()
-                .all(|s| s.shape.clip == surfels[0].shape.clip)
-        );
     }
 }

@@ -1,85 +1,147 @@
-//! Splats of a sensor frame's long triangles, each in its own plane (issue 13).
+//! Splats of a mesh's long triangles, each in its own plane (issue 13): a sensor
+//! frame's grid ([`super::grid`]) and a terrain's TIN ([`super::terrain`]).
 //!
-//! A frame's grid triangles ([`super::grid`]) join neighbouring pixels. Where the
-//! sensor quantises depth, or sees a surface nearly edge-on, neighbouring pixels lie
-//! many pixel footprints apart: the triangles between them are long and thin (the
-//! risers between two depth steps). A vertex's one-ring ellipse ([`super::ring`]) had
-//! to reach along such a riser, in the plane of the vertex's normal, which blends the
-//! step's and the riser's; seen from the side it stuck out of both as a needle.
+//! A frame's grid triangles join neighbouring pixels. Where the sensor quantises depth,
+//! or sees a surface nearly edge-on, neighbouring pixels lie many pixel footprints
+//! apart: the triangles between them are long and thin (the risers between two depth
+//! steps). A vertex's one-ring ellipse ([`super::ring`]) had to reach along such a
+//! riser, in the plane of the vertex's normal, which blends the step's and the riser's;
+//! seen from the side it stuck out of both as a needle. A terrain's walls, between a
+//! roof's edge and the street, are such triangles too.
 //!
-//! Here a triangle whose longest edge exceeds [`LONG_PITCHES`] pixel footprints at its
-//! depth is drawn by a splat of its own: its Steiner circumellipse, the least-area
-//! ellipse through its three corners, centred on its centroid g with conjugate
-//! semi-diameters c − g and (a − b) / √3 (area 4π / (3√3) ≈ 2.42 times the
-//! triangle's). The ellipse bulges beyond each edge by a third of the triangle's height
-//! over that edge: barely beyond the long edges, by a third of the riser beyond the
-//! short one, where it is clipped ([`Clip::Line`] through that edge). Its shading and
-//! colour fields are fitted over the triangle as a vertex's are over its ring
-//! ([`fit_field`], [`fit_color_field`]), so that it shades as the reference
-//! interpolates. The vertices' ellipses then cover only their short triangles.
+//! So [`disks`] draws a long triangle (the caller says which: [`LONG_PITCHES`] pixel
+//! footprints on a frame) by a splat of its own ([`splats`]): an ellipse of its second
+//! moments centred on its centroid g, the Steiner family with conjugate semi-diameters
+//! c − g and (a − b) / √3 ([`Reach`]). The circumellipse, through the corners, bulges
+//! beyond each edge by a third of the triangle's height over that edge: barely beyond
+//! the long edges, by a third of the riser beyond the short one, where it is clipped
+//! ([`Clip::Line`] through that edge). Its shading and colour fields are fitted over
+//! the triangle as a vertex's are over its ring ([`fit_field`], [`fit_color_field`]),
+//! so that it shades as the reference interpolates. The vertices' ellipses then cover
+//! only their short triangles.
 
 use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
-use super::Surfel;
 use super::clip::Clip;
 use super::field::{fit_color_field, fit_field, unit_rgb};
+use super::mesh::face_disks;
 use super::mesh::{RADIUS_MARGIN, triangle_terms};
+use super::ring::{clip_at_border, ring_shapes};
 use super::shape::{Fit, Shape, tangent_frame};
+use super::{DEFAULT_COLOR, Surfel, SurfelStats};
 use crate::io::PointAttributes;
 
 /// Longest edge, in pixel footprints (pitch × depth), beyond which a frame's triangle
 /// gets a splat of its own.
-pub const LONG_PITCHES: f64 = 3.0;
+pub const LONG_PITCHES: f32 = 3.0;
 
-/// `triangles` split into the short and the long ([`LONG_PITCHES`]), for a frame seen
-/// from `sensor` (relative to the model origin, as `points`) with pixel `pitch`
-/// (radians).
-pub fn split(
-    points: &[Vec3],
-    sensor: Vec3,
-    pitch: f32,
+/// The splats of a mesh (a frame's grid, a terrain's TIN) whose long triangles are
+/// drawn by splats of their own: each vertex's normal from all its triangles, its
+/// ellipse and shading field from its short ones, clipped at their border, and no
+/// colour field; a vertex on long triangles only is a circle of `lone_radius(position)`.
+/// Fills `surfels` (one per point; `given` normals kept) and returns the isolated
+/// vertices (ascending), the long triangles and the vertex normals that
+/// [`splats`] interpolates over them.
+pub fn disks(
+    (points, scale): (&[Vec3], f32),
     triangles: &[[u32; 3]],
-) -> (Vec<[u32; 3]>, Vec<[u32; 3]>) {
-    let at = |v: u32| (points[v as usize] - sensor).as_dvec3();
-    let long = |t: &[u32; 3]| {
-        let depth = t.iter().map(|&v| at(v).length()).sum::<f64>() / 3.0;
-        let longest = (0..3)
-            .map(|k| at(t[k]).distance(at(t[(k + 1) % 3])))
-            .fold(0.0, f64::max);
-        longest > LONG_PITCHES * pitch as f64 * depth
-    };
-    triangles.par_iter().partition(|t| !long(t))
+    (is_long, lone_radius): (impl Fn(&[u32; 3]) -> bool + Sync, impl Fn(Vec3) -> f32),
+    given: Option<&[Vec3]>,
+    surfels: &mut [Surfel],
+    stats: &mut SurfelStats,
+) -> Split {
+    let isolated = face_disks(points, scale, triangles, given, surfels, stats);
+    let (short, long): (Vec<[u32; 3]>, Vec<[u32; 3]>) =
+        triangles.par_iter().partition(|t| !is_long(t));
+    let mut in_short = vec![false; points.len()];
+    short
+        .iter()
+        .flatten()
+        .for_each(|&v| in_short[v as usize] = true);
+    // The vertices keep their own colours, without fields: fitted over a ring cut at a
+    // step's edge, a field ran on across the step in saturated specks.
+    let normals = ring_shapes(points, scale, &short, surfels, false);
+    for (v, s) in surfels.iter_mut().enumerate() {
+        if !in_short[v] && s.radius > 0.0 {
+            s.radius = s.radius.min(lone_radius(s.position));
+        }
+    }
+    stats.clipped_boundaries += clip_at_border(points, &short, surfels);
+    Split {
+        isolated,
+        long,
+        normals,
+    }
+}
+
+/// What [`disks`] leaves to its caller.
+pub struct Split {
+    /// The vertices no triangle holds, ascending.
+    pub isolated: Vec<u32>,
+    pub long: Vec<[u32; 3]>,
+    /// Each vertex's normal, from all its triangles.
+    pub normals: Vec<Vec3>,
+}
+
+/// The length of triangle `t`'s longest edge.
+pub fn longest_edge(points: &[Vec3], t: &[u32; 3]) -> f32 {
+    (0..3)
+        .map(|k| points[t[k] as usize].distance(points[t[(k + 1) % 3] as usize]))
+        .fold(0.0, f32::max)
 }
 
 /// One splat per triangle of `long` (indices into `points`, relative to the model
 /// origin; `scale` the model's unit scale): `normals` are the vertices' normals, as the
-/// reference interpolates them, `colors` the file's (None: grey). A degenerate
+/// reference interpolates them, `colors` the file's (None: [`DEFAULT_COLOR`], the vertices'). A degenerate
 /// triangle gets none.
 pub fn splats(
     points: &[Vec3],
     scale: f32,
     long: &[[u32; 3]],
     normals: &[Vec3],
-    colors: Option<&[[u8; 4]]>,
+    (colors, reach): (Option<&[[u8; 4]]>, Reach),
 ) -> Vec<Surfel> {
     let s = scale as f64;
     long.par_iter()
         .filter_map(|t| {
             let corners = t.map(|v| {
-                let color = colors.map_or(DVec3::splat(0.5), |c| unit_rgb(c[v as usize]));
+                let color = unit_rgb(colors.map_or(DEFAULT_COLOR, |c| c[v as usize]));
                 Corner {
                     position: points[v as usize].as_dvec3() * s,
                     normal: normals[v as usize].as_dvec3(),
                     color,
                 }
             });
-            let mut surfel = triangle_splat(corners, colors.is_some())?;
+            let mut surfel = triangle_splat(corners, colors.is_some(), reach)?;
             surfel.position = (surfel.position.as_dvec3() / s).as_vec3();
             surfel.radius = (surfel.radius as f64 / s) as f32;
             Some(surfel)
         })
         .collect()
+}
+
+/// Which ellipse of a triangle's second moments (the Steiner family, centred on its
+/// centroid) draws it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reach {
+    /// The Steiner circumellipse, through the corners: it covers the triangle, with
+    /// 4π / (3√3) ≈ 2.42 times its area.
+    Corners,
+    /// The one of the triangle's own area, 0.643 times the circumellipse: it leaves
+    /// the thin tips of a needle to the corners' own splats, and reaches past the
+    /// edges by less.
+    Area,
+}
+
+impl Reach {
+    /// Its semi-axes over the circumellipse's: √(3√3 / 4π) for [`Reach::Area`].
+    fn scale(self) -> f64 {
+        match self {
+            Reach::Corners => 1.0,
+            Reach::Area => (3.0 * 3f64.sqrt() / (4.0 * std::f64::consts::PI)).sqrt(),
+        }
+    }
 }
 
 /// A triangle's corner: unit-scaled position, vertex normal, RGB 0–1.
@@ -92,7 +154,7 @@ struct Corner {
 
 /// The splat of one triangle (see the module doc), in the corners' unit; None when it
 /// is degenerate ([`super::mesh::DEGENERATE`]).
-fn triangle_splat(corners: [Corner; 3], colored: bool) -> Option<Surfel> {
+fn triangle_splat(corners: [Corner; 3], colored: bool, reach: Reach) -> Option<Surfel> {
     let [a, b, c] = corners.map(|k| k.position);
     let (cross, _, degenerate) = triangle_terms(a, b, c);
     if degenerate {
@@ -101,6 +163,7 @@ fn triangle_splat(corners: [Corner; 3], colored: bool) -> Option<Surfel> {
     let face = cross.normalize();
     let g = (a + b + c) / 3.0;
     let (major, r, ratio) = steiner_ellipse(face, [a, b, c]);
+    let r = r * reach.scale();
     let shape = Shape::ellipse(face, major, ratio);
     let at = |k: &Corner| (k.position, k.normal);
     let (normal, mut shape) = fit_field(
@@ -213,7 +276,7 @@ mod tests {
             color: DVec3::splat(0.5),
         };
         let [a, b, c] = [DVec3::ZERO, DVec3::X, DVec3::new(0.5, 12.0, 0.0)];
-        let s = triangle_splat([a, b, c].map(corner), false).unwrap();
+        let s = triangle_splat([a, b, c].map(corner), false, Reach::Corners).unwrap();
         let n = s.normal.as_dvec3();
         let shape = s.shape.unpack(n);
         let g = s.position.as_dvec3();
@@ -233,5 +296,26 @@ mod tests {
         // The ellipse bulges a third of the height (4) beyond the short edge a–b.
         assert!(!kept(DVec3::new(0.5, -1.0, 0.0)));
         assert!(shape.clip.is_some());
+    }
+
+    #[test]
+    fn the_ellipse_of_a_triangle_s_area_leaves_a_needle_s_tip_out() {
+        let corner = |position: DVec3| Corner {
+            position,
+            normal: DVec3::Z,
+            color: DVec3::splat(0.5),
+        };
+        // Thick enough that its ellipse is over MIN_RATIO.
+        let [a, b, c] = [DVec3::ZERO, 4.0 * DVec3::X, DVec3::new(2.0, 12.0, 0.0)];
+        let s = triangle_splat([a, b, c].map(corner), false, Reach::Area).unwrap();
+        let shape = s.shape.unpack(DVec3::Z);
+        let r = s.radius as f64 / (1.0 + RADIUS_MARGIN);
+        let area = std::f64::consts::PI * r * r * shape.ratio;
+        assert!(
+            (area / 24.0 - 1.0).abs() < 2e-3,
+            "ellipse {area}, triangle 24"
+        );
+        assert!(s.covers(((a + b + c) / 3.0).as_vec3()));
+        assert!(!s.covers((c + (a - c) * 0.1).as_vec3()), "the tip");
     }
 }

@@ -21,6 +21,7 @@ pub mod octahedral;
 pub mod pca;
 pub mod ring;
 pub mod shape;
+pub mod terrain;
 pub mod walls;
 
 use bytemuck::{Pod, Zeroable};
@@ -114,6 +115,19 @@ pub struct SurfelStats {
     /// ([`grid`]): its surfels are then those of the grid's triangulation, as a mesh's,
     /// and the rules for frames without one (depth steps, footprint) do not run.
     pub pixel_grid: Option<grid::PixelGrid>,
+}
+
+#[cfg(test)]
+impl Surfel {
+    /// Whether its clipped ellipse covers `p` (in its plane, to first order).
+    pub(crate) fn covers(&self, p: Vec3) -> bool {
+        let n = self.normal.as_dvec3();
+        let shape = self.shape.unpack(n);
+        let d = (p - self.position).as_dvec3() / self.radius as f64;
+        let xy = shape.along_axes(n, d);
+        let inside = xy.x * xy.x + (xy.y / shape.ratio).powi(2) < 1.0;
+        inside && shape.clip.is_none_or(|c| c.keeps(xy))
+    }
 }
 
 impl SurfelStats {
@@ -294,6 +308,23 @@ fn initial_surfels(g: &Geometry) -> Vec<Surfel> {
         .collect()
 }
 
+/// A terrain's splats from its TIN ([`terrain::terrain_disks`]); None for any other
+/// model, and for a terrain whose samples make no triangle.
+fn terrain_path(
+    g: &Geometry,
+    (own, scale): (usize, f32),
+    orientation: cloud::Orientation,
+    surfels: &mut [Surfel],
+    stats: &mut SurfelStats,
+) -> Option<(Vec<u32>, Vec<Surfel>)> {
+    if !g.triangles.is_empty() || orientation != cloud::Orientation::Up {
+        return None;
+    }
+    let given = g.normals.as_deref();
+    let colors = g.colors.as_deref();
+    terrain::terrain_disks((&g.positions, scale), own, (given, colors), surfels, stats)
+}
+
 /// The leaf surfels, and a mesh piece's terms of the orientation vote.
 fn leaf_surfels_among(
     g: &Geometry,
@@ -324,6 +355,14 @@ fn leaf_surfels_among(
         (redundant, walls) =
             grid::frame_disks(g, (mesh, sensor, scale), given, &mut surfels, &mut stats);
         stats.pixel_grid = Some(mesh.grid);
+        let oriented = given.is_some() && stats.given_normals == own as u64;
+        if !oriented {
+            normals_turned = NormalsTurned::of(orientation);
+        }
+        oriented
+    } else if let Some(found) = terrain_path(g, (own, scale), orientation, &mut surfels, &mut stats)
+    {
+        (redundant, walls) = found;
         let oriented = given.is_some() && stats.given_normals == own as u64;
         if !oriented {
             normals_turned = NormalsTurned::of(orientation);

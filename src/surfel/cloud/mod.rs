@@ -15,6 +15,10 @@
 //!   terrain's edge sample at its wall (counted: [`SurfelStats::clipped_boundaries`]);
 //! * walls: a terrain's steep edges stand on wall surfels of their own ([`walls`]).
 //!
+//! A terrain whose samples make a TIN is drawn from it instead ([`super::terrain`],
+//! since 2026-11-24); the terrain rules here (the TIN's shading, the tile's spacing,
+//! walls) now serve a terrain piece whose samples make no triangle.
+//!
 //! Duplicated samples do not shrink a radius (only distinct neighbours count). A surfel
 //! whose neighbours all coincide with it takes the median radius of the others
 //! ([`fallback_radius`]).
