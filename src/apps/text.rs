@@ -13,12 +13,13 @@ pub fn count(n: u64) -> String {
     out
 }
 
-/// How many of a terrain's leaves are wall splats (`spt::surfel::walls`), as a clause to
-/// append: ", 1,234 wall splats under the terrain's steep edges" ("" where there are none).
+/// How many of a model's leaves are no sample of its file (a terrain's walls, long
+/// triangles' splats: `SurfelStats::added_splats`), as a clause to append: ", 1,234
+/// splats of walls and long triangles" ("" where there are none).
 pub fn walls(n: u64) -> String {
     match n {
         0 => String::new(),
-        n => format!(", {} wall splats under the terrain's steep edges", count(n)),
+        n => format!(", {} splats of walls and long triangles", count(n)),
     }
 }
 

@@ -51,7 +51,8 @@ pub struct Part {
     pub root: (NodeRecord, SplatShape, PointAttributes),
     pub nodes: u64,
     pub leaves: u64,
-    /// How many of them are a terrain's walls ([`crate::surfel::walls`]).
+    /// How many of them are no sample of the file: a terrain's walls and long
+    /// triangles' splats ([`crate::surfel::SurfelStats::added_splats`]).
     pub walls: u64,
     pub chunks: u64,
     /// Each chunk's largest parent error (its first node's, f16 bits): where the file
