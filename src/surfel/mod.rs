@@ -309,7 +309,8 @@ fn initial_surfels(g: &Geometry) -> Vec<Surfel> {
 }
 
 /// A terrain's splats from its TIN ([`terrain::terrain_disks`]); None for any other
-/// model, and for a terrain whose samples make no triangle.
+/// model, for a terrain whose samples make no triangle, and for one whose file gives
+/// every normal (kept as given, by the cloud's rules).
 fn terrain_path(
     g: &Geometry,
     (own, scale): (usize, f32),
@@ -321,6 +322,9 @@ fn terrain_path(
         return None;
     }
     let given = g.normals.as_deref();
+    if given.is_some_and(|n| n.iter().all(|v| *v != Vec3::ZERO)) {
+        return None;
+    }
     let colors = g.colors.as_deref();
     terrain::terrain_disks((&g.positions, scale), own, (given, colors), surfels, stats)
 }
