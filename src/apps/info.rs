@@ -305,7 +305,7 @@ impl ModelInfo {
         line(
             "",
             format!(
-                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, splats of long triangles (a frame's grid, a terrain's TIN) {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}, a terrain's splats held to its tile's spacing {}, shaded by its triangulation {}",
+                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, splats of long triangles (a frame's grid, a terrain's TIN) {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}, a terrain's splats held to its tile's spacing {}",
                 count(st.degenerate_triangles),
                 count(st.isolated_vertices),
                 count(st.redundant_vertices),
@@ -318,8 +318,7 @@ impl ModelInfo {
                 count(st.triangle_splats),
                 count(st.step_treads),
                 count(st.footprint_capped),
-                count(st.tile_capped),
-                count(st.tin_shaded)
+                count(st.tile_capped)
             ),
         );
         let t = &self.timing;

@@ -107,10 +107,6 @@ pub struct SurfelStats {
     /// A terrain's splats whose axes were held within a few of its tile's spacings
     /// ([`cloud::TILE_SPACINGS`]).
     pub tile_capped: u64,
-    /// A terrain's samples shaded by its triangulation: the vertex normal (and, where
-    /// the splat covers enough of the one-ring to fit one, the shading field) of the
-    /// 2.5D Delaunay triangles that hold them (`cloud::tin`).
-    pub tin_shaded: u64,
     /// The pixel grid a sensor frame's samples lie on in their file's order
     /// ([`grid`]): its surfels are then those of the grid's triangulation, as a mesh's,
     /// and the rules for frames without one (depth steps, footprint) do not run.

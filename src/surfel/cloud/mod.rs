@@ -6,8 +6,7 @@
 //!   neighbours: enough to span several scan lines), unless the file gives a non-zero
 //!   one; on a quantised frame where it lies on one depth step ([`super::levels`]) the
 //!   mean of its neighbours' that span steps (`smoothed`); oriented afterwards where a
-//!   direction is known ([`Orientation`]); on a terrain its triangulation's vertex
-//!   normal, with a shading field over its one-ring ([`tin`]);
+//!   direction is known ([`Orientation`]);
 //! * radius and ellipse: the covering of [`super::covering`], from the same
 //!   neighbourhood; a capped one is counted ([`SurfelStats::capped_radii`]); on a
 //!   terrain held within [`TILE_SPACINGS`] of the tile's spacing;
@@ -16,8 +15,9 @@
 //! * walls: a terrain's steep edges stand on wall surfels of their own ([`walls`]).
 //!
 //! A terrain whose samples make a TIN is drawn from it instead ([`super::terrain`],
-//! since 2026-11-24); the terrain rules here (the TIN's shading, the tile's spacing,
-//! walls) now serve a terrain piece whose samples make no triangle.
+//! since 2026-11-24, twenty-ninth session, which also removed the TIN's shading from
+//! here, `cloud/tin.rs`); the terrain rules here (the tile's spacing, walls) now serve
+//! a terrain whose samples make no triangle, or whose file gives every normal.
 //!
 //! Duplicated samples do not shrink a radius (only distinct neighbours count). A surfel
 //! whose neighbours all coincide with it takes the median radius of the others
@@ -26,7 +26,6 @@
 mod orientation;
 mod search;
 mod smoothed;
-mod tin;
 
 use arrayvec::ArrayVec;
 use glam::Vec3;
@@ -66,9 +65,8 @@ fn median_of_positive(values: impl Iterator<Item = f32>) -> Option<f32> {
 /// Normal, radius and ellipse from the neighbours of each point listed in `which`,
 /// searching among all `points` (unit-scaled by `scale` for the search), written into
 /// `surfels`. Non-zero `given` normals are kept, the estimated ones turned by
-/// `orientation` (on a quantised frame, smoothed first: `smoothed_disks`; on a terrain,
-/// its [`tin::Tin`]'s where a triangle holds the sample); a radius already set (from faces)
-/// is only grown. A boundary splat ends where its sampling does ([`boundary_clip`]), a
+/// `orientation` (on a quantised frame, smoothed first: `smoothed_disks`); a radius
+/// already set (from faces) is only grown. A boundary splat ends where its sampling does ([`boundary_clip`]), a
 /// terrain's edge sample where its wall stands ([`walls`]). Afterwards every listed
 /// surfel whose radius is still 0 gets [`fallback_radius`]. Returns a terrain's wall
 /// surfels (none for any other cloud).
@@ -114,33 +112,22 @@ pub fn neighbour_disks(
     } else {
         Vec::new()
     };
-    let searched = search.tree.is_some();
-    drop(search); // before the triangulation's peak
-    let estimated = |i: u32| given_normal(i) == Vec3::ZERO;
-    let tin_splats = match orientation {
-        Orientation::Up if searched => tin::splats(which, (points, scale), &disks, estimated),
-        _ => Vec::new(),
-    };
-    stats.tin_shaded += tin_splats.iter().flatten().count() as u64;
+    drop(search);
     let mut next_wall = walls.iter().peekable();
     for (k, (&i, (normal, c))) in which.iter().zip(disks).enumerate() {
         let wall = next_wall.next_if(|(j, _)| *j == k).map(|(_, w)| w);
         let s = &mut surfels[i as usize];
-        let from_tin = tin_splats.get(k).copied().flatten();
         let estimated = given_normal(i) == Vec3::ZERO;
-        s.normal = match from_tin {
-            Some(t) => t.normal,
-            None if estimated => orientation.apply(s.position, normal),
-            None => normal,
+        s.normal = if estimated {
+            orientation.apply(s.position, normal)
+        } else {
+            normal
         };
         let radius = c.radius / scale;
         if radius >= s.radius {
             s.radius = radius;
             let n = s.normal.as_dvec3();
-            let mut shape = from_tin.map_or_else(
-                || Shape::ellipse(n, c.axis.as_dvec3(), c.ratio as f64),
-                |t| t.shape(c.ratio as f64),
-            );
+            let mut shape = Shape::ellipse(n, c.axis.as_dvec3(), c.ratio as f64);
             let p = points[i as usize] * scale;
             shape.clip = match wall {
                 Some(w) => w.clip_of(p, (&shape, n, c.radius)),
@@ -174,8 +161,7 @@ pub fn neighbour_disks(
 
 /// Each of the points `which`'s normal (given, or fitted to its neighbourhood and, on a
 /// quantised frame, smoothed: [`Steps`], which turns its fits before their means) and
-/// covering; [`neighbour_disks`] turns every estimated normal after (or, on a terrain,
-/// takes its triangulation's: [`tin::Tin`]).
+/// covering; [`neighbour_disks`] turns every estimated normal after.
 fn disks(
     search: &Search,
     (points, scale): (&[Vec3], f32),
@@ -310,43 +296,6 @@ fn boundary_clip(shape: &Shape, n: glam::DVec3, open: Vec3) -> Clip {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_terrain_s_roof_ridge_stays_sharper_than_its_fits() {
-        // A gabled roof z = 9 − |x − 9| sampled as an airborne scan stores it: lines
-        // 0.5 apart in y, jittered samples along them (proptest's seeded generator). A
-        // terrain's normals (its triangulation's, over one ring) must lie nearer each
-        // roof plane's than the fits to 24 neighbours (an unknown cloud's normals),
-        // which round the ridge off.
-        use proptest::prelude::Rng;
-        let mut rng = proptest::test_runner::TestRng::deterministic_rng(
-            proptest::test_runner::RngAlgorithm::ChaCha,
-        );
-        let points: Vec<Vec3> = (0..60 * 40)
-            .map(|i| {
-                let x = (i % 60) as f32 * 0.3 + rng.random::<f32>() * 0.2;
-                let y = (i / 60) as f32 * 0.5 + rng.random::<f32>() * 0.02;
-                Vec3::new(x, y, 9.0 - (x - 9.0).abs())
-            })
-            .collect();
-        let plane = |x: f32| Vec3::new((x - 9.0).signum(), 0.0, 1.0).normalize();
-        let mean_error = |orientation: Orientation| {
-            let surfels = surfels_of(&points, 0.05, orientation);
-            let angles = surfels
-                .iter()
-                .map(|s| s.normal.dot(plane(s.position.x)).abs().min(1.0).acos());
-            angles.sum::<f32>().to_degrees() / points.len() as f32
-        };
-        let (terrain, fits) = (
-            mean_error(Orientation::Up),
-            mean_error(Orientation::Unknown),
-        );
-        eprintln!("mean error: terrain {terrain:.3}°, fits {fits:.3}°");
-        assert!(
-            terrain < 0.6 * fits,
-            "terrain {terrain:.2}° against fits {fits:.2}°"
-        );
-    }
 
     #[test]
     fn a_quantised_frame_s_step_treads_take_the_floor_s_slope() {
