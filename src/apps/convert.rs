@@ -10,7 +10,7 @@ use std::sync::Mutex;
 
 use crate::apps::progress::Stage;
 use crate::apps::stats::peak_memory_bytes;
-use crate::apps::text::{count, triangle_splats, walls};
+use crate::apps::text::{count, walls};
 use crate::io::GeometryStats;
 use crate::tree::NodeRecord;
 use crate::tree::record::{PointAttributes, SplatShape};
@@ -69,10 +69,9 @@ impl Report for Steps {
                 dropped(&model.stats)
             ),
             Finished::Surfels(leaves) => {
-                let walls = walls(leaves.stats.wall_splats);
-                let triangles = triangle_splats(leaves.stats.triangle_splats);
+                let walls = walls(leaves.stats.added_splats());
                 format!(
-                    "{:.2} M surfels/s{walls}{triangles}",
+                    "{:.2} M surfels/s{walls}",
                     per_s(leaves.surfels.len() as u64)
                 )
             }

@@ -23,15 +23,6 @@ pub fn walls(n: u64) -> String {
     }
 }
 
-/// How many of a frame's or a terrain's leaves are its long triangles' splats
-/// (`spt::surfel::long_triangles`), as a clause to append ("" where there are none).
-pub fn triangle_splats(n: u64) -> String {
-    match n {
-        0 => String::new(),
-        n => format!(", {} splats of long triangles", count(n)),
-    }
-}
-
 /// A byte count in B, KiB, MiB or GiB.
 pub fn bytes(n: u64) -> String {
     match n {

@@ -127,8 +127,8 @@ impl Surfel {
 }
 
 impl SurfelStats {
-    /// The surfels that are no sample of the file: a terrain's walls and a frame's
-    /// long triangles' splats.
+    /// The surfels that are no sample of the file: a terrain's walls and the long
+    /// triangles' splats of a frame or a terrain.
     pub fn added_splats(&self) -> u64 {
         self.wall_splats + self.triangle_splats
     }
