@@ -81,9 +81,9 @@ pub fn frame_disks(
     );
     let redundant = isolated::redundant(points, scale, &split.isolated, surfels);
     stats.redundant_vertices = redundant.len() as u64;
-    let colors = g.colors.as_deref();
+    let looks = (g.colors.as_deref(), g.attributes.as_deref());
     let (long, normals) = (&split.long, &split.normals);
-    let splats = long_triangles::splats(points, scale, long, normals, (colors, Reach::Corners));
+    let splats = long_triangles::splats(points, scale, long, normals, (looks, Reach::Corners));
     stats.triangle_splats = splats.len() as u64;
     (redundant, splats)
 }

@@ -100,7 +100,7 @@ pub fn splats(
     scale: f32,
     long: &[[u32; 3]],
     normals: &[Vec3],
-    (colors, reach): (Option<&[[u8; 4]]>, Reach),
+    ((colors, attributes), reach): (Looks, Reach),
 ) -> Vec<Surfel> {
     let s = scale as f64;
     long.par_iter()
@@ -116,10 +116,22 @@ pub fn splats(
             let mut surfel = triangle_splat(corners, colors.is_some(), reach)?;
             surfel.position = (surfel.position.as_dvec3() / s).as_vec3();
             surfel.radius = (surfel.radius as f64 / s) as f32;
+            if let Some(a) = attributes {
+                // The LiDAR attributes of the corner nearest the splat's centre.
+                let g = surfel.position;
+                let near = t.iter().min_by(|&&u, &&v| {
+                    let d = |w: u32| points[w as usize].distance_squared(g);
+                    d(u).total_cmp(&d(v))
+                });
+                surfel.attributes = a[*near.unwrap_or(&t[0]) as usize];
+            }
             Some(surfel)
         })
         .collect()
 }
+
+/// The file's colours and LiDAR attributes per sample, where it has them.
+pub type Looks<'a> = (Option<&'a [[u8; 4]]>, Option<&'a [PointAttributes]>);
 
 /// Which ellipse of a triangle's second moments (the Steiner family, centred on its
 /// centroid) draws it.

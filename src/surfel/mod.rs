@@ -321,8 +321,8 @@ fn terrain_path(
     if given.is_some_and(|n| n.iter().all(|v| *v != Vec3::ZERO)) {
         return None;
     }
-    let colors = g.colors.as_deref();
-    terrain::terrain_disks((&g.positions, scale), own, (given, colors), surfels, stats)
+    let look = (given, (g.colors.as_deref(), g.attributes.as_deref()));
+    terrain::terrain_disks((&g.positions, scale), own, look, surfels, stats)
 }
 
 /// The leaf surfels, and a mesh piece's terms of the orientation vote.

@@ -35,7 +35,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::long_triangles::{self, Reach};
+use super::long_triangles::{self, Looks, Reach};
 use super::{Surfel, SurfelStats, isolated};
 use crate::io::triangulate::height_field;
 
@@ -45,13 +45,14 @@ pub const LONG_SPACINGS: f32 = 2.0;
 
 /// The splats of the first `own` of a terrain's `points` (the rest: the halo of a
 /// piece, [`crate::tree::out_of_core`]) from their TIN (see the module doc), into
-/// `surfels` (one per point; `given` normals kept): returns the redundant isolated
-/// vertices among them, and the splats of the long triangles that the piece owns (the
-/// piece of their least corner, [`owner`]). None where the samples make no triangle.
+/// `surfels` (one per point; `given` normals kept; `looks` for the long triangles'
+/// splats): returns the redundant isolated vertices among them, and the splats of the
+/// long triangles that the piece owns (the piece of their least corner, [`owner`]).
+/// None where the samples make no triangle.
 pub fn terrain_disks(
     (points, scale): (&[Vec3], f32),
     own: usize,
-    (given, colors): (Option<&[Vec3]>, Option<&[[u8; 4]]>),
+    (given, looks): (Option<&[Vec3]>, Looks),
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
 ) -> Option<(Vec<u32>, Vec<Surfel>)> {
@@ -88,7 +89,7 @@ pub fn terrain_disks(
     let owned: Vec<[u32; 3]> = (split.long.into_par_iter())
         .filter(|t| (owner(points, t) as usize) < own)
         .collect();
-    let reach = (colors, Reach::Area);
+    let reach = (looks, Reach::Area);
     let splats = long_triangles::splats(points, scale, &owned, &split.normals, reach);
     stats.triangle_splats = splats.len() as u64;
     Some((redundant, splats))
@@ -165,7 +166,14 @@ mod tests {
         let mut surfels: Vec<Surfel> = points.iter().map(|&p| Surfel::unsized_at(p)).collect();
         let mut stats = SurfelStats::default();
         let all = points.len();
-        terrain_disks((points, scale), all, (None, None), &mut surfels, &mut stats).unwrap();
+        terrain_disks(
+            (points, scale),
+            all,
+            (None, (None, None)),
+            &mut surfels,
+            &mut stats,
+        )
+        .unwrap();
         surfels
     }
 
