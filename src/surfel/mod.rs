@@ -313,7 +313,7 @@ fn terrain_path(
     orientation: cloud::Orientation,
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
-) -> Option<(Vec<u32>, Vec<Surfel>)> {
+) -> Option<Vec<Surfel>> {
     if !g.triangles.is_empty() || orientation != cloud::Orientation::Up {
         return None;
     }
@@ -362,7 +362,7 @@ fn leaf_surfels_among(
         oriented
     } else if let Some(found) = terrain_path(g, (own, scale), orientation, &mut surfels, &mut stats)
     {
-        (redundant, walls) = found;
+        walls = found;
         let oriented = given.is_some() && stats.given_normals == own as u64;
         if !oriented {
             normals_turned = NormalsTurned::of(orientation);

@@ -36,7 +36,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::long_triangles::{self, Looks, Reach};
-use super::{Surfel, SurfelStats, isolated};
+use super::{Surfel, SurfelStats};
 use crate::io::triangulate::height_field;
 
 /// Longest edge, in the tile's spacings, beyond which a TIN triangle gets a splat of
@@ -46,18 +46,23 @@ pub const LONG_SPACINGS: f32 = 2.0;
 /// The splats of the first `own` of a terrain's `points` (the rest: the halo of a
 /// piece, [`crate::tree::out_of_core`]) from their TIN (see the module doc), into
 /// `surfels` (one per point; `given` normals kept; `looks` for the long triangles'
-/// splats): returns the redundant isolated vertices among them, and the splats of the
-/// long triangles that the piece owns (the piece of their least corner, [`owner`]).
-/// None where the samples make no triangle.
+/// splats): returns the splats of the long triangles that the piece owns (the piece of
+/// their least corner, [`owner`]). None where the samples make no triangle, or lie
+/// closer than a normal f32 apart. A sample that no triangle holds and no twin shares
+/// its x–y with (a stray return, a sample in a gap the TIN leaves open) keeps the disk
+/// its neighbours give it, as a cloud's, turned up: every sample of the file is drawn,
+/// in memory and in out-of-core jobs alike (a mesh leaves out such a vertex where a
+/// triangle's splat reaches it, `super::isolated`; which ones a job's splats reach
+/// differs from the whole's).
 pub fn terrain_disks(
     (points, scale): (&[Vec3], f32),
     own: usize,
     (given, looks): (Option<&[Vec3]>, Looks),
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
-) -> Option<(Vec<u32>, Vec<Surfel>)> {
+) -> Option<Vec<Surfel>> {
     let mut triangles = height_field(points);
-    let spacing = median_horizontal_edge(points, &triangles)?;
+    let spacing = median_horizontal_edge(points, &triangles).filter(|s| s.is_normal())?;
     triangles.par_iter_mut().for_each(|t| {
         let [a, b, c] = t.map(|v| points[v as usize]);
         if (b - a).cross(c - a).z < 0.0 {
@@ -83,16 +88,13 @@ pub fn terrain_disks(
             s.normal = -s.normal;
         }
     }
-    let mut redundant = isolated::redundant(points, scale, &isolated, surfels);
-    redundant.retain(|&v| (v as usize) < own);
-    stats.redundant_vertices = redundant.len() as u64;
     let owned: Vec<[u32; 3]> = (split.long.into_par_iter())
         .filter(|t| (owner(points, t) as usize) < own)
         .collect();
     let reach = (looks, Reach::Area);
     let splats = long_triangles::splats(points, scale, &owned, &split.normals, reach);
     stats.triangle_splats = splats.len() as u64;
-    Some((redundant, splats))
+    Some(splats)
 }
 
 /// The median horizontal length of `triangles`' edges; None when there are none.
