@@ -5,20 +5,28 @@
 //! * disk: p = Σ aᵢ pᵢ / Σ aᵢ; n = normalize(Σ aᵢ nᵢ) (if that vanishes, the normal of
 //!   the children centres' best-fit plane); colour = Σ aᵢ cᵢ / Σ aᵢ;
 //!   r = maxᵢ(|pᵢ − p| + rᵢ), so the disk reaches every child disk.
-//! * perpendicular error: the thickness along n of the slab holding all child disks,
-//!   e_p = maxᵢ[(pᵢ − p)·n + dᵢ] − minᵢ[(pᵢ − p)·n − dᵢ], dᵢ = rᵢ √(1 − (nᵢ·n)²)
-//!   (dᵢ is how far a tilted child disk reaches out of its own plane along n).
+//!
+//! The error terms see each child as its splat: the ellipse of major semi-axis rᵢ along
+//! uᵢ (unit, ⟂ nᵢ) and minor semi-axis ratioᵢ rᵢ along vᵢ = nᵢ × uᵢ ([`Splat`]; the
+//! disk when ratioᵢ = 1), whose half-width along a unit direction d (its support) is
+//! hᵢ(d) = rᵢ √((uᵢ·d)² + ratioᵢ² (vᵢ·d)²), rᵢ √(1 − (nᵢ·d)²) for the disk.
+//!
+//! * perpendicular error: the thickness along n of the slab holding all child splats,
+//!   e_p = maxᵢ[(pᵢ − p)·n + hᵢ(n)] − minᵢ[(pᵢ − p)·n − hᵢ(n)] (hᵢ(n) is how far a
+//!   tilted child reaches out of its own plane along n).
 //! * tangential error: how far the parent disk overhangs its children in its own plane,
-//!   e_t = max(0, max_t [r − maxᵢ((pᵢ − p)·t + rᵢ √(1 − (nᵢ·t)²))]) over [`DIRECTIONS`]
-//!   unit directions t of the tangent plane (the bracket is the support of child disk i
-//!   in direction t).
+//!   e_t = max(0, max_t [r − maxᵢ((pᵢ − p)·t + hᵢ(t))]) over [`DIRECTIONS`] unit
+//!   directions t of the tangent plane. Seen as disks, a fan of a terrain's needles
+//!   from a tree's top (`surfel::terrain`) reached a crown's width sideways, and a
+//!   parent as wide as the crown overhung them by nothing: level of detail drew blobs
+//!   over the spires.
 //! * e = √(e_p² + e_t²), then e = max(e, maxᵢ eᵢ): errors never shrink toward the root.
 //!   Leaves have e = 0.
 //!
 //! Unoriented normals (point clouds) are first flipped to agree with the first child's,
 //! so that opposite signs of one surface do not cancel.
 
-use glam::{DVec3, Vec3};
+use glam::{DVec2, DVec3, Vec3};
 
 use super::hierarchy::MAX_CHILDREN;
 use crate::surfel::pca::plane_normal;
@@ -71,38 +79,73 @@ pub fn parent_disk(children: &[Disk], colors: &[[u8; 4]], oriented: bool) -> (Di
     (Disk { p, n, r }, color)
 }
 
-/// rᵢ √(1 − (nᵢ·d)²): the extent of a disk of normal nᵢ along a unit direction d.
-#[inline]
-fn disk_extent(r: f64, n: DVec3, d: DVec3) -> f64 {
-    r * (1.0 - n.dot(d).powi(2)).max(0.0).sqrt()
+/// A child's splat as the error terms see it: its disk (the radius is the ellipse's
+/// major semi-axis), the major axis (unit, ⟂ the disk's normal) and minor / major ratio.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Splat {
+    pub disk: Disk,
+    pub axis: DVec3,
+    pub ratio: f64,
+}
+
+impl Splat {
+    /// The splat that is its disk.
+    pub fn round(disk: Disk) -> Splat {
+        Splat {
+            disk,
+            axis: disk.n.any_orthonormal_vector(),
+            ratio: 1.0,
+        }
+    }
+
+    /// The major axis u and the minor one scaled by the ratio, ratio · (n × u): the
+    /// support along d is r |(u·d, w·d)|.
+    fn axes(&self) -> (DVec3, DVec3) {
+        (self.axis, self.disk.n.cross(self.axis) * self.ratio)
+    }
+
+    /// Its half-width along the unit direction `d` (the module doc's hᵢ(d)).
+    fn extent(&self, d: DVec3) -> f64 {
+        let (u, w) = self.axes();
+        self.disk.r * DVec2::new(u.dot(d), w.dot(d)).length()
+    }
 }
 
 /// Perpendicular error e_p of `parent` over `children`.
-pub fn perpendicular_error(parent: &Disk, children: &[Disk]) -> f64 {
+pub fn perpendicular_error(parent: &Disk, children: &[Splat]) -> f64 {
     let (mut top, mut bottom) = (f64::NEG_INFINITY, f64::INFINITY);
     for c in children {
-        let h = (c.p - parent.p).dot(parent.n);
-        let d = disk_extent(c.r, c.n, parent.n);
+        let h = (c.disk.p - parent.p).dot(parent.n);
+        let d = c.extent(parent.n);
         top = top.max(h + d);
         bottom = bottom.min(h - d);
     }
     (top - bottom).max(0.0)
 }
 
+/// A child's centre and axes in the parent's tangent basis (u, v): for t = u cos θ + v
+/// sin θ, (pᵢ − p)·t = a·(cos θ, sin θ), and its axes' dot products with t are
+/// x·(cos θ, sin θ) and y·(cos θ, sin θ); its radius.
+type Projected = (DVec2, DVec2, DVec2, f64);
+
 /// Tangential error e_t of `parent` over `children`.
-pub fn tangential_error(parent: &Disk, children: &[Disk]) -> f64 {
+pub fn tangential_error(parent: &Disk, children: &[Splat]) -> f64 {
     let u = parent.n.any_orthonormal_vector();
     let v = parent.n.cross(u);
-    // Per child: its centre and normal in the (u, v) basis, so that for t = u cos θ + v sin θ
-    // (pᵢ − p)·t = aᵢ cos θ + bᵢ sin θ and nᵢ·t = xᵢ cos θ + yᵢ sin θ.
-    let project = |c: &Disk| {
-        let d = c.p - parent.p;
-        (d.dot(u), d.dot(v), c.n.dot(u), c.n.dot(v), c.r)
+    let basis = |d: DVec3| DVec2::new(d.dot(u), d.dot(v));
+    let project = |c: &Splat| {
+        let (major, minor) = c.axes();
+        (
+            basis(c.disk.p - parent.p),
+            basis(major),
+            basis(minor),
+            c.disk.r,
+        )
     };
     // The hierarchy gives 2–4 children: on the stack. Any other count: on the heap.
-    let mut small = [(0.0, 0.0, 0.0, 0.0, 0.0); MAX_CHILDREN];
+    let mut small = [(DVec2::ZERO, DVec2::ZERO, DVec2::ZERO, 0.0); MAX_CHILDREN];
     let large: Vec<_>;
-    let proj: &[(f64, f64, f64, f64, f64)] = if children.len() <= MAX_CHILDREN {
+    let proj: &[Projected] = if children.len() <= MAX_CHILDREN {
         for (slot, c) in small.iter_mut().zip(children) {
             *slot = project(c);
         }
@@ -113,11 +156,10 @@ pub fn tangential_error(parent: &Disk, children: &[Disk]) -> f64 {
     };
     let mut worst = 0.0f64;
     for &(cos, sin) in DIRECTION_TABLE.iter() {
+        let t = DVec2::new(cos, sin);
         let mut reach = f64::NEG_INFINITY;
-        for &(a, b, x, y, r) in proj {
-            let along = a * cos + b * sin;
-            let tilt = x * cos + y * sin;
-            reach = reach.max(along + r * (1.0 - tilt * tilt).max(0.0).sqrt());
+        for &(a, x, y, r) in proj {
+            reach = reach.max(a.dot(t) + r * DVec2::new(x.dot(t), y.dot(t)).length());
         }
         worst = worst.max(parent.r - reach);
     }
@@ -151,7 +193,7 @@ pub(super) const DIRECTION_TABLE: [(f64, f64); DIRECTIONS] = {
 };
 
 /// The node error before the max over children: √(e_p² + e_t²).
-pub fn node_error(parent: &Disk, children: &[Disk]) -> f64 {
+pub fn node_error(parent: &Disk, children: &[Splat]) -> f64 {
     let (p, t) = (
         perpendicular_error(parent, children),
         tangential_error(parent, children),
@@ -184,6 +226,10 @@ mod tests {
         }
     }
 
+    fn round(disks: &[Disk]) -> Vec<Splat> {
+        disks.iter().copied().map(Splat::round).collect()
+    }
+
     fn close(a: f64, b: f64) -> bool {
         (a - b).abs() <= 1e-12 * (1.0 + a.abs().max(b.abs()))
     }
@@ -196,7 +242,7 @@ mod tests {
             disk([-1.0, 0.0, 0.0], Z, 1.0),
             disk([1.0, 0.0, 0.0], Z, 1.0),
         ];
-        assert_eq!(perpendicular_error(&parent, &flat), 0.0);
+        assert_eq!(perpendicular_error(&parent, &round(&flat)), 0.0);
         // One child tilted by 30°: it reaches r sin 30° above and below the plane.
         let tilt = 30f64.to_radians();
         let tilted = DVec3::new(tilt.sin(), 0.0, tilt.cos());
@@ -205,7 +251,7 @@ mod tests {
             disk([1.0, 0.0, 0.0], tilted, 0.8),
         ];
         let want = 2.0 * 0.8 * tilt.sin();
-        assert!(close(perpendicular_error(&parent, &children), want));
+        assert!(close(perpendicular_error(&parent, &round(&children)), want));
     }
 
     #[test]
@@ -213,14 +259,14 @@ mod tests {
         let h = 0.25;
         let parent = disk([0.0; 3], Z, 2.0);
         let flat = [disk([0.0, -1.0, h], Z, 1.0), disk([0.0, 1.0, -h], Z, 1.0)];
-        assert!(close(perpendicular_error(&parent, &flat), 2.0 * h));
+        assert!(close(perpendicular_error(&parent, &round(&flat)), 2.0 * h));
         // Tilted children add d = r √(1 − (n·Z)²) above the upper and below the lower one.
         let a = 0.4f64;
         let n1 = DVec3::new(0.0, a.sin(), a.cos());
         let n2 = DVec3::new(a.sin(), 0.0, a.cos());
         let children = [disk([0.0, -1.0, h], n1, 1.0), disk([0.0, 1.0, -h], n2, 0.5)];
         let want = 2.0 * h + 1.0 * a.sin() + 0.5 * a.sin();
-        assert!(close(perpendicular_error(&parent, &children), want));
+        assert!(close(perpendicular_error(&parent, &round(&children)), want));
     }
 
     #[test]
@@ -233,25 +279,50 @@ mod tests {
             disk([1.0, 0.0, 0.0], Z, 1.0),
         ];
         let parent = disk([0.5, 0.0, 0.0], Z, 3.0);
-        assert!(close(tangential_error(&parent, &children), 2.0));
+        assert!(close(tangential_error(&parent, &round(&children)), 2.0));
         // A parent that is exactly the children's hull along x and y: a long child and
         // a parent of its size, shifted by s along x: overhang s on one side only.
         let s = 0.3;
         let one = [disk([0.0, 0.0, 0.0], Z, 1.0)];
         let shifted = disk([s, 0.0, 0.0], Z, 1.0);
         // Sampled directions include ±x: the overhang along +x is exactly s.
-        assert!(close(tangential_error(&shifted, &one), s));
+        assert!(close(tangential_error(&shifted, &round(&one)), s));
         // Five children (more than the hierarchy makes) take the general path.
         let five: Vec<Disk> = (0..5)
             .map(|i| disk([i as f64 - 2.0, 0.0, 0.0], Z, 0.5))
             .collect();
         let hull = disk([0.0, 0.0, 0.0], Z, 2.5);
         assert!(
-            close(tangential_error(&hull, &five), 2.0),
+            close(tangential_error(&hull, &round(&five)), 2.0),
             "along ±y: 2.5 − 0.5"
         );
         // And the same disk overhangs nothing.
-        assert_eq!(tangential_error(&one[0], &one), 0.0);
+        assert_eq!(tangential_error(&one[0], &round(&one)), 0.0);
+    }
+
+    #[test]
+    fn thin_children_leave_the_parent_s_overhang_across_them() {
+        // Two needles along x, 0.1 wide, 4 long, end to end: a parent disk of radius 4
+        // reaches ±4 along y, where they reach ±0.1 (as disks, ±2: overhang 2).
+        let needle = |x: f64| Splat {
+            disk: disk([x, 0.0, 0.0], Z, 2.0),
+            axis: DVec3::X,
+            ratio: 0.05,
+        };
+        let children = [needle(-2.0), needle(2.0)];
+        let parent = disk([0.0; 3], Z, 4.0);
+        assert!(close(tangential_error(&parent, &children), 3.9));
+        let disks = children.map(|c| Splat::round(c.disk));
+        assert!(close(tangential_error(&parent, &disks), 2.0));
+        // Stood up about their axis (normal y), they are 0.1 thick along z, not 2.
+        let standing = children.map(|c| Splat {
+            disk: Disk {
+                n: DVec3::Y,
+                ..c.disk
+            },
+            ..c
+        });
+        assert!(close(perpendicular_error(&parent, &standing), 0.2));
     }
 
     #[test]
@@ -267,7 +338,7 @@ mod tests {
             for c in &children {
                 assert!((c.p - p.p).length() + c.r <= p.r + 1e-12);
             }
-            let e = node_error(&p, &children);
+            let e = node_error(&p, &round(&children));
             assert!(e.is_finite() && e >= 0.0);
         }
         // Oriented normals that cancel fall back to the centres' plane.

@@ -36,7 +36,7 @@ use crate::surfel::cloud::Orientation;
 use crate::surfel::field::unit_rgb;
 use crate::surfel::shape::{Shape, SplatShape};
 use chunks::Chunk;
-use errors::{Disk, node_error, parent_disk};
+use errors::{Disk, Splat, node_error, parent_disk};
 use hierarchy::{Hierarchy, MAX_CHILDREN};
 use parent_shape::{Child, parent_shape};
 pub use record::NodeRecord;
@@ -227,11 +227,16 @@ fn internal_record(
         r: disk.r.max(major),
         ..disk
     };
+    let splats = children.map(|c| Splat {
+        disk: c.disk,
+        axis: c.shape.axis,
+        ratio: c.shape.ratio,
+    });
     let mut rec = NodeRecord::new(disk.p.as_vec3(), major as f32, disk.n.as_vec3(), color);
     if (rec.radius() as f64) < major {
         rec.radius = f32::from_bits(rec.radius).next_up().to_bits();
     }
-    let e = node_error(&disk, disks);
+    let e = node_error(&disk, &splats[..k]);
     rec.error = encode_up(e, scale).max(children_max);
     (rec, shape.pack())
 }
