@@ -83,7 +83,7 @@ pub fn frame_disks(
     stats.redundant_vertices = redundant.len() as u64;
     let looks = (g.colors.as_deref(), g.attributes.as_deref());
     let (long, normals) = (&split.long, &split.normals);
-    let splats = long_triangles::splats(points, scale, long, normals, (looks, Reach::Corners));
+    let splats = long_triangles::splats(points, scale, long, normals, (looks, Reach::CORNERS));
     stats.triangle_splats = splats.len() as u64;
     (redundant, splats)
 }

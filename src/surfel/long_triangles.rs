@@ -28,7 +28,7 @@ use super::field::{fit_color_field, fit_field, unit_rgb};
 use super::mesh::face_disks;
 use super::mesh::{RADIUS_MARGIN, triangle_terms};
 use super::ring::{clip_at_border, ring_shapes};
-use super::shape::{Fit, Shape, tangent_frame};
+use super::shape::{Fit, MIN_RATIO, Shape, tangent_frame};
 use super::{DEFAULT_COLOR, Surfel, SurfelStats};
 use crate::io::PointAttributes;
 
@@ -134,26 +134,27 @@ pub fn splats(
 pub type Looks<'a> = (Option<&'a [[u8; 4]]>, Option<&'a [PointAttributes]>);
 
 /// Which ellipse of a triangle's second moments (the Steiner family, centred on its
-/// centroid) draws it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Reach {
-    /// The Steiner circumellipse, through the corners: it covers the triangle, with
-    /// 4π / (3√3) ≈ 2.42 times its area.
-    Corners,
-    /// The one of the triangle's own area, 0.643 times the circumellipse: it leaves
-    /// the thin tips of a needle to the corners' own splats, and reaches past the
-    /// edges by less.
-    Area,
+/// centroid: the circumellipse scaled) draws it, and how thin it may be.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reach {
+    /// Its semi-axes over the circumellipse's, which passes through the corners and
+    /// covers the triangle with 4π / (3√3) ≈ 2.42 times its area; s² times that.
+    pub scale: f64,
+    /// Its least minor / major semi-axis ([`super::shape::MIN_PACKED_RATIO`]: as thin
+    /// as the triangle's circumellipse, up to what the format holds).
+    pub min_ratio: f64,
 }
 
 impl Reach {
-    /// Its semi-axes over the circumellipse's: √(3√3 / 4π) for [`Reach::Area`].
-    fn scale(self) -> f64 {
-        match self {
-            Reach::Corners => 1.0,
-            Reach::Area => (3.0 * 3f64.sqrt() / (4.0 * std::f64::consts::PI)).sqrt(),
-        }
-    }
+    /// The circumellipse, no thinner than [`MIN_RATIO`]: a sensor frame's
+    /// ([`super::grid`]). Its risers are needles a sensor pixel wide; as thin as they
+    /// are, they missed the pixel centres that the triangulation at 1× covers, on
+    /// orbits beside the sensor (kinect_rgb's worst view's holes 0.39 → 0.86 %, over
+    /// issue 13's 0.5 %, for FLIP 0.118 → 0.108).
+    pub const CORNERS: Reach = Reach {
+        scale: 1.0,
+        min_ratio: MIN_RATIO,
+    };
 }
 
 /// A triangle's corner: unit-scaled position, vertex normal, RGB 0–1.
@@ -175,8 +176,8 @@ fn triangle_splat(corners: [Corner; 3], colored: bool, reach: Reach) -> Option<S
     let face = cross.normalize();
     let g = (a + b + c) / 3.0;
     let (major, r, ratio) = steiner_ellipse(face, [a, b, c]);
-    let r = r * reach.scale();
-    let shape = Shape::ellipse(face, major, ratio);
+    let r = r * reach.scale;
+    let shape = Shape::ellipse(face, major, ratio.max(reach.min_ratio));
     let at = |k: &Corner| (k.position, k.normal);
     let (normal, mut shape) = fit_field(
         (g, face),
@@ -288,7 +289,7 @@ mod tests {
             color: DVec3::splat(0.5),
         };
         let [a, b, c] = [DVec3::ZERO, DVec3::X, DVec3::new(0.5, 12.0, 0.0)];
-        let s = triangle_splat([a, b, c].map(corner), false, Reach::Corners).unwrap();
+        let s = triangle_splat([a, b, c].map(corner), false, Reach::CORNERS).unwrap();
         let n = s.normal.as_dvec3();
         let shape = s.shape.unpack(n);
         let g = s.position.as_dvec3();
@@ -311,7 +312,7 @@ mod tests {
     }
 
     #[test]
-    fn the_ellipse_of_a_triangle_s_area_leaves_a_needle_s_tip_out() {
+    fn a_smaller_reach_scales_the_ellipse_s_area_and_leaves_a_needle_s_tip_out() {
         let corner = |position: DVec3| Corner {
             position,
             normal: DVec3::Z,
@@ -319,15 +320,44 @@ mod tests {
         };
         // Thick enough that its ellipse is over MIN_RATIO.
         let [a, b, c] = [DVec3::ZERO, 4.0 * DVec3::X, DVec3::new(2.0, 12.0, 0.0)];
-        let s = triangle_splat([a, b, c].map(corner), false, Reach::Area).unwrap();
+        let reach = Reach {
+            scale: 0.8,
+            ..Reach::CORNERS
+        };
+        let s = triangle_splat([a, b, c].map(corner), false, reach).unwrap();
         let shape = s.shape.unpack(DVec3::Z);
         let r = s.radius as f64 / (1.0 + RADIUS_MARGIN);
         let area = std::f64::consts::PI * r * r * shape.ratio;
+        let steiner = 4.0 * std::f64::consts::PI / (3.0 * 3f64.sqrt());
+        let expected = 0.8 * 0.8 * steiner * 24.0;
         assert!(
-            (area / 24.0 - 1.0).abs() < 2e-3,
-            "ellipse {area}, triangle 24"
+            (area / expected - 1.0).abs() < 2e-3,
+            "ellipse {area}, expected {expected}"
         );
         assert!(s.covers(((a + b + c) / 3.0).as_vec3()));
         assert!(!s.covers((c + (a - c) * 0.1).as_vec3()), "the tip");
+    }
+
+    #[test]
+    fn a_needle_s_splat_is_as_thin_as_its_reach_lets_it_be() {
+        // A mast's needle, 1 wide and 24 high: its circumellipse is 0.036 as wide as
+        // long. At MIN_RATIO it would reach 4 beside the needle's axis.
+        let corner = |position: DVec3| Corner {
+            position,
+            normal: DVec3::Z,
+            color: DVec3::splat(0.5),
+        };
+        let [a, b, c] = [DVec3::ZERO, DVec3::X, DVec3::new(0.5, 24.0, 0.0)];
+        let thin = Reach {
+            min_ratio: crate::surfel::shape::MIN_PACKED_RATIO,
+            ..Reach::CORNERS
+        };
+        let beside = DVec3::new(2.0, 8.0, 0.0).as_vec3();
+        let on_axis = DVec3::new(0.5, 8.0, 0.0).as_vec3();
+        let s = triangle_splat([a, b, c].map(corner), false, thin).unwrap();
+        assert!(s.covers(on_axis) && !s.covers(beside));
+        assert!(s.shape.unpack(DVec3::Z).ratio < 0.05);
+        let fat = triangle_splat([a, b, c].map(corner), false, Reach::CORNERS).unwrap();
+        assert!(fat.covers(beside), "MIN_RATIO's sail");
     }
 }

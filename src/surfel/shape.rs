@@ -32,8 +32,13 @@ use half::f16;
 pub use crate::surfel::clip::Clip;
 use crate::surfel::octahedral::{oct_decode, oct_encode};
 
-/// The thinnest ellipse: minor / major semi-axis.
+/// The thinnest ellipse fitted to samples (a vertex's ring, a cloud's neighbours, a
+/// node's children): minor / major semi-axis.
 pub const MIN_RATIO: f64 = 0.25;
+/// The thinnest ellipse [`SplatShape`] holds. A terrain's triangle draws its own splat
+/// as thin as it is (`long_triangles`): a wall's or a mast's needle, 1/30 as wide as
+/// long, made an ellipse [`MIN_RATIO`] thin a fat sail beside it.
+pub const MIN_PACKED_RATIO: f64 = 1.0 / 256.0;
 /// Largest |a|, |b|, |c|: a normal turning by more than about 60° over one radius is a
 /// crease, not a curvature the field should follow.
 pub const MAX_GRADIENT: f64 = 2.0;
@@ -44,7 +49,7 @@ pub const MAX_GRADIENT: f64 = 2.0;
 pub struct SplatShape {
     /// The major axis u, octahedral snorm16 × 2.
     pub axis: u32,
-    /// Minor / major semi-axis, f16 bits, in [MIN_RATIO, 1].
+    /// Minor / major semi-axis, f16 bits, in [MIN_PACKED_RATIO, 1].
     pub ratio: u16,
     /// a, b, c of G, f16 bits.
     pub gradient: [u16; 3],
@@ -115,7 +120,7 @@ impl Shape {
         let h = |x: f64| f16::from_f64(x).to_bits();
         SplatShape {
             axis: oct_encode(self.axis.as_vec3()),
-            ratio: h(self.ratio.clamp(MIN_RATIO, 1.0)),
+            ratio: h(self.ratio.clamp(MIN_PACKED_RATIO, 1.0)),
             gradient: self
                 .gradient
                 .map(|g| h(g.clamp(-MAX_GRADIENT, MAX_GRADIENT))),

@@ -10,15 +10,14 @@
 //! shading field. The rest stand between a roof's edge and the street below it, or a
 //! tree's crown and the ground: walls, which the scanner sees edge-on or not at all. A
 //! triangle whose longest edge exceeds [`LONG_SPACINGS`] s gets a splat of its own, in
-//! its own plane, the ellipse of its own area ([`Reach::Area`]), and a sample on such
-//! triangles only keeps a circle of half a spacing's diagonal. A wall's triangles are
-//! needles a spacing wide and many high, a tree's a fan of them from its top: the
-//! circumellipse, 2.4 times a needle's area, drew them as fat sails and its tree tops
-//! as blobs wider than the crown, where the reference's supersamples draw a thin,
-//! faint spire. Before, the walls were guessed from each sample's steepest drop among
-//! its neighbours (`super::walls`), and each splat was the cloud's covering in the plane
-//! of its TIN vertex normal (`super::cloud`, which still draws a terrain without
-//! triangles).
+//! its own plane ([`TIN_REACH`]), and a sample on such triangles only keeps a circle of
+//! half a spacing's diagonal. A wall's triangles are needles a spacing wide and many
+//! high, a tree's a fan of them from its top. Their ellipses are as thin as they are:
+//! held to [`super::shape::MIN_RATIO`], as a fitted ellipse is, a mast's needles 1/30
+//! as wide as long drew a sail several metres wide across a river. Before, the walls
+//! were guessed from each sample's steepest drop among its neighbours (`super::walls`),
+//! and each splat was the cloud's covering in the plane of its TIN vertex normal
+//! (`super::cloud`, which still draws a terrain without triangles).
 //!
 //! The triangulation keeps one of the samples that share an x–y (215,298 of
 //! terrain_utm's 522,674 samples do, 3 cm apart in height at the median): each other
@@ -26,11 +25,9 @@
 //! the file is drawn.
 //!
 //! Why (`cloud_quality --terrain`, 4 views, medians, lavapipe): terrain_utm 0.1531 →
-//! 0.1242 (SSIM 0.437 → 0.571), autzen_trim 0.1616 → 0.1270. With the circumellipse:
-//! 0.1281 and 0.1824 (autzen's tree tops); ellipses 0.85, 0.7, 0.6 and 0.5 times it
-//! (the last the inellipse): 0.1250, 0.1238, 0.1246, 0.1319 and 0.1583, 0.1351,
-//! 0.1215, 0.1140. Long beyond 1.5, 2, 3, 4 and 6 spacings (circumellipses, twins not
-//! drawn): 0.1269, 0.1279, 0.1314, 0.1457 and 0.1877 on terrain_utm.
+//! 0.1242 (SSIM 0.437 → 0.571), autzen_trim 0.1616 → 0.1270 with the TIN's splats held
+//! to MIN_RATIO (long beyond 2 spacings, ellipses of the triangle's area); 0.1191 and
+//! 0.1097 as thin as the triangles (see [`LONG_SPACINGS`] and [`TIN_REACH`]).
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -40,8 +37,22 @@ use super::{Surfel, SurfelStats};
 use crate::io::triangulate::height_field;
 
 /// Longest edge, in the tile's spacings, beyond which a TIN triangle gets a splat of
-/// its own.
-pub const LONG_SPACINGS: f32 = 2.0;
+/// its own. With [`TIN_REACH`], terrain_utm / autzen_trim FLIP: 0.1191 / 0.1097 at
+/// 1.5; 0.1185 / 0.1135 at 1, which draws 1.23 times the splats (1.06 M against
+/// 867 k on terrain_utm); 0.1204 / 0.1090 at 2; 0.1192 / 0.1144 at 0 (every triangle
+/// its own splat).
+pub const LONG_SPACINGS: f32 = 1.5;
+
+/// A TIN triangle's splat: 0.85 times its circumellipse (1.75 times its area), as thin
+/// as the triangle. Scales 0.75, 0.8, 0.85, 0.9 and 1: FLIP 0.1209, 0.1197, 0.1191,
+/// 0.1188, 0.1193 on terrain_utm and 0.1079, 0.1084, 0.1097, 0.1125, 0.1179 on
+/// autzen_trim, where the fans from a tree's top to the ground overlap more the larger
+/// they are. Held to MIN_RATIO, a needle's ellipse was too wide, and 0.643 (the
+/// triangle's own area, long beyond 2 spacings) scored best: 0.1242 and 0.1270.
+pub const TIN_REACH: Reach = Reach {
+    scale: 0.85,
+    min_ratio: super::shape::MIN_PACKED_RATIO,
+};
 
 /// The splats of the first `own` of a terrain's `points` (the rest: the halo of a
 /// piece, [`crate::tree::out_of_core`]) from their TIN (see the module doc), into
@@ -91,7 +102,7 @@ pub fn terrain_disks(
     let owned: Vec<[u32; 3]> = (split.long.into_par_iter())
         .filter(|t| (owner(points, t) as usize) < own)
         .collect();
-    let reach = (looks, Reach::Area);
+    let reach = (looks, TIN_REACH);
     let splats = long_triangles::splats(points, scale, &owned, &split.normals, reach);
     stats.triangle_splats = splats.len() as u64;
     Some(splats)

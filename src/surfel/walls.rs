@@ -148,7 +148,8 @@ impl Wall {
         } else {
             (self.out.cross(Vec3::Z), width, reach)
         };
-        let shape = Shape::ellipse(normal.as_dvec3(), axis.as_dvec3(), (minor / major) as f64);
+        let ratio = ((minor / major) as f64).max(MIN_RATIO);
+        let shape = Shape::ellipse(normal.as_dvec3(), axis.as_dvec3(), ratio);
         let shape = shape.pack();
         let edge = self.top - 0.5 * self.out * self.run;
         let standing = if self.edge { self.pieces } else { 0 };
