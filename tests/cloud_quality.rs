@@ -22,7 +22,7 @@
 //! Before the surfels of issue 13: 0.37 / 8.9 % and 0.26 / 1.0 %. Issue 13's hole
 //! bound (0.5 %) holds on every view, and is asserted on the worst; its FLIP target
 //! (0.12) is asserted on both of its clouds. Level of detail at ε = 1 px stays within
-//! [`LOD_COST`] of the leaves' FLIP (measured: terrain 1.00, autzen 1.07, kinect 1.08),
+//! [`LOD_COST`] of the leaves' FLIP (measured: terrain 1.00, autzen 1.08, kinect 1.09),
 //! so that work on the inner nodes cannot blur or blot a cloud's level of detail
 //! unnoticed.
 //! The display modes of clouds (EDL, elevation) are checked on the tile.

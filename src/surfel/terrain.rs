@@ -30,7 +30,7 @@
 //! 0.1097 as thin as the triangles (see [`LONG_SPACINGS`] and [`TIN_REACH`], whose
 //! scans were made then), and 0.1188 and 0.1097 once a node's errors saw its children
 //! as ellipses (`crate::tree::errors`, which took level of detail at ε = 1 px from
-//! 1.14× and 1.50× the leaves' FLIP to 1.00× and 1.07×).
+//! 1.14× and 1.50× the leaves' FLIP to 1.00× and 1.08×).
 
 use glam::Vec3;
 use rayon::prelude::*;

@@ -14,12 +14,12 @@
 //! * perpendicular error: the thickness along n of the slab holding all child splats,
 //!   e_p = maxᵢ[(pᵢ − p)·n + hᵢ(n)] − minᵢ[(pᵢ − p)·n − hᵢ(n)] (hᵢ(n) is how far a
 //!   tilted child reaches out of its own plane along n).
-//! * tangential error: how far the parent disk overhangs its children in its own plane,
-//!   e_t = max(0, max_t [r − maxᵢ((pᵢ − p)·t + hᵢ(t))]) over [`DIRECTIONS`] unit
-//!   directions t of the tangent plane. Seen as disks, a fan of a terrain's needles
-//!   from a tree's top (`surfel::terrain`) reached a crown's width sideways, and a
-//!   parent as wide as the crown overhung them by nothing: level of detail drew blobs
-//!   over the spires.
+//! * tangential error: how far the parent's splat (its ellipse, `parent_shape`)
+//!   overhangs its children in its own plane, e_t = max(0, max_t [h(t) − maxᵢ((pᵢ −
+//!   p)·t + hᵢ(t))]) over [`DIRECTIONS`] unit directions t of the tangent plane, from
+//!   its major axis. Seen as disks, a fan of a terrain's needles from a tree's top
+//!   (`surfel::terrain`) reached a crown's width sideways, and a parent as wide as the
+//!   crown overhung them by nothing: level of detail drew blobs over the spires.
 //! * e = √(e_p² + e_t²), then e = max(e, maxᵢ eᵢ): errors never shrink toward the root.
 //!   Leaves have e = 0.
 //!
@@ -129,9 +129,12 @@ pub fn perpendicular_error(parent: &Disk, children: &[Splat]) -> f64 {
 type Projected = (DVec2, DVec2, DVec2, f64);
 
 /// Tangential error e_t of `parent` over `children`.
-pub fn tangential_error(parent: &Disk, children: &[Splat]) -> f64 {
-    let u = parent.n.any_orthonormal_vector();
-    let v = parent.n.cross(u);
+pub fn tangential_error(parent: &Splat, children: &[Splat]) -> f64 {
+    let (u, w) = parent.axes();
+    let v = parent.disk.n.cross(u);
+    // The parent's support along t = u cos θ + v sin θ: r |(cos θ, ratio sin θ)|.
+    let (r, ratio) = (parent.disk.r, w.length());
+    let parent = &parent.disk;
     let basis = |d: DVec3| DVec2::new(d.dot(u), d.dot(v));
     let project = |c: &Splat| {
         let (major, minor) = c.axes();
@@ -161,7 +164,7 @@ pub fn tangential_error(parent: &Disk, children: &[Splat]) -> f64 {
         for &(a, x, y, r) in proj {
             reach = reach.max(a.dot(t) + r * DVec2::new(x.dot(t), y.dot(t)).length());
         }
-        worst = worst.max(parent.r - reach);
+        worst = worst.max(r * DVec2::new(cos, ratio * sin).length() - reach);
     }
     worst
 }
@@ -193,9 +196,9 @@ pub(super) const DIRECTION_TABLE: [(f64, f64); DIRECTIONS] = {
 };
 
 /// The node error before the max over children: √(e_p² + e_t²).
-pub fn node_error(parent: &Disk, children: &[Splat]) -> f64 {
+pub fn node_error(parent: &Splat, children: &[Splat]) -> f64 {
     let (p, t) = (
-        perpendicular_error(parent, children),
+        perpendicular_error(&parent.disk, children),
         tangential_error(parent, children),
     );
     // Not f64::hypot (several times slower): the terms are far from overflow.
@@ -279,25 +282,31 @@ mod tests {
             disk([1.0, 0.0, 0.0], Z, 1.0),
         ];
         let parent = disk([0.5, 0.0, 0.0], Z, 3.0);
-        assert!(close(tangential_error(&parent, &round(&children)), 2.0));
+        assert!(close(
+            tangential_error(&Splat::round(parent), &round(&children)),
+            2.0
+        ));
         // A parent that is exactly the children's hull along x and y: a long child and
         // a parent of its size, shifted by s along x: overhang s on one side only.
         let s = 0.3;
         let one = [disk([0.0, 0.0, 0.0], Z, 1.0)];
         let shifted = disk([s, 0.0, 0.0], Z, 1.0);
         // Sampled directions include ±x: the overhang along +x is exactly s.
-        assert!(close(tangential_error(&shifted, &round(&one)), s));
+        assert!(close(
+            tangential_error(&Splat::round(shifted), &round(&one)),
+            s
+        ));
         // Five children (more than the hierarchy makes) take the general path.
         let five: Vec<Disk> = (0..5)
             .map(|i| disk([i as f64 - 2.0, 0.0, 0.0], Z, 0.5))
             .collect();
         let hull = disk([0.0, 0.0, 0.0], Z, 2.5);
         assert!(
-            close(tangential_error(&hull, &round(&five)), 2.0),
+            close(tangential_error(&Splat::round(hull), &round(&five)), 2.0),
             "along ±y: 2.5 − 0.5"
         );
         // And the same disk overhangs nothing.
-        assert_eq!(tangential_error(&one[0], &round(&one)), 0.0);
+        assert_eq!(tangential_error(&Splat::round(one[0]), &round(&one)), 0.0);
     }
 
     #[test]
@@ -311,9 +320,12 @@ mod tests {
         };
         let children = [needle(-2.0), needle(2.0)];
         let parent = disk([0.0; 3], Z, 4.0);
-        assert!(close(tangential_error(&parent, &children), 3.9));
+        assert!(close(
+            tangential_error(&Splat::round(parent), &children),
+            3.9
+        ));
         let disks = children.map(|c| Splat::round(c.disk));
-        assert!(close(tangential_error(&parent, &disks), 2.0));
+        assert!(close(tangential_error(&Splat::round(parent), &disks), 2.0));
         // Stood up about their axis (normal y), they are 0.1 thick along z, not 2.
         let standing = children.map(|c| Splat {
             disk: Disk {
@@ -323,6 +335,13 @@ mod tests {
             ..c
         });
         assert!(close(perpendicular_error(&parent, &standing), 0.2));
+        // A parent that is their ellipse, 0.1 wide: next to no overhang.
+        let along = Splat {
+            disk: parent,
+            axis: DVec3::X,
+            ratio: 0.025,
+        };
+        assert!(tangential_error(&along, &children) < 1e-3);
     }
 
     #[test]
@@ -338,7 +357,7 @@ mod tests {
             for c in &children {
                 assert!((c.p - p.p).length() + c.r <= p.r + 1e-12);
             }
-            let e = node_error(&p, &round(&children));
+            let e = node_error(&Splat::round(p), &round(&children));
             assert!(e.is_finite() && e >= 0.0);
         }
         // Oriented normals that cancel fall back to the centres' plane.

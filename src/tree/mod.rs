@@ -223,20 +223,17 @@ fn internal_record(
         };
     }
     let (shape, major) = parent_shape(&disk, &children[..k]);
-    let disk = Disk {
-        r: disk.r.max(major),
-        ..disk
+    let splat = |disk: Disk, shape: &Shape| Splat {
+        disk,
+        axis: shape.axis,
+        ratio: shape.ratio,
     };
-    let splats = children.map(|c| Splat {
-        disk: c.disk,
-        axis: c.shape.axis,
-        ratio: c.shape.ratio,
-    });
+    let splats = children.map(|c| splat(c.disk, &c.shape));
     let mut rec = NodeRecord::new(disk.p.as_vec3(), major as f32, disk.n.as_vec3(), color);
     if (rec.radius() as f64) < major {
         rec.radius = f32::from_bits(rec.radius).next_up().to_bits();
     }
-    let e = node_error(&disk, &splats[..k]);
+    let e = node_error(&splat(Disk { r: major, ..disk }, &shape), &splats[..k]);
     rec.error = encode_up(e, scale).max(children_max);
     (rec, shape.pack())
 }
