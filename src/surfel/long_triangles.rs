@@ -251,6 +251,15 @@ mod tests {
         xy.x * xy.x + (xy.y / shape.ratio).powi(2)
     }
 
+    /// A corner of a level, grey triangle.
+    fn flat_corner(position: DVec3) -> Corner {
+        Corner {
+            position,
+            normal: DVec3::Z,
+            color: DVec3::splat(0.5),
+        }
+    }
+
     #[test]
     fn the_steiner_ellipse_passes_through_the_corners_and_holds_the_triangle() {
         let triangles = [
@@ -283,13 +292,8 @@ mod tests {
 
     #[test]
     fn a_long_triangle_s_splat_is_clipped_beyond_its_short_edge_only() {
-        let corner = |position: DVec3| Corner {
-            position,
-            normal: DVec3::Z,
-            color: DVec3::splat(0.5),
-        };
         let [a, b, c] = [DVec3::ZERO, DVec3::X, DVec3::new(0.5, 12.0, 0.0)];
-        let s = triangle_splat([a, b, c].map(corner), false, Reach::CORNERS).unwrap();
+        let s = triangle_splat([a, b, c].map(flat_corner), false, Reach::CORNERS).unwrap();
         let n = s.normal.as_dvec3();
         let shape = s.shape.unpack(n);
         let g = s.position.as_dvec3();
@@ -313,18 +317,13 @@ mod tests {
 
     #[test]
     fn a_smaller_reach_scales_the_ellipse_s_area_and_leaves_a_needle_s_tip_out() {
-        let corner = |position: DVec3| Corner {
-            position,
-            normal: DVec3::Z,
-            color: DVec3::splat(0.5),
-        };
         // Thick enough that its ellipse is over MIN_RATIO.
         let [a, b, c] = [DVec3::ZERO, 4.0 * DVec3::X, DVec3::new(2.0, 12.0, 0.0)];
         let reach = Reach {
             scale: 0.8,
             ..Reach::CORNERS
         };
-        let s = triangle_splat([a, b, c].map(corner), false, reach).unwrap();
+        let s = triangle_splat([a, b, c].map(flat_corner), false, reach).unwrap();
         let shape = s.shape.unpack(DVec3::Z);
         let r = s.radius as f64 / (1.0 + RADIUS_MARGIN);
         let area = std::f64::consts::PI * r * r * shape.ratio;
@@ -342,11 +341,6 @@ mod tests {
     fn a_needle_s_splat_is_as_thin_as_its_reach_lets_it_be() {
         // A mast's needle, 1 wide and 24 high: its circumellipse is 0.036 as wide as
         // long. At MIN_RATIO it would reach 4 beside the needle's axis.
-        let corner = |position: DVec3| Corner {
-            position,
-            normal: DVec3::Z,
-            color: DVec3::splat(0.5),
-        };
         let [a, b, c] = [DVec3::ZERO, DVec3::X, DVec3::new(0.5, 24.0, 0.0)];
         let thin = Reach {
             min_ratio: crate::surfel::shape::MIN_PACKED_RATIO,
@@ -354,10 +348,10 @@ mod tests {
         };
         let beside = DVec3::new(2.0, 8.0, 0.0).as_vec3();
         let on_axis = DVec3::new(0.5, 8.0, 0.0).as_vec3();
-        let s = triangle_splat([a, b, c].map(corner), false, thin).unwrap();
+        let s = triangle_splat([a, b, c].map(flat_corner), false, thin).unwrap();
         assert!(s.covers(on_axis) && !s.covers(beside));
         assert!(s.shape.unpack(DVec3::Z).ratio < 0.05);
-        let fat = triangle_splat([a, b, c].map(corner), false, Reach::CORNERS).unwrap();
+        let fat = triangle_splat([a, b, c].map(flat_corner), false, Reach::CORNERS).unwrap();
         assert!(fat.covers(beside), "MIN_RATIO's sail");
     }
 }

@@ -79,7 +79,7 @@ pub fn parent_disk(children: &[Disk], colors: &[[u8; 4]], oriented: bool) -> (Di
     (Disk { p, n, r }, color)
 }
 
-/// A child's splat as the error terms see it: its disk (the radius is the ellipse's
+/// A node's splat as the error terms see it: its disk (the radius is the ellipse's
 /// major semi-axis), the major axis (unit, ⟂ the disk's normal) and minor / major ratio.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Splat {
@@ -130,10 +130,9 @@ type Projected = (DVec2, DVec2, DVec2, f64);
 
 /// Tangential error e_t of `parent` over `children`.
 pub fn tangential_error(parent: &Splat, children: &[Splat]) -> f64 {
-    let (u, w) = parent.axes();
-    let v = parent.disk.n.cross(u);
+    let (u, v) = (parent.axis, parent.disk.n.cross(parent.axis));
     // The parent's support along t = u cos θ + v sin θ: r |(cos θ, ratio sin θ)|.
-    let (r, ratio) = (parent.disk.r, w.length());
+    let (r, ratio) = (parent.disk.r, parent.ratio);
     let parent = &parent.disk;
     let basis = |d: DVec3| DVec2::new(d.dot(u), d.dot(v));
     let project = |c: &Splat| {

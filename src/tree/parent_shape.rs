@@ -10,7 +10,7 @@
 //! and affine maps keep containment), and the parent's ellipse is convex. When that R
 //! exceeds the same growth of the radius r of the circle that reaches every child
 //! (`errors::parent_disk`), the node is that circle. The node's errors are computed for
-//! the circle of radius max(r, R), which holds the ellipse.
+//! its ellipse over its children's (`errors::Splat`).
 //!
 //! The normal field is fitted to each sample's tangential normal components over its
 //! normal component (tan of its tilt), since pass 2 draws normalize(n + G d): an inner
