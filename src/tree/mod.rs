@@ -314,19 +314,18 @@ fn fill_internal(
         let id = (n + k) as u32;
         by_level[levels[id as usize] as usize].push(id);
     }
+    // One buffer for every level's results (fresh pages per level cost more than the
+    // scatter).
+    let mut done: Vec<(NodeRecord, SplatShape)> = Vec::new();
     for ids in by_level.iter().rev() {
-        let done: Vec<(u32, (NodeRecord, SplatShape))> = ids
-            .par_iter()
+        ids.par_iter()
             .with_min_len(256)
             .map(|&id| {
                 let node = &hierarchy.internal[id as usize - n];
-                (
-                    id,
-                    internal_record(node, (records, shapes), scale, oriented),
-                )
+                internal_record(node, (records, shapes), scale, oriented)
             })
-            .collect();
-        for (id, (rec, shape)) in done {
+            .collect_into_vec(&mut done);
+        for (&id, &(rec, shape)) in ids.iter().zip(&done) {
             records[id as usize] = rec;
             shapes[id as usize] = shape;
         }
