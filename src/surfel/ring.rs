@@ -34,20 +34,41 @@ use super::field::{fit_color_field, fit_field, unit_rgb};
 use super::mesh::{RADIUS_MARGIN, triangle_terms};
 use super::shape::{Clip, Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
 
-/// Offset and normal change of vertex `w` seen from vertex `v`'s tangent frame.
-fn ring_term(
-    p: &impl Fn(u32) -> DVec3,
-    n: &impl Fn(u32) -> DVec3,
-    v: u32,
-    w: u32,
-) -> (DVec2, DVec2) {
-    let (t1, t2) = tangent_frame(n(v));
-    let d = p(w) - p(v);
-    let dn = n(w) - n(v);
-    (
-        DVec2::new(d.dot(t1), d.dot(t2)),
-        DVec2::new(dn.dot(t1), dn.dot(t2)),
-    )
+/// Vertex v's position, normal and tangent frame, made once per vertex: each of its
+/// ring's vertices is seen from it two to four times.
+struct RingFrame {
+    at: DVec3,
+    normal: DVec3,
+    t1: DVec3,
+    t2: DVec3,
+}
+
+impl RingFrame {
+    fn of(p: &impl Fn(u32) -> DVec3, n: &impl Fn(u32) -> DVec3, v: u32) -> Self {
+        let normal = n(v);
+        let (t1, t2) = tangent_frame(normal);
+        RingFrame {
+            at: p(v),
+            normal,
+            t1,
+            t2,
+        }
+    }
+
+    /// Offset and normal change of vertex `w` in this frame.
+    fn term(&self, p: &impl Fn(u32) -> DVec3, n: &impl Fn(u32) -> DVec3, w: u32) -> (DVec2, DVec2) {
+        let (d, dn) = (p(w) - self.at, n(w) - self.normal);
+        (
+            DVec2::new(d.dot(self.t1), d.dot(self.t2)),
+            DVec2::new(dn.dot(self.t1), dn.dot(self.t2)),
+        )
+    }
+
+    /// The offset alone of vertex `w` ([`RingFrame::term`]).
+    fn offset(&self, p: &impl Fn(u32) -> DVec3, w: u32) -> DVec2 {
+        let d = p(w) - self.at;
+        DVec2::new(d.dot(self.t1), d.dot(self.t2))
+    }
 }
 
 /// The ellipse's frame and unscaled gradient from a vertex's fit; None when the ring
@@ -162,25 +183,18 @@ fn border_fan(
     ((sweep - angle).abs() <= FAN_TOLERANCE).then_some((start, end))
 }
 
-/// Covering radius of triangle `t` around its vertex `v` (position `at`, normal
-/// `normal`) in the metric of `shape`.
-fn covering_radius(
-    p: &impl Fn(u32) -> DVec3,
-    at: DVec3,
-    normal: DVec3,
-    shape: &Shape,
-    t: &[u32; 3],
-) -> f64 {
-    let minor = shape.minor_axis(normal);
+/// Covering radius of a triangle around the vertex of `frame` in the metric of
+/// `shape` (minor axis `minor`): `corners` are the triangle's positions.
+fn covering_radius(frame: &RingFrame, (shape, minor): (&Shape, DVec3), corners: [DVec3; 3]) -> f64 {
     let map = |q: DVec3| {
-        let d = q - at;
+        let d = q - frame.at;
         DVec3::new(
             d.dot(shape.axis),
             d.dot(minor) / shape.ratio,
-            d.dot(normal) / shape.ratio,
+            d.dot(frame.normal) / shape.ratio,
         )
     };
-    let [a, b, c] = t.map(|i| map(p(i)));
+    let [a, b, c] = corners.map(map);
     triangle_terms(a, b, c).1
 }
 
@@ -296,10 +310,11 @@ fn vertex_shape<'a, I>(
 where
     I: Iterator<Item = (&'a [u32; 3], u32, u32)> + Clone,
 {
+    let frame = RingFrame::of(p, n, v);
     let (mut fit, mut chord, mut winding) = (Fit::default(), DVec2::ZERO, 0.0);
     for (_, next, previous) in ring() {
-        let (d_out, dn_out) = ring_term(p, n, v, next);
-        let (d_in, dn_in) = ring_term(p, n, v, previous);
+        let (d_out, dn_out) = frame.term(p, n, next);
+        let (d_in, dn_in) = frame.term(p, n, previous);
         fit.add(d_out, dn_out);
         fit.add(d_in, dn_in);
         chord += d_out - d_in;
@@ -308,13 +323,14 @@ where
     // Triangles wound clockwise seen from the normal lie right of the chord.
     let chord = if winding < 0.0 { -chord } else { chord };
     let outward = border_normal(chord, &fit);
-    let mut shape = oriented(n(v), &fit)?;
+    let mut shape = oriented(frame.normal, &fit)?;
+    let minor = shape.minor_axis(frame.normal);
     let (mut major, mut reach) = (0.0f64, 0.0f64);
     for (t, next, previous) in ring() {
-        major = major.max(covering_radius(p, p(v), n(v), &shape, t));
+        major = major.max(covering_radius(&frame, (&shape, minor), t.map(p)));
         if outward != DVec2::ZERO {
             for w in [next, previous] {
-                reach = reach.max(outward.dot(ring_term(p, n, v, w).0));
+                reach = reach.max(outward.dot(frame.offset(p, w)));
             }
         }
     }
@@ -326,10 +342,10 @@ where
     let fan = (outward != DVec2::ZERO)
         .then(|| {
             let corners = ring().map(|(_, next, previous)| (next, previous));
-            border_fan(corners, |w| ring_term(p, n, v, w).0)
+            border_fan(corners, |w| frame.offset(p, w))
         })
         .flatten();
-    shape.clip = border_clip(n(v), (outward, reach), fan, &shape, r);
+    shape.clip = border_clip(frame.normal, (outward, reach), fan, &shape, r);
     Some((r, shape))
 }
 
