@@ -111,9 +111,16 @@ impl Shape {
 
     /// The normal at plane coordinates (x, y) (in radii along u, v).
     pub fn normal_at(&self, normal: DVec3, x: f64, y: f64) -> DVec3 {
+        self.field_at(normal, self.minor_axis(normal), (x, y))
+            .normalize_or(normal)
+    }
+
+    /// The field's normal at plane coordinates (x, y) before it is normalized, n + G
+    /// (x, y) in the frame (u, `minor`): a direction, of length ≥ 1 and finite where
+    /// |G| is (`MAX_GRADIENT` bounds a packed shape's).
+    pub fn field_at(&self, normal: DVec3, minor: DVec3, (x, y): (f64, f64)) -> DVec3 {
         let [a, b, c] = self.gradient;
-        let v = self.minor_axis(normal);
-        (normal + self.axis * (a * x + b * y) + v * (b * x + c * y)).normalize_or(normal)
+        normal + self.axis * (a * x + b * y) + minor * (b * x + c * y)
     }
 
     pub fn pack(&self) -> SplatShape {

@@ -52,7 +52,9 @@ pub struct Child {
     pub color: DVec3,
 }
 
-/// Centre and rim samples of a child: (position, normal), rim points last.
+/// Centre and rim samples of a child: (position, normal direction), rim points last.
+/// A rim point's direction is its child's field there before normalizing
+/// ([`Shape::field_at`]): the fit reads only its tilt, a ratio of its components.
 fn samples(child: &Child, parent_normal: DVec3) -> [(DVec3, DVec3); RIM_SAMPLES + 1] {
     let Child { disk, shape, .. } = child;
     let sign = if disk.n.dot(parent_normal) < 0.0 {
@@ -65,9 +67,32 @@ fn samples(child: &Child, parent_normal: DVec3) -> [(DVec3, DVec3); RIM_SAMPLES 
     for (sample, &(c, s)) in out[1..].iter_mut().zip(&DIRECTION_TABLE) {
         let (x, y) = (c, s * shape.ratio);
         let q = disk.p + (shape.axis * x + minor * y) * disk.r;
-        *sample = (q, shape.normal_at(disk.n, x, y) * sign);
+        let m = shape.field_at(disk.n, minor, (x, y));
+        *sample = (
+            q,
+            if m.is_finite() {
+                m * sign
+            } else {
+                disk.n * sign
+            },
+        );
     }
     out
+}
+
+/// The tangent of a sample's tilt from the parent's normal `n` in the parent's frame
+/// `frame`, for the sample's normal direction `m` (any length): frame(m) / (m·n), its
+/// cosine m·n / |m| taken as at least [`MIN_COS_TILT`]. One division, and a root only
+/// where the cosine is clamped.
+fn tilt(m: DVec3, n: DVec3, frame: impl Fn(DVec3) -> DVec2) -> DVec2 {
+    let (along, length2) = (m.dot(n), m.length_squared());
+    let unclamped = along > 0.0 && along * along >= MIN_COS_TILT * MIN_COS_TILT * length2;
+    let denominator = if unclamped {
+        along
+    } else {
+        MIN_COS_TILT * length2.sqrt()
+    };
+    frame(m) * denominator.recip()
 }
 
 /// The parent's shape and major semi-axis, given its disk `parent` (centre, normal and
@@ -85,11 +110,10 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
     let mut rims = [[(DVec3::ZERO, DVec3::ZERO); RIM_SAMPLES + 1]; MAX_CHILDREN];
     for (child, rim) in children.iter().zip(&mut rims) {
         *rim = samples(child, parent.n);
-        for &(q, n) in rim.iter() {
+        for &(q, m) in rim.iter() {
             // The field's normal is normalize(n + G d): G d must be the sample's
             // tangential part over its normal part, tan of its tilt (not its sine).
-            let along = n.dot(parent.n).max(MIN_COS_TILT);
-            fit.add(frame(q - parent.p), frame(n) / along);
+            fit.add(frame(q - parent.p), tilt(m, parent.n, frame));
         }
     }
     let (dir, l1, l2) = fit.axes();
