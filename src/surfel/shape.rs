@@ -116,8 +116,8 @@ impl Shape {
     }
 
     /// The field's normal at plane coordinates (x, y) before it is normalized, n + G
-    /// (x, y) in the frame (u, `minor`): a direction, of length ≥ 1 and finite where
-    /// |G| is (`MAX_GRADIENT` bounds a packed shape's).
+    /// (x, y) in the frame (u, `minor`): a direction, no shorter than n where u and
+    /// `minor` are ⟂ n (as `unpack` makes them), and finite where G is.
     pub fn field_at(&self, normal: DVec3, minor: DVec3, (x, y): (f64, f64)) -> DVec3 {
         let [a, b, c] = self.gradient;
         normal + self.axis * (a * x + b * y) + minor * (b * x + c * y)

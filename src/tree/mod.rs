@@ -553,7 +553,16 @@ pub fn order_list(set: NodeSet, max_nodes: usize) -> OrderedSet {
 
 /// `values` at `ids`, in that order.
 pub fn gather<T: Copy + Send + Sync>(values: &[T], ids: &[u32]) -> Vec<T> {
-    ids.par_iter().map(|&id| values[id as usize]).collect()
+    let mut out = Vec::new();
+    gather_into(values, ids, &mut out);
+    out
+}
+
+/// [`gather`] into `out`, whose allocation is reused when it is large enough.
+pub fn gather_into<T: Copy + Send + Sync>(values: &[T], ids: &[u32], out: &mut Vec<T>) {
+    ids.par_iter()
+        .map(|&id| values[id as usize])
+        .collect_into_vec(out);
 }
 
 impl OrderedSet {

@@ -13,12 +13,11 @@ use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::Path;
 
 use bytemuck::Pod;
-use rayon::prelude::*;
 use xxhash_rust::xxh3::Xxh3;
 
-use super::OrderedSet;
 use super::select::BlockIndexBuilder;
 use super::spt_file::{CHECKSUM_OFFSET, header_for};
+use super::{OrderedSet, gather_into};
 use crate::io::atomic::write_atomically_seekable;
 
 /// A writer that hashes what it writes (XXH3-64, as the header's checksum) and tells
@@ -73,17 +72,12 @@ fn put_gathered<T: Pod + Send + Sync>(
     (ids, slab): (&[u32], usize),
     mut seen: impl FnMut(&[T]) + Send,
 ) -> std::io::Result<()> {
-    let gather_into = |ids: &[u32], buffer: &mut Vec<T>| {
-        ids.par_iter()
-            .map(|&id| values[id as usize])
-            .collect_into_vec(buffer)
-    };
     let mut slabs = ids.chunks(slab);
     let (mut current, mut spare) = (Vec::new(), Vec::new());
     let Some(first) = slabs.next() else {
         return Ok(());
     };
-    gather_into(first, &mut current);
+    gather_into(values, first, &mut current);
     loop {
         let following = slabs.next();
         let (written, ()) = rayon::join(
@@ -93,7 +87,7 @@ fn put_gathered<T: Pod + Send + Sync>(
             },
             || {
                 if let Some(ids) = following {
-                    gather_into(ids, &mut spare);
+                    gather_into(values, ids, &mut spare);
                 }
             },
         );
