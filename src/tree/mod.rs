@@ -23,6 +23,7 @@ pub mod spt_file;
 pub mod spt_write;
 pub mod validate;
 
+use arrayvec::ArrayVec;
 use glam::{DVec3, Vec3};
 use half::f16;
 use rayon::prelude::*;
@@ -228,12 +229,15 @@ fn internal_record(
         axis: shape.axis,
         ratio: shape.ratio,
     };
-    let splats = children.map(|c| splat(c.disk, &c.shape));
+    let splats: ArrayVec<Splat, MAX_CHILDREN> = children[..k]
+        .iter()
+        .map(|c| splat(c.disk, &c.shape))
+        .collect();
     let mut rec = NodeRecord::new(disk.p.as_vec3(), major as f32, disk.n.as_vec3(), color);
     if (rec.radius() as f64) < major {
         rec.radius = f32::from_bits(rec.radius).next_up().to_bits();
     }
-    let e = node_error(&splat(Disk { r: major, ..disk }, &shape), &splats[..k]);
+    let e = node_error(&splat(Disk { r: major, ..disk }, &shape), &splats);
     rec.error = encode_up(e, scale).max(children_max);
     (rec, shape.pack())
 }
