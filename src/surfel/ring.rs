@@ -186,12 +186,13 @@ fn border_fan(
 /// Covering radius of a triangle around the vertex of `frame` in the metric of
 /// `shape` (minor axis `minor`): `corners` are the triangle's positions.
 fn covering_radius(frame: &RingFrame, (shape, minor): (&Shape, DVec3), corners: [DVec3; 3]) -> f64 {
+    let stretch = shape.ratio.recip();
     let map = |q: DVec3| {
         let d = q - frame.at;
         DVec3::new(
             d.dot(shape.axis),
-            d.dot(minor) / shape.ratio,
-            d.dot(frame.normal) / shape.ratio,
+            d.dot(minor) * stretch,
+            d.dot(frame.normal) * stretch,
         )
     };
     let [a, b, c] = corners.map(map);

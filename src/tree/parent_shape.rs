@@ -134,11 +134,11 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
     let grow = 1.0 / (std::f64::consts::PI / RIM_SAMPLES as f64).cos();
     // The largest ρ², then one root (√ is monotone and correctly rounded: the same
     // value as the largest root).
-    let mut major2 = 0.0f64;
+    let (mut major2, stretch) = (0.0f64, ratio.recip());
     for (child, rim) in children.iter().zip(&rims) {
         for (q, _) in &rim[1..] {
             let d = child.disk.p + (*q - child.disk.p) * grow - parent.p;
-            let (x, y) = (d.dot(shape.axis), d.dot(minor) / ratio);
+            let (x, y) = (d.dot(shape.axis), d.dot(minor) * stretch);
             major2 = major2.max(x * x + y * y);
         }
     }
