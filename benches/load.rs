@@ -51,7 +51,7 @@ fn load(c: &mut Criterion) {
         group.finish();
 
         let mut leaves = leaf_surfels(&model.geometry);
-        let hierarchy = build_hierarchy(&mut leaves, &Silent);
+        let hierarchy = build_hierarchy(&leaves, &Silent);
         let mut group = c.benchmark_group(format!("errors/{name}"));
         group.throughput(Throughput::Elements(hierarchy.internal.len() as u64));
         group.sample_size(10);

@@ -287,7 +287,7 @@ mod tests {
                 }
             })
             .collect();
-        crate::tree::hierarchy::build(&mut surfels, &Silent)
+        crate::tree::hierarchy::build(&surfels, &Silent)
     }
 
     #[test]

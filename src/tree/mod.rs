@@ -160,9 +160,10 @@ pub struct NodeSet {
     pub meta: TreeMeta,
 }
 
-/// Stage 1: the hierarchy. Reorders the surfels; `report` hears leaves done.
-pub fn build_hierarchy(leaves: &mut LeafSurfels, report: &dyn Report) -> Hierarchy {
-    hierarchy::build(&mut leaves.surfels, report)
+/// Stage 1: the hierarchy, and the order its leaves take the surfels in; `report`
+/// hears leaves done.
+pub fn build_hierarchy(leaves: &LeafSurfels, report: &dyn Report) -> Hierarchy {
+    hierarchy::build(&leaves.surfels, report)
 }
 
 /// The size errors are stored relative to: the largest extent of the box holding every
@@ -400,29 +401,36 @@ pub fn build_above(
 /// [`build_records`] with errors stored relative to `scale` (> 0).
 pub fn build_records_scaled(
     leaves: LeafSurfels,
-    hierarchy: Hierarchy,
+    mut hierarchy: Hierarchy,
     scale: f32,
     report: &dyn Report,
 ) -> NodeSet {
     let n = leaves.surfels.len();
     let (oriented, normals_turned) = (leaves.oriented_normals, leaves.normals_turned);
     let bounds = leaf_bounds(&leaves);
-    let (mut records, mut shapes): (Vec<NodeRecord>, Vec<SplatShape>) = leaves
-        .surfels
+    // Leaf id k is surfel leaf_order[k]: the leaves' records in id order.
+    let in_leaf_order = std::mem::take(&mut hierarchy.leaf_order);
+    let leaf = |k: &u32| &leaves.surfels[*k as usize];
+    let (mut records, mut shapes): (Vec<NodeRecord>, Vec<SplatShape>) = in_leaf_order
         .par_iter()
-        .map(|s| {
+        .map(|k| {
+            let s = leaf(k);
             let rec = NodeRecord::new(s.position, s.radius, s.normal, s.color);
             (rec, s.shape)
         })
         .unzip();
     let total = hierarchy.node_count();
     let mut attributes: Vec<PointAttributes> = if leaves.has_attributes {
-        let mut a: Vec<PointAttributes> = leaves.surfels.par_iter().map(|s| s.attributes).collect();
+        let mut a: Vec<PointAttributes> = in_leaf_order
+            .par_iter()
+            .map(|k| leaf(k).attributes)
+            .collect();
         a.resize(total, PointAttributes::default());
         a
     } else {
         Vec::new()
     };
+    drop(in_leaf_order);
     drop(leaves.surfels);
     let nodes = (&mut records, &mut shapes, &mut attributes);
     let (levels, parent_ids) = complete_internal(&hierarchy, nodes, (scale, oriented), report);
@@ -611,7 +619,7 @@ pub fn build_ordered(mut leaves: LeafSurfels, report: &dyn Report) -> OrderedSet
     leaves.drop_redundant();
     let n = leaves.surfels.len() as u64;
     report.step(Step::Hierarchy, n);
-    let hierarchy = build_hierarchy(&mut leaves, report);
+    let hierarchy = build_hierarchy(&leaves, report);
     let internal = hierarchy.internal.len() as u64;
     report.finished(Finished::Hierarchy {
         leaves: n,

@@ -58,6 +58,7 @@ fn hierarchy_of(split: &Split, jobs: usize) -> Hierarchy {
     Hierarchy {
         leaf_count: jobs as u32,
         internal,
+        leaf_order: (0..jobs as u32).collect(),
     }
 }
 

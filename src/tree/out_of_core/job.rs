@@ -150,7 +150,7 @@ pub fn build_leaves(
     let (leaf_count, walls) = (leaves.surfels.len() as u64, leaves.stats.added_splats());
     let disk_extent = crate::tree::error_scale(&leaves.surfels);
     let (oriented, normals_turned) = (leaves.oriented_normals, leaves.normals_turned);
-    let hierarchy = build_hierarchy(&mut leaves, &Silent);
+    let hierarchy = build_hierarchy(&leaves, &Silent);
     let set = build_records_scaled(leaves, hierarchy, model.error_scale, &Silent);
     let list = sort_list_chunked(set, model.chunk_nodes);
     write_part(&list, part)?;
