@@ -50,7 +50,7 @@ fn load(c: &mut Criterion) {
         group.bench_function("leaf_surfels", |b| b.iter(|| leaf_surfels(&model.geometry)));
         group.finish();
 
-        let mut leaves = leaf_surfels(&model.geometry);
+        let leaves = leaf_surfels(&model.geometry);
         let hierarchy = build_hierarchy(&leaves, &Silent);
         let mut group = c.benchmark_group(format!("errors/{name}"));
         group.throughput(Throughput::Elements(hierarchy.internal.len() as u64));

@@ -278,7 +278,7 @@ mod tests {
     use crate::tree::report::Silent;
 
     fn hierarchy(n: usize) -> Hierarchy {
-        let mut surfels: Vec<Surfel> = (0..n)
+        let surfels: Vec<Surfel> = (0..n)
             .map(|i| {
                 let t = i as f32 * 0.37;
                 Surfel {
