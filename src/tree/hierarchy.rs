@@ -50,7 +50,8 @@ pub struct Hierarchy {
     pub leaf_count: u32,
     pub internal: Vec<Internal>,
     /// Leaf id k is the input's surfel `leaf_order[k]` (a permutation of
-    /// `0..leaf_count`).
+    /// `0..leaf_count`). Emptied by [`build_records_scaled`](super::build_records_scaled),
+    /// which puts the leaves' records in this order and drops the surfels.
     pub leaf_order: Vec<u32>,
 }
 
