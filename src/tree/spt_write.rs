@@ -18,21 +18,35 @@ use xxhash_rust::xxh3::Xxh3;
 use super::select::BlockIndexBuilder;
 use super::spt_file::{CHECKSUM_OFFSET, header_for};
 use super::{OrderedSet, gather_into};
-use crate::io::atomic::write_atomically_seekable;
+use crate::io::atomic::{start_writeback, write_atomically_seekable};
 
-/// A writer that hashes what it writes (XXH3-64, as the header's checksum) and tells
-/// `progress` how many bytes went by.
+/// A writer that hashes what it writes (XXH3-64, as the header's checksum), tells
+/// `progress` how many bytes went by, and starts the writeback of every
+/// [`WRITEBACK_STEP`] bytes that reach the file ([`start_writeback`]).
 pub struct Hashed<'a> {
     w: &'a mut BufWriter<File>,
     hash: Xxh3,
     progress: &'a (dyn Fn(u64) + Sync),
+    /// Bytes put so far, and the end of those whose writeback has started.
+    put: u64,
+    written_back: u64,
 }
+
+/// Bytes between two starts of the writeback.
+const WRITEBACK_STEP: u64 = 32 << 20;
 
 impl Hashed<'_> {
     pub fn put(&mut self, bytes: &[u8]) -> std::io::Result<()> {
         self.hash.update(bytes);
         self.w.write_all(bytes)?;
         (self.progress)(bytes.len() as u64);
+        self.put += bytes.len() as u64;
+        // What the buffer still holds has not reached the file.
+        let in_file = self.put - self.w.buffer().len() as u64;
+        if in_file - self.written_back >= WRITEBACK_STEP {
+            start_writeback(self.w.get_ref(), self.written_back..in_file);
+            self.written_back = in_file;
+        }
         Ok(())
     }
 }
@@ -50,6 +64,8 @@ pub fn write_hashed(
             w,
             hash: Xxh3::new(),
             progress,
+            put: 0,
+            written_back: 0,
         };
         out.put(header)?;
         body(&mut out)?;
@@ -151,5 +167,31 @@ mod tests {
         hash.update(&bytes[header.len()..]);
         let at = CHECKSUM_OFFSET as usize;
         assert_eq!(bytes[at..at + 8], hash.digest().to_le_bytes());
+    }
+
+    #[test]
+    fn a_file_past_the_writeback_step_reads_back_whole() {
+        // 1.5 steps of values, put in slabs that straddle the step: the writeback
+        // started on the way must not change a byte.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("large");
+        let n = (WRITEBACK_STEP as usize / 4) * 3 / 2;
+        let values: Vec<u32> = (0..n as u32)
+            .map(|i| i.wrapping_mul(2_654_435_761))
+            .collect();
+        let ids: Vec<u32> = (0..n as u32).rev().collect();
+        let header = [7u8; 256];
+        write_hashed(&path, &header, &|_| {}, |out| {
+            put_gathered(out, &values, (&ids, 3 << 20), |_| {})
+        })
+        .unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let body: &[u32] = bytemuck::cast_slice(&bytes[header.len()..]);
+        assert_eq!(body.len(), n);
+        assert!(
+            body.iter()
+                .zip(ids.iter())
+                .all(|(&v, &i)| v == values[i as usize])
+        );
     }
 }
