@@ -55,32 +55,36 @@ impl RingFrame {
         }
     }
 
+    /// A direction's coordinates in the tangent frame.
+    fn project(&self, d: DVec3) -> DVec2 {
+        DVec2::new(d.dot(self.t1), d.dot(self.t2))
+    }
+
+    /// The direction with tangent-frame coordinates `d`.
+    fn unproject(&self, d: DVec2) -> DVec3 {
+        self.t1 * d.x + self.t2 * d.y
+    }
+
     /// Offset and normal change of vertex `w` in this frame.
     fn term(&self, p: &impl Fn(u32) -> DVec3, n: &impl Fn(u32) -> DVec3, w: u32) -> (DVec2, DVec2) {
-        let (d, dn) = (p(w) - self.at, n(w) - self.normal);
-        (
-            DVec2::new(d.dot(self.t1), d.dot(self.t2)),
-            DVec2::new(dn.dot(self.t1), dn.dot(self.t2)),
-        )
+        (self.offset(p, w), self.project(n(w) - self.normal))
     }
 
     /// The offset alone of vertex `w` ([`RingFrame::term`]).
     fn offset(&self, p: &impl Fn(u32) -> DVec3, w: u32) -> DVec2 {
-        let d = p(w) - self.at;
-        DVec2::new(d.dot(self.t1), d.dot(self.t2))
+        self.project(p(w) - self.at)
     }
 }
 
 /// The ellipse's frame and unscaled gradient from a vertex's fit; None when the ring
 /// spans no area (no triangle, or all neighbours coincide).
-fn oriented(normal: DVec3, fit: &Fit) -> Option<Shape> {
+fn oriented(frame: &RingFrame, fit: &Fit) -> Option<Shape> {
     let (dir, l1, l2) = fit.axes();
     if l1 <= 0.0 || !l1.is_finite() {
         return None;
     }
-    let (t1, t2) = tangent_frame(normal);
     Some(Shape {
-        axis: (t1 * dir.x + t2 * dir.y).normalize_or(t1),
+        axis: frame.unproject(dir).normalize_or(frame.t1),
         ratio: (l2 / l1).sqrt().clamp(MIN_RATIO, 1.0),
         gradient: rotate_gradient(fit.gradient(), dir),
         clip: None,
@@ -100,27 +104,24 @@ fn border_normal(chord: DVec2, fit: &Fit) -> DVec2 {
 
 /// A tangent-frame direction of a vertex as plane coordinates of its ellipse (along u,
 /// v), unit; None if it vanishes.
-fn to_plane(normal: DVec3, d: DVec2, shape: &Shape) -> Option<DVec2> {
-    let (t1, t2) = tangent_frame(normal);
-    let o = t1 * d.x + t2 * d.y;
-    shape.along_axes(normal, o).try_normalize()
+fn to_plane(frame: &RingFrame, d: DVec2, shape: &Shape) -> Option<DVec2> {
+    shape
+        .along_axes(frame.normal, frame.unproject(d))
+        .try_normalize()
 }
 
-/// The clip of a border vertex on an ellipse of major radius `r`: the wedge of its
+/// The clip of a border vertex (its `frame`) on an ellipse of major radius `r`: the wedge of its
 /// fan where it has one ([`border_fan`]), else the line ⟂ `outward` (in its tangent
 /// frame) at `reach`, the largest offset of a ring vertex along it.
 fn border_clip(
-    normal: DVec3,
+    frame: &RingFrame,
     (outward, reach): (DVec2, f64),
     fan: Option<Fan>,
     shape: &Shape,
     r: f64,
 ) -> Option<Clip> {
     if let Some((start, end)) = fan {
-        let (start, end) = (
-            to_plane(normal, start, shape)?,
-            to_plane(normal, end, shape)?,
-        );
+        let (start, end) = (to_plane(frame, start, shape)?, to_plane(frame, end, shape)?);
         return Some(Clip::Wedge {
             start: start.to_angle(),
             end: end.to_angle(),
@@ -130,7 +131,7 @@ fn border_clip(
         return None;
     }
     Some(Clip::Line {
-        normal: to_plane(normal, outward, shape)?,
+        normal: to_plane(frame, outward, shape)?,
         offset: reach.max(0.0) / r,
     })
 }
@@ -324,7 +325,7 @@ where
     // Triangles wound clockwise seen from the normal lie right of the chord.
     let chord = if winding < 0.0 { -chord } else { chord };
     let outward = border_normal(chord, &fit);
-    let mut shape = oriented(frame.normal, &fit)?;
+    let mut shape = oriented(&frame, &fit)?;
     let minor = shape.minor_axis(frame.normal);
     let (mut major, mut reach) = (0.0f64, 0.0f64);
     for (t, next, previous) in ring() {
@@ -346,7 +347,7 @@ where
             border_fan(corners, |w| frame.offset(p, w))
         })
         .flatten();
-    shape.clip = border_clip(frame.normal, (outward, reach), fan, &shape, r);
+    shape.clip = border_clip(&frame, (outward, reach), fan, &shape, r);
     Some((r, shape))
 }
 

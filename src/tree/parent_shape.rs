@@ -68,14 +68,7 @@ fn samples(child: &Child, parent_normal: DVec3) -> [(DVec3, DVec3); RIM_SAMPLES 
         let (x, y) = (c, s * shape.ratio);
         let q = disk.p + (shape.axis * x + minor * y) * disk.r;
         let m = shape.field_at(disk.n, minor, (x, y));
-        *sample = (
-            q,
-            if m.is_finite() {
-                m * sign
-            } else {
-                disk.n * sign
-            },
-        );
+        *sample = (q, if m.is_finite() { m } else { disk.n } * sign);
     }
     out
 }
