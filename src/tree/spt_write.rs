@@ -8,8 +8,7 @@
 //! and shapes was the build's peak: 672 MB of records beside their copy, 504 MB of
 //! shapes.
 
-use std::fs::File;
-use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::io::{Seek, SeekFrom, Write};
 use std::path::Path;
 
 use bytemuck::Pod;
@@ -18,35 +17,21 @@ use xxhash_rust::xxh3::Xxh3;
 use super::select::BlockIndexBuilder;
 use super::spt_file::{CHECKSUM_OFFSET, header_for};
 use super::{OrderedSet, gather_into};
-use crate::io::atomic::{start_writeback, write_atomically_seekable};
+use crate::io::atomic::{AtomicWriter, write_atomically_seekable};
 
-/// A writer that hashes what it writes (XXH3-64, as the header's checksum), tells
-/// `progress` how many bytes went by, and starts the writeback of every
-/// [`WRITEBACK_STEP`] bytes that reach the file ([`start_writeback`]).
+/// A writer that hashes what it writes (XXH3-64, as the header's checksum) and tells
+/// `progress` how many bytes went by.
 pub struct Hashed<'a> {
-    w: &'a mut BufWriter<File>,
+    w: &'a mut AtomicWriter,
     hash: Xxh3,
     progress: &'a (dyn Fn(u64) + Sync),
-    /// Bytes put so far, and the end of those whose writeback has started.
-    put: u64,
-    written_back: u64,
 }
-
-/// Bytes between two starts of the writeback.
-const WRITEBACK_STEP: u64 = 32 << 20;
 
 impl Hashed<'_> {
     pub fn put(&mut self, bytes: &[u8]) -> std::io::Result<()> {
         self.hash.update(bytes);
         self.w.write_all(bytes)?;
         (self.progress)(bytes.len() as u64);
-        self.put += bytes.len() as u64;
-        // What the buffer still holds has not reached the file.
-        let in_file = self.put - self.w.buffer().len() as u64;
-        if in_file - self.written_back >= WRITEBACK_STEP {
-            start_writeback(self.w.get_ref(), self.written_back..in_file);
-            self.written_back = in_file;
-        }
         Ok(())
     }
 }
@@ -64,8 +49,6 @@ pub fn write_hashed(
             w,
             hash: Xxh3::new(),
             progress,
-            put: 0,
-            written_back: 0,
         };
         out.put(header)?;
         body(&mut out)?;
@@ -175,7 +158,7 @@ mod tests {
         // started on the way must not change a byte.
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("large");
-        let n = (WRITEBACK_STEP as usize / 4) * 3 / 2;
+        let n = (crate::io::atomic::WRITEBACK_STEP as usize / 4) * 3 / 2;
         let values: Vec<u32> = (0..n as u32)
             .map(|i| i.wrapping_mul(2_654_435_761))
             .collect();
