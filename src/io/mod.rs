@@ -12,6 +12,7 @@ pub mod model;
 pub mod ply;
 pub mod rebase;
 pub mod stream;
+pub(crate) mod syncing_file;
 pub mod torus_knot;
 pub mod triangulate;
 

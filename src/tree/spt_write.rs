@@ -158,7 +158,7 @@ mod tests {
         // started on the way must not change a byte.
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("large");
-        let n = (crate::io::atomic::WRITEBACK_STEP as usize / 4) * 3 / 2;
+        let n = (crate::io::syncing_file::WRITEBACK_STEP as usize / 4) * 3 / 2;
         let values: Vec<u32> = (0..n as u32)
             .map(|i| i.wrapping_mul(2_654_435_761))
             .collect();
