@@ -228,6 +228,20 @@ pub fn coarse_first(largest_parent_error: u16, level: u32) -> (u16, u32) {
 const FIRST_BAND: usize = 64;
 const BAND_GROWTH: usize = 8;
 
+/// Sorts `ids` by (`key(id)`, id), as one u64 each: the key is read once per id
+/// rather than twice per comparison (a gather from the records in random order). On
+/// the Lucy-size mesh the list's sorts took about 1 CPU-second that way.
+pub fn sort_by_key_then_id(ids: &mut [u32], key: impl Fn(u32) -> u16) {
+    let mut keyed: Vec<u64> = ids
+        .iter()
+        .map(|&id| (u64::from(key(id)) << 32) | u64::from(id))
+        .collect();
+    keyed.sort_unstable();
+    for (id, k) in ids.iter_mut().zip(&keyed) {
+        *id = *k as u32;
+    }
+}
+
 /// Cuts each part of `cut` (the top part first, then the subtrees) into bands of
 /// whole levels, the first of at least [`FIRST_BAND`] nodes, each next
 /// [`BAND_GROWTH`] times more, up to `min_band` (the lowest band of a part excepted), and
@@ -244,7 +258,7 @@ pub fn by_level(
         .into_par_iter()
         .enumerate()
         .flat_map_iter(|(part, mut ids)| {
-            ids.sort_unstable_by_key(|&id| (level(id), id));
+            sort_by_key_then_id(&mut ids, &level);
             let mut out = Vec::new();
             let (mut start, mut least) = (0, min_band.min(FIRST_BAND));
             while start < ids.len() {
@@ -276,6 +290,18 @@ mod tests {
     use super::*;
     use crate::surfel::Surfel;
     use crate::tree::report::Silent;
+
+    #[test]
+    fn ids_sort_by_key_then_id() {
+        // Keys with many ties, ids in no order: the ties fall to the id.
+        let ids: Vec<u32> = (0..1000u32).map(|i| i.wrapping_mul(7919) % 1000).collect();
+        let key = |id: u32| (id.wrapping_mul(31) % 17) as u16;
+        let mut sorted = ids.clone();
+        sort_by_key_then_id(&mut sorted, key);
+        let mut expected = ids;
+        expected.sort_by_key(|&id| (key(id), id));
+        assert_eq!(sorted, expected);
+    }
 
     fn hierarchy(n: usize) -> Hierarchy {
         let surfels: Vec<Surfel> = (0..n)

@@ -535,7 +535,7 @@ pub fn order_list(set: NodeSet, max_nodes: usize) -> OrderedSet {
         |id| records[id as usize].parent_error,
     );
     cut.chunks.par_iter_mut().for_each(|ids| {
-        ids.sort_unstable_by_key(|&id| (0xffff - records[id as usize].parent_error, id))
+        chunks::sort_by_key_then_id(ids, |id| 0xffff - records[id as usize].parent_error)
     });
     let counts: Vec<usize> = cut.chunks.iter().map(Vec::len).collect();
     let order: Vec<u32> = cut.chunks.concat();
