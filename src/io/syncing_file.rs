@@ -17,7 +17,7 @@
 //! the switch or at a write, gets the same bytes buffered.
 
 use std::fs::File;
-use std::io::{Seek, SeekFrom, Write};
+use std::io::{ErrorKind, Seek, SeekFrom, Write};
 
 /// Bytes written between two starts of the writeback, and the size a file reaches
 /// before it goes direct.
@@ -212,22 +212,17 @@ impl AlignedChunk {
 }
 
 /// Writes `bytes` at `offset`, the file's end. A direct write the file system refuses
-/// (`EINVAL`) is made again buffered.
+/// (`EINVAL`, which std reports as `InvalidInput`) is made again buffered.
 fn write_at_end(file: &mut File, offset: u64, bytes: &[u8]) -> std::io::Result<()> {
     file.seek(SeekFrom::Start(offset))?;
     match file.write_all(bytes) {
-        Err(e) if e.raw_os_error() == Some(EINVAL) && set_direct(file, false) => {
+        Err(e) if e.kind() == ErrorKind::InvalidInput && set_direct(file, false) => {
             file.seek(SeekFrom::Start(offset))?;
             file.write_all(bytes)
         }
         other => other,
     }
 }
-
-#[cfg(target_os = "linux")]
-const EINVAL: i32 = libc::EINVAL;
-#[cfg(not(target_os = "linux"))]
-const EINVAL: i32 = 22;
 
 /// Sets or clears `O_DIRECT` on `file`; returns whether it took (always false off
 /// Linux).
