@@ -94,8 +94,8 @@ impl FrameUniform {
         lod_eps: f64,
     ) -> FrameUniform {
         let eye_rel = camera.eye - DVec3::from(meta.origin);
-        let near = camera.near_plane(meta);
         let aspect = width as f64 / height as f64;
+        let near = camera.near_plane(meta, aspect);
         let tan_y = (camera.fov_y * 0.5).tan();
         let mode = match settings.mode {
             Mode::Shaded => 0,
