@@ -9,6 +9,7 @@
 
 pub mod clip;
 pub mod cloud;
+mod corners;
 pub mod covering;
 pub mod field;
 pub mod footprint;

@@ -30,6 +30,7 @@ use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::Surfel;
+use super::corners::corners_by_vertex;
 use super::field::{fit_color_field, fit_field, unit_rgb};
 use super::mesh::{RADIUS_MARGIN, triangle_terms};
 use super::shape::{Clip, Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
@@ -198,33 +199,6 @@ fn covering_radius(frame: &RingFrame, (shape, minor): (&Shape, DVec3), corners: 
     };
     let [a, b, c] = corners.map(map);
     triangle_terms(a, b, c).1
-}
-
-/// Each vertex's corners, as compressed rows: vertex v's are `corners[start[v]..
-/// start[v + 1]]`, each 3 t + k for corner k of triangle t, in triangle order, so that a
-/// vertex gathers its terms in the order a pass over the triangles would add them.
-/// `start` first holds each row's end (the running count); the corners, placed last
-/// to first, each move their row's end down one, which leaves it at the row's start.
-pub(super) fn corners_by_vertex(
-    vertex_count: usize,
-    triangles: &[[u32; 3]],
-) -> (Vec<u32>, Vec<u32>) {
-    let mut start = vec![0u32; vertex_count + 1];
-    for &v in triangles.iter().flatten() {
-        start[v as usize] += 1;
-    }
-    let mut total = 0;
-    for end in &mut start[..vertex_count] {
-        total += *end;
-        *end = total;
-    }
-    start[vertex_count] = total;
-    let mut corners = vec![0u32; total as usize];
-    for (c, &v) in triangles.as_flattened().iter().enumerate().rev() {
-        start[v as usize] -= 1;
-        corners[start[v as usize] as usize] = c as u32;
-    }
-    (start, corners)
 }
 
 /// Replaces the radius of every vertex that a triangle holds by the major semi-axis of
