@@ -172,20 +172,63 @@ fn build_seq(s: &mut [Key], offset: usize, leaf_count: u32, out: &mut Vec<Intern
     leaf_count + out.len() as u32 - 1
 }
 
+/// A subtree of [`build_par`]: built whole on one thread (nodes in post-order, ids
+/// local as [`build_seq`] gives them, and its root), or split, its parts built in
+/// parallel and joined only once, by [`Built::append`]. Joining at every parallel level
+/// had copied the Lucy-size mesh's 7 M internal nodes four or five times.
+enum Built {
+    Whole(Vec<Internal>, u32),
+    Split(Vec<Built>),
+}
+
+impl Built {
+    /// Its internal nodes.
+    fn len(&self) -> usize {
+        match self {
+            Built::Whole(nodes, _) => nodes.len(),
+            Built::Split(parts) => parts.iter().map(Built::len).sum::<usize>() + 1,
+        }
+    }
+
+    /// Appends its nodes to `out` in post-order, each internal id moved by where its
+    /// subtree lands, and returns its root's id.
+    fn append(self, out: &mut Vec<Internal>, leaf_count: u32) -> u32 {
+        match self {
+            Built::Whole(nodes, root) => {
+                let base = out.len() as u32;
+                let shift = |id: u32| if id >= leaf_count { id + base } else { id };
+                out.extend(nodes.into_iter().map(|mut n| {
+                    for c in &mut n.children[..n.child_count as usize] {
+                        *c = shift(*c);
+                    }
+                    n
+                }));
+                shift(root)
+            }
+            Built::Split(parts) => {
+                let mut node = Internal {
+                    children: [0; MAX_CHILDREN],
+                    child_count: 0,
+                };
+                for part in parts {
+                    node.children[node.child_count as usize] = part.append(out, leaf_count);
+                    node.child_count += 1;
+                }
+                out.push(node);
+                leaf_count + out.len() as u32 - 1
+            }
+        }
+    }
+}
+
 /// Like [`build_seq`], on several threads: the child subtrees are built in parallel
-/// and their vectors joined in child order, so the result does not depend on the
-/// number of threads.
-fn build_par(
-    s: &mut [Key],
-    offset: usize,
-    leaf_count: u32,
-    report: &dyn Report,
-) -> (Vec<Internal>, u32) {
+/// and joined in child order, so the result does not depend on the number of threads.
+fn build_par(s: &mut [Key], offset: usize, leaf_count: u32, report: &dyn Report) -> Built {
     if s.len() <= PARALLEL_RANGE {
         let mut out = Vec::new();
         let root = build_seq(s, offset, leaf_count, &mut out);
         report.advance(s.len() as u64);
-        return (out, root);
+        return Built::Whole(out, root);
     }
     let ranges = child_ranges(s);
     let mut pieces = Vec::with_capacity(4);
@@ -198,37 +241,12 @@ fn build_par(
         rest = tail;
         at = start + len;
     }
-    let built: Vec<(Vec<Internal>, u32)> = pieces
-        .into_par_iter()
-        .map(|(piece, off)| build_par(piece, off, leaf_count, report))
-        .collect();
-    let total = built.iter().map(|b| b.0.len()).sum::<usize>() + 1;
-    let mut out = Vec::with_capacity(total);
-    let mut node = Internal {
-        children: [0; 4],
-        child_count: 0,
-    };
-    let shift = |id: u32, base: usize| {
-        if id >= leaf_count {
-            id + base as u32
-        } else {
-            id
-        }
-    };
-    for (sub, root) in built {
-        let base = out.len();
-        out.extend(sub.into_iter().map(|mut n| {
-            for c in &mut n.children[..n.child_count as usize] {
-                *c = shift(*c, base);
-            }
-            n
-        }));
-        node.children[node.child_count as usize] = shift(root, base);
-        node.child_count += 1;
-    }
-    out.push(node);
-    let root = leaf_count + out.len() as u32 - 1;
-    (out, root)
+    Built::Split(
+        pieces
+            .into_par_iter()
+            .map(|(piece, off)| build_par(piece, off, leaf_count, report))
+            .collect(),
+    )
 }
 
 /// Builds the hierarchy over `surfels`, ordering its leaves so that every node covers
@@ -247,7 +265,10 @@ pub fn build(surfels: &[Surfel], report: &dyn Report) -> Hierarchy {
     let internal = if keys.is_empty() {
         Vec::new()
     } else {
-        build_par(&mut keys, 0, leaf_count, report).0
+        let built = build_par(&mut keys, 0, leaf_count, report);
+        let mut internal = Vec::with_capacity(built.len());
+        built.append(&mut internal, leaf_count);
+        internal
     };
     Hierarchy {
         leaf_count,
