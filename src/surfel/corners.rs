@@ -12,7 +12,8 @@
 
 use rayon::prelude::*;
 
-/// Vertex ranges per core: a few, since every range's task reads all the corners.
+/// The most vertex ranges (one per thread up to this): few, since every range's task
+/// reads all the corners.
 const MAX_RANGES: usize = 8;
 
 /// The rows of `triangles`' corners by vertex (see the module doc): `(start, corners)`,

@@ -42,6 +42,19 @@ impl Internal {
     pub fn children(&self) -> &[u32] {
         &self.children[..self.child_count as usize]
     }
+
+    /// The node over `children` (at most [`MAX_CHILDREN`]), in their order.
+    fn over(children: impl IntoIterator<Item = u32>) -> Internal {
+        let mut node = Internal {
+            children: [0; MAX_CHILDREN],
+            child_count: 0,
+        };
+        for child in children {
+            node.children[node.child_count as usize] = child;
+            node.child_count += 1;
+        }
+        node
+    }
 }
 
 /// The hierarchy: internal nodes in post-order, ids as in the module doc.
@@ -159,15 +172,9 @@ fn build_seq(s: &mut [Key], offset: usize, leaf_count: u32, out: &mut Vec<Intern
     if s.len() == 1 {
         return offset as u32;
     }
-    let mut node = Internal {
-        children: [0; 4],
-        child_count: 0,
-    };
-    for (start, len) in child_ranges(s) {
-        let child = build_seq(&mut s[start..start + len], offset + start, leaf_count, out);
-        node.children[node.child_count as usize] = child;
-        node.child_count += 1;
-    }
+    let node = Internal::over(child_ranges(s).into_iter().map(|(start, len)| {
+        build_seq(&mut s[start..start + len], offset + start, leaf_count, out)
+    }));
     out.push(node);
     leaf_count + out.len() as u32 - 1
 }
@@ -206,14 +213,8 @@ impl Built {
                 shift(root)
             }
             Built::Split(parts) => {
-                let mut node = Internal {
-                    children: [0; MAX_CHILDREN],
-                    child_count: 0,
-                };
-                for part in parts {
-                    node.children[node.child_count as usize] = part.append(out, leaf_count);
-                    node.child_count += 1;
-                }
+                let node =
+                    Internal::over(parts.into_iter().map(|part| part.append(out, leaf_count)));
                 out.push(node);
                 leaf_count + out.len() as u32 - 1
             }

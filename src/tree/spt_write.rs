@@ -154,8 +154,8 @@ mod tests {
 
     #[test]
     fn a_file_past_the_writeback_step_reads_back_whole() {
-        // 1.5 steps of values, put in slabs that straddle the step: the writeback
-        // started on the way must not change a byte.
+        // 1.5 steps of values, put in slabs that straddle the step: the file going
+        // direct past it, and the checksum's seek back, must not change a byte.
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("large");
         let n = (crate::io::syncing_file::WRITEBACK_STEP as usize / 4) * 3 / 2;
