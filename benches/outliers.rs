@@ -1,4 +1,4 @@
-//! One outlier must not change the time of the surfels (issue 10): the shared bunny as
+//! One outlier must not change the time of the surfels: the shared bunny as
 //! a mesh and as a cloud, plain and with one vertex moved far away (x = 3.4e38 for the
 //! mesh; 1e36 and 1e10 for the cloud), load and leaf surfels timed on the same machine
 //! in one run.
@@ -8,7 +8,8 @@
 use std::path::{Path, PathBuf};
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use spt::io::ply::{Encoding, FaceList, PlyLayout, PolyMesh, Scalar, read_ply, write_ply};
+use spt::io::ply::{Encoding, FaceList, PlyLayout, PolyMesh, read_ply, write_ply};
+use spt::io::scalar::Scalar;
 use spt::surfel::leaf_surfels;
 
 /// The vertex moved: an inner one of the bunny.

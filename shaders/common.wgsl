@@ -1,3 +1,4 @@
+#import constants
 // Shared by every pass: the per-frame uniforms, node record decoding, the selection
 // test (DESIGN.md §5) and view rays. Passes import it (`#import common`).
 
@@ -61,17 +62,8 @@ struct Frame {
     elevation_pad: f32,
 }
 
-const MODE_SHADED: u32 = 0u;
-const MODE_LEVELS: u32 = 1u;
-const MODE_NORMALS: u32 = 2u;
-const MODE_RADIUS: u32 = 3u;
-const MODE_POINTS: u32 = 4u;
-const MODE_MESH: u32 = 5u;
-const MODE_EDL: u32 = 6u;
-const MODE_ELEVATION: u32 = 7u;
-const MODE_CLASSIFICATION: u32 = 8u;
-const MODE_INTENSITY: u32 = 9u;
-const MODE_RETURNS: u32 = 10u;
+// The display modes' MODE_* constants come from Rust (`Mode::wgsl_constants`, through
+// the generated `constants` module).
 
 // What pass 2 writes for each coverage sample a fragment covers when the fragment
 // does not show a front side at the pixel centre (one seen from behind, which weighs

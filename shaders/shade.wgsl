@@ -67,7 +67,7 @@ fn fs_shade(@builtin(position) frag: vec4<f32>) -> Shaded {
 // quantised depth frame), |n̄| < 1 darkens the pixel as averaging the reference's
 // shaded supersamples does. Beside the background the blended fragments are a rim's,
 // whose normals turn edge-on and flip to face the eye where the reference shows one
-// front side: there the diffuse term takes the normalized n̄ (README, issue 13).
+// front side: there the diffuse term takes the normalized n̄ (docs/point-clouds.md).
 fn shade(frag: vec2<f32>, texel: vec2<i32>, sums: Sums, alpha: f32, inside: bool) -> vec3<f32> {
     let color = sums.c.rgb / sums.c.w;
     let mean_n = sums.nz.xyz / sums.c.w;
@@ -151,7 +151,7 @@ const GAP_DEPTH_RATIO = 1.1;
 // to be a gap: two. A pixel inside a slit of any slope lies across at least two (the
 // one nearest the slit's normal and a diagonal); a one-pixel notch in an outline,
 // across one. (One: the outline's notches filled, more spill; three: the tile's worst
-// view kept 0.58 % holes. README, issue 13.)
+// view kept 0.58 % holes. docs/point-clouds.md.)
 const GAP_MIN_DIRECTIONS = 2;
 
 // Whether pixels whose centre no splat covers are filled as gaps (`fill_between`):
@@ -183,7 +183,7 @@ fn front_at_centre(marked: vec4<f32>) -> bool {
 //   that lie a little off the surface they sample meet the view rays beyond their rims
 //   (an offset h off the surface moves the hit by h / tan θ along it) and leave such
 //   slits, through which the sheet behind the contour showed as specks facing the
-//   other way (README, issue 12).
+//   other way (docs/image-quality.md).
 fn fill_between(texel: vec2<i32>, slit: bool) -> Sums {
     var sums = Sums(vec4<f32>(0.0), vec4<f32>(0.0));
     var across = 0;

@@ -9,7 +9,7 @@ to within the tolerance), so the flipped mesh is as faithful to the scanned surf
 the original: what differs is only how the triangles interpolate normals and colours
 between the samples. Rendering it against the original's supersampled reference
 (`cargo run --release --example quality -- MODEL --mesh FLIPPED`) measures how far
-apart two equally valid meshes of one scan are (issue 12).
+apart two equally valid meshes of one scan are.
 
     python3 tools/alt_triangulation.py IN.ply OUT.ply [--tolerance 20]
 """

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # GPU ms of `spt bench --quick` for an older commit and this checkout, alternated RUNS
-# times on one machine (the cost table of issue 12 in the README):
+# times on one machine (the cost tables of docs/image-quality.md and docs/gpu.md):
 #   tools/bench_before_after.sh COMMIT [MODEL]      (RUNS=3 by default)
 #   OLD_SPT=path SPT=path tools/bench_before_after.sh COMMIT [MODEL]
 #                       (prebuilt binaries of COMMIT and of this checkout: no cargo needed)

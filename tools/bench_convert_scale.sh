@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Conversion at scale (issue 15), against PotreeConverter 2 built from its public
+# Conversion at scale, against PotreeConverter 2 built from its public
 # source (tools/build_potree.sh): the Lucy-size mesh (14,028,800 vertices; spt reads the
 # PLY, Potree the same points as LAS, tools/ply_to_las.py) and a generated city tile of
 # 200 M points with colours (LAS, tools/gen_cloud.rs). Lucy is converted in memory (the

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""LAS/LAZ read throughput (issue 14, must-show 3): spt against laspy with its parallel
+"""LAS/LAZ read throughput: spt against laspy with its parallel
 lazrs backend, on the same generated files, alternated in one run on one machine.
 
     python3 tools/bench_las.py [--points 10000000] [--runs 3] [--dir /tmp/spt-las]

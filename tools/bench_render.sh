@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Render benchmark (issue #4): GPU time per frame (timestamp queries, median and p95)
+# Render benchmark: GPU time per frame (timestamp queries, median and p95)
 # and splats/s at 1024×768, leaves only and at ε = 1 px, for bunny and the Lucy-size
 # model, with both culling strategies, on whatever adapter `spt render` picks
 # (SPT_BACKEND chooses). Prints a Markdown table.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Streamed viewing under a GPU memory budget (issue #16), in a real window (an X
+# Streamed viewing under a GPU memory budget, in a real window (an X
 # display: $DISPLAY, else Xvfb started here). For each MODEL (an .spt file), RUNS runs
 # of
 #   spt view MODEL --screenshot … --frames FRAMES --size 1024x768 --hide-panel

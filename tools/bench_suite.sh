@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The whole speed-against-error suite (issue #6): `spt bench` on the default model, the
+# The whole speed-against-error suite: `spt bench` on the default model, the
 # shared scans (bunny, dragon40k, terrain_utm, kinect_rgb) and the Lucy-size generated
 # model, each into docs/bench/<model>/ (results.csv, summary.md, speed_vs_error.png),
 # then the README's performance section (between the bench markers) rewritten from

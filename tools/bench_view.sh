@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Viewer benchmark (issue #5) on the Lucy-size generated model, in a real window (an
+# Viewer benchmark on the Lucy-size generated model, in a real window (an
 # X display: $DISPLAY, else Xvfb started here):
 #   - launch to first frame, as .spt (RUNS runs, median) and as PLY (converted in the
 #     background; one run), read from spt view's own log;

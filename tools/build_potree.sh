@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds PotreeConverter 2 from its public source, for the conversion comparison of
-# issue 15 (tools/bench_convert_scale.sh). Its code stays out of this repository: it is
+# tools/bench_convert_scale.sh. Its code stays out of this repository: it is
 # cloned (or taken from POTREE_SRC, a checkout) into target/potree and built there.
 #
 #   tools/build_potree.sh            # prints the path of the PotreeConverter binary

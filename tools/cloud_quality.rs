@@ -1,4 +1,4 @@
-//! A face-less cloud's splats against a triangulation of the same points (issue 13):
+//! A face-less cloud's splats against a triangulation of the same points:
 //! per view and as medians, FLIP and SSIM of the splats (leaves only, or at
 //! `--error-px E` with level of detail), FLIP of the
 //! triangulation at 1×, hole rate (see `spt::apps::cloud_quality`); for a sensor frame,
@@ -16,7 +16,7 @@ use std::path::PathBuf;
 use clap::Parser;
 use spt::apps::cloud_quality::{CloudAndReference, Triangulation, ViewImages, measure};
 use spt::apps::stats::quantile;
-use spt::render::perceptual::flip_heat_map;
+use spt::eval::perceptual::flip_heat_map;
 use spt::render::{Gpu, Renderer, Settings};
 
 #[derive(Parser)]
@@ -89,12 +89,12 @@ fn main() -> anyhow::Result<()> {
                 ("mesh", &images.mesh),
                 ("reference", &images.reference),
             ] {
-                if let Err(e) = image.save_png(&dir.join(format!("view{k}_{name}.png"))) {
+                if let Err(e) = write_png(&dir.join(format!("view{k}_{name}.png")), image) {
                     eprintln!("view {k}: {e:#}");
                 }
             }
             let heat = flip_heat_map(&images.splats, &images.reference);
-            if let Err(e) = heat.save_png(&dir.join(format!("view{k}_flip.png"))) {
+            if let Err(e) = write_png(&dir.join(format!("view{k}_flip.png")), &heat) {
                 eprintln!("view {k}: {e:#}");
             }
         }
@@ -139,4 +139,9 @@ fn main() -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// Writes a rendered image as PNG.
+fn write_png(path: &std::path::Path, image: &spt::render::Image) -> anyhow::Result<()> {
+    spt::io::png::write_png(path, image.width, image.height, &image.rgba)
 }

@@ -1,4 +1,4 @@
-//! Splat image quality against the mesh, view by view (issue 12): FLIP and SSIM of the
+//! Splat image quality against the mesh, view by view: FLIP and SSIM of the
 //! splats (leaves only, without the prefilter, at ε = 1 px) and of the aliased mesh,
 //! against the mesh rendered at 4×4 the size and averaged in linear light; and, with
 //! `--crops`, each image (`view{k}_image{i}.png`, i in the order printed), the FLIP maps,
@@ -21,8 +21,9 @@ use std::path::PathBuf;
 
 use clap::Parser;
 use spt::apps::stats::quantile;
-use spt::render::perceptual::{downsample, flip_map, flip_mean, ssim_mean};
-use spt::render::{Camera, Gpu, Image, Renderer, Scene, Settings};
+use spt::eval::perceptual::{downsample, flip_map, flip_mean, ssim_mean};
+use spt::render::{Camera, Gpu, Image, Renderer, Settings};
+use spt::tree::scene::Scene;
 
 #[derive(Parser)]
 struct Args {

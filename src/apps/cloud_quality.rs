@@ -1,4 +1,4 @@
-//! How faithfully a face-less cloud's splats draw what was scanned (issue 13): against
+//! How faithfully a face-less cloud's splats draw what was scanned: against
 //! a triangulation of the same points that needs no normals ([`crate::io::triangulate`]),
 //! rendered by the mesh pass at 4×4 the size and averaged in linear light. Per orbit view
 //! (elevation 20°): FLIP and SSIM of the splats (leaves only) over the pixels either
@@ -9,13 +9,14 @@ use std::path::Path;
 
 use anyhow::Context;
 
+use crate::eval::metrics::compare;
+use crate::eval::perceptual::{downsample, flip_mean, ssim_mean};
 use crate::io::Geometry;
-use crate::io::model::read_model;
+use crate::io::formats::read_model;
 use crate::io::triangulate::{sensor_grid, terrain};
-use crate::render::metrics::compare;
-use crate::render::perceptual::{downsample, flip_mean, ssim_mean};
-use crate::render::{Camera, Image, OrbitAxes, Renderer, Scene, Settings};
+use crate::render::{Camera, Image, OrbitAxes, Renderer, Settings};
 use crate::surfel::leaf_surfels;
+use crate::tree::scene::Scene;
 
 /// How a cloud is triangulated for its reference.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -172,7 +173,7 @@ pub fn measure(
     let mut out = Vec::new();
     for k in 0..views {
         let azimuth = 360.0 * k as f64 / views as f64;
-        // About z, as issue 13 measured them (a sensor frame's own axes would look
+        // About z, as docs/point-clouds.md measures them (a sensor frame's own axes would look
         // from its sensor).
         let orbit = [azimuth, 20.0, distance];
         let camera = Camera::orbit_about(OrbitAxes::Z_UP, models.cloud.meta(), orbit, fov);

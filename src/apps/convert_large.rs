@@ -10,7 +10,7 @@ use std::time::Instant;
 use crate::apps::progress::Stage;
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::{count, walls};
-use crate::io::stream::ModelStream;
+use crate::io::formats::ModelStream;
 use crate::tree::out_of_core::{BYTES_PER_JOB_POINT, Options, Progress, build_file};
 
 /// Bytes per point the in-memory build takes at its peak on a cloud (measured: 14 M

@@ -4,7 +4,8 @@
 use anyhow::bail;
 use glam::{DVec3, Vec3};
 
-use crate::render::{Camera, Culling, Mode, OrbitAxes, Scene, Settings};
+use crate::render::{Camera, Culling, Mode, OrbitAxes, Settings};
+use crate::tree::scene::Scene;
 
 /// The options `spt render` (and the viewer's screenshots) take.
 #[derive(Debug, Clone, clap::Args)]
@@ -159,5 +160,27 @@ impl RenderArgs {
             }
             _ => Camera::framed(meta, scene.index.chunks(), fov, aspect),
         })
+    }
+}
+
+/// `--mode`'s values: the engine's display modes by their names.
+impl clap::ValueEnum for Mode {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Mode::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()).help(self.description()))
+    }
+}
+
+/// `--culling`'s values: the engine's culling strategies by their names.
+impl clap::ValueEnum for Culling {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Culling::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()).help(self.description()))
     }
 }

@@ -8,10 +8,9 @@ use serde::Serialize;
 
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::{bytes, count, readable};
+use crate::io::formats::read_model;
 use crate::io::las::LasSummary;
-use crate::io::model::{Model, Source, read_model};
-use crate::io::ply::Header;
-use crate::io::ply::fields::Plan;
+use crate::io::model::{ElementSummary, Model};
 use crate::io::rebase::MAX_OFFSET;
 use crate::io::{Bounds, GeometryStats};
 use crate::surfel::{LeafSurfels, NormalsTurned, SurfelStats, leaf_surfels};
@@ -28,13 +27,6 @@ fn estimated_normals(turned: NormalsTurned) -> &'static str {
             "toward the sensor at the file's origin (a frame's: drawn two-sided)"
         }
     }
-}
-
-#[derive(Debug, Serialize)]
-pub struct ElementInfo {
-    pub name: String,
-    pub count: u64,
-    pub properties: Vec<String>,
 }
 
 #[derive(Debug, Serialize)]
@@ -79,7 +71,7 @@ pub struct ModelInfo {
     /// Elements of a PLY file that the reader skips (neither the vertices nor the faces
     /// or triangle strips it reads).
     pub skipped_elements: Vec<String>,
-    pub elements: Vec<ElementInfo>,
+    pub elements: Vec<ElementSummary>,
     /// Bounding box of the finite vertices, in the file's coordinates (exact f64).
     pub bounds: Bounds,
     /// Bounding box of the vertices that are not outliers (`bounds` when none is).
@@ -103,46 +95,16 @@ impl ModelInfo {
         let (radius_min, radius_median, radius_max) = leaves.radius_range().unwrap_or_default();
         let load_seconds = model.load_time.as_secs_f64();
         let g = &model.geometry;
-        let skipped_elements = match &model.source {
-            Source::Ply(h) => skipped_elements(h),
-            Source::Las(_) => Vec::new(),
-        };
-        let (format, comments, obj_info, elements, las) = match &model.source {
-            Source::Ply(h) => (
-                format!("PLY {} {}", h.encoding.name(), h.version),
-                h.comments.clone(),
-                h.obj_info.clone(),
-                h.elements
-                    .iter()
-                    .map(|e| ElementInfo {
-                        name: e.name.clone(),
-                        count: e.count,
-                        properties: e.properties.iter().map(|p| p.declaration()).collect(),
-                    })
-                    .collect(),
-                None,
-            ),
-            Source::Las(s) => {
-                let kind = if s.compressed { "LAZ" } else { "LAS" };
-                let format = format!("{kind} {}, point format {}", s.version, s.point_format);
-                (
-                    format,
-                    Vec::new(),
-                    Vec::new(),
-                    Vec::new(),
-                    Some((**s).clone()),
-                )
-            }
-        };
+        let s = &model.summary;
         Ok(ModelInfo {
             file: path.display().to_string(),
             bytes: model.file_bytes,
-            format,
-            comments,
-            obj_info,
-            elements,
-            las,
-            skipped_elements,
+            format: s.format.clone(),
+            comments: s.comments.clone(),
+            obj_info: s.obj_info.clone(),
+            elements: s.elements.clone(),
+            las: s.las.clone(),
+            skipped_elements: s.skipped_elements.clone(),
             bounds: g.bounds,
             core: g.core,
             origin: g.origin.to_array(),
@@ -347,19 +309,6 @@ impl ModelInfo {
 }
 
 /// The names of the elements of `h` that the PLY reader does not use.
-fn skipped_elements(h: &Header) -> Vec<String> {
-    let Ok(plan) = Plan::new(h) else {
-        return Vec::new();
-    };
-    let used = [Some(plan.vertex_element), plan.faces.map(|(f, _)| f)];
-    h.elements
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| !used.contains(&Some(*i)))
-        .map(|(_, e)| e.name.clone())
-        .collect()
-}
-
 /// What a LAS file says of itself: software, points by return and class, intensity,
 /// scale and offset, CRS, colours.
 fn las_lines(s: &LasSummary, out: &mut String) {

@@ -8,8 +8,9 @@ use anyhow::Context;
 pub use crate::apps::frame_args::RenderArgs;
 use crate::apps::stats::Summary;
 use crate::apps::text::count;
-use crate::render::{Gpu, Renderer, Scene};
+use crate::render::{Gpu, Renderer};
 use crate::tree::report::Silent;
+use crate::tree::scene::Scene;
 use crate::tree::select::error_per_distance;
 
 pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> {
@@ -67,7 +68,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     // Under a budget the file was opened without its checks: they run now, before the
     // picture is written.
     scene.check_file()?;
-    image.save_png(output)?;
+    crate::io::png::write_png(output, image.width, image.height, &image.rgba)?;
     if stats.coarsened {
         let px = stats.eps / error_per_distance(1.0, camera.fov_y, args.size.1);
         println!(

@@ -13,9 +13,9 @@ use serde::Serialize;
 
 use crate::io::bounds::Bounds;
 use crate::io::ply::faces::Faces;
-use crate::io::ply::fields::{ColumnRows, Field, VertexFields, VertexRows};
-use crate::io::ply::scalar::Scalar;
 use crate::io::rebase;
+use crate::io::rows::{ColumnRows, Field, VertexFields, VertexRows};
+use crate::io::scalar::Scalar;
 
 /// A model ready for the surfel builder.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,17 +1,22 @@
-//! Model files in: PLY reading and writing, LAS and LAZ reading ([`model::read_model`]
-//! takes any of them; [`stream::ModelStream`] reads any of them a batch at a time), and
-//! the rebased [`Geometry`] they produce.
+//! Model files in: the formats ([`formats::FORMATS`]: PLY, LAS and LAZ) fill one
+//! format-neutral row model ([`rows`]), from which the rebased [`Geometry`] is built;
+//! [`formats::read_model`] reads a whole file of any of them, [`formats::ModelStream`] a
+//! batch at a time. Also PLY writing, PNG writing, and atomic writes.
 //! This layer imports no other module of the crate (`.spt` files, which hold trees,
 //! live in [`crate::tree::spt_file`]).
 
 pub mod atomic;
 pub mod bounds;
+pub mod format;
+pub mod formats;
 pub mod geometry;
 pub mod las;
 pub mod model;
 pub mod ply;
+pub mod png;
 pub mod rebase;
-pub mod stream;
+pub mod rows;
+pub mod scalar;
 pub(crate) mod syncing_file;
 pub mod torus_knot;
 pub mod triangulate;

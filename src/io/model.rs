@@ -1,26 +1,48 @@
-//! A model file of any format the engine reads (PLY, LAS, LAZ), told apart by its first
-//! bytes, as one [`Model`]: the rebased geometry and what the format says of itself.
+//! A model file read, whatever its format, as one [`Model`]: the rebased geometry and
+//! what the format says of the file ([`Summary`]); or why it could not be read
+//! ([`ModelError`]).
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use super::las::{LasError, LasSummary, is_las, read_las};
-use super::ply::header::Header;
-use super::ply::{PlyError, read_ply};
+use serde::Serialize;
+
+use super::las::{LasError, LasSummary};
+use super::ply::PlyError;
 use super::{Geometry, GeometryStats};
 
-/// What the file's format says of it.
-#[derive(Debug, Clone)]
-pub enum Source {
-    Ply(Header),
-    Las(Box<LasSummary>),
+/// What a file says of itself, in terms every format fills (those a format does not
+/// have stay empty).
+#[derive(Debug, Clone, Default)]
+pub struct Summary {
+    /// The format, its encoding and version: `PLY binary_little_endian 1.0`,
+    /// `LAZ 1.4, point format 6`.
+    pub format: String,
+    /// Free-text comments of the header.
+    pub comments: Vec<String>,
+    /// PLY's `obj_info` lines.
+    pub obj_info: Vec<String>,
+    /// The file's elements (a PLY file's `element` lines) as declared.
+    pub elements: Vec<ElementSummary>,
+    /// Elements the reader skips (neither the vertices nor the faces it reads).
+    pub skipped_elements: Vec<String>,
+    /// What a LAS or LAZ file says of itself (software, counts by class and return,
+    /// scale, offset, CRS).
+    pub las: Option<LasSummary>,
+}
+
+/// One element of a file: its name, row count and property declarations.
+#[derive(Debug, Clone, Serialize)]
+pub struct ElementSummary {
+    pub name: String,
+    pub count: u64,
+    pub properties: Vec<String>,
 }
 
 /// A model file read.
 #[derive(Debug, Clone)]
 pub struct Model {
-    pub source: Source,
+    pub summary: Summary,
     pub geometry: Geometry,
     pub stats: GeometryStats,
     pub file_bytes: u64,
@@ -38,38 +60,12 @@ pub enum ModelError {
     Io { path: PathBuf, message: String },
 }
 
-/// Whether `path` is a LAS or LAZ file (it starts with `LASF`): the other files are
-/// read as PLY.
-pub fn is_las_file(path: &Path) -> Result<bool, ModelError> {
-    let mut magic = [0u8; 4];
-    let n = std::fs::File::open(path)
-        .and_then(|mut f| f.read(&mut magic))
-        .map_err(|e| ModelError::Io {
+impl ModelError {
+    /// The file at `path` could not be read: `error`.
+    pub fn io(path: &Path, error: &std::io::Error) -> ModelError {
+        ModelError::Io {
             path: path.to_owned(),
-            message: e.to_string(),
-        })?;
-    Ok(is_las(&magic[..n]))
-}
-
-/// Reads a PLY, LAS or LAZ file (LAS and LAZ start with `LASF`; anything else is read
-/// as PLY, whose reader says what is wrong with a file that is neither).
-pub fn read_model(path: &Path) -> Result<Model, ModelError> {
-    if is_las_file(path)? {
-        let m = read_las(path)?;
-        return Ok(Model {
-            source: Source::Las(Box::new(m.summary)),
-            geometry: m.geometry,
-            stats: m.stats,
-            file_bytes: m.file_bytes,
-            load_time: m.load_time,
-        });
+            message: error.to_string(),
+        }
     }
-    let m = read_ply(path)?;
-    Ok(Model {
-        source: Source::Ply(m.header),
-        geometry: m.geometry,
-        stats: m.stats,
-        file_bytes: m.file_bytes,
-        load_time: m.load_time,
-    })
 }

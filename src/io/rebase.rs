@@ -22,7 +22,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::bounds::Bounds;
-use crate::io::ply::fields::VertexRows;
+use crate::io::rows::VertexRows;
 
 /// Largest offset from the origin, per axis, that a kept vertex may have: 2⁶⁰ ≈ 1.15·10¹⁸
 /// model units (the square of a distance between two such points still fits an f32).

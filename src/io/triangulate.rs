@@ -1,5 +1,5 @@
 //! Triangle meshes of face-less clouds, made without normals, for reference images: what
-//! a cloud's splats are measured against (issue 13), drawn by the mesh pass.
+//! a cloud's splats are measured against, drawn by the mesh pass.
 //!
 //! * [`sensor_grid`]: an organised cloud (an RGB-D frame: one row per pixel, row-major,
 //!   invalid pixels dropped by the reader) joins neighbouring valid pixels. Each 2×2 block

@@ -8,6 +8,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use super::bindings::{Slot, cull as slots};
 use super::gpu_scene::Share;
 use super::shaders::{WORKGROUP_SIZE, module};
 
@@ -98,9 +99,9 @@ impl Compaction {
 }
 
 /// A storage-buffer entry of bind group 1, visible to the compute stage.
-fn storage(binding: u32, read_only: bool, min_size: u64) -> wgpu::BindGroupLayoutEntry {
+fn storage(slot: Slot, read_only: bool, min_size: u64) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
-        binding,
+        binding: slot.binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Storage { read_only },
@@ -120,16 +121,16 @@ pub(super) struct CullPass {
 
 impl CullPass {
     pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> CullPass {
-        let node = std::mem::size_of::<crate::tree::NodeRecord>() as u64;
-        let shape = std::mem::size_of::<crate::tree::record::SplatShape>() as u64;
+        let node = size_of::<crate::tree::NodeRecord>() as u64;
+        let shape = size_of::<crate::surfel::shape::SplatShape>() as u64;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull"),
             entries: &[
-                storage(0, true, node),
-                storage(1, false, 4),
-                storage(2, false, std::mem::size_of::<Compaction>() as u64),
-                storage(3, true, std::mem::size_of::<TestRange>() as u64),
-                storage(4, true, shape),
+                storage(slots::NODES, true, node),
+                storage(slots::SURVIVORS, false, size_of::<u32>() as u64),
+                storage(slots::COMPACTION, false, size_of::<Compaction>() as u64),
+                storage(slots::RANGES, true, size_of::<TestRange>() as u64),
+                storage(slots::SHAPES, true, shape),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

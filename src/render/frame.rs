@@ -5,7 +5,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
 use super::camera::{Camera, heights};
-use super::settings::{DEPTH_PUSH, Mode, PREFILTER_PX, Settings};
+use super::settings::{DEPTH_PUSH, PREFILTER_PX, Settings};
 use crate::tree::TreeMeta;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl`, field for field (the WGSL file
@@ -52,7 +52,7 @@ pub(super) fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("frame"),
         entries: &[wgpu::BindGroupLayoutEntry {
-            binding: 0,
+            binding: super::bindings::FRAME.binding,
             visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Uniform,
@@ -65,7 +65,7 @@ pub(super) fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
 }
 
 /// The sRGB transfer function, inverted: an sRGB-encoded value in 0–1 to linear.
-pub(super) fn srgb_to_linear(c: f32) -> f32 {
+pub fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {
         c / 12.92
     } else {
@@ -74,7 +74,7 @@ pub(super) fn srgb_to_linear(c: f32) -> f32 {
 }
 
 /// The sRGB transfer function: a linear value in 0–1 to its sRGB encoding in 0–1.
-pub(super) fn linear_to_srgb(c: f32) -> f32 {
+pub fn linear_to_srgb(c: f32) -> f32 {
     if c <= 0.003_130_8 {
         12.92 * c
     } else {
@@ -97,19 +97,7 @@ impl FrameUniform {
         let aspect = width as f64 / height as f64;
         let near = camera.near_plane(meta, aspect);
         let tan_y = (camera.fov_y * 0.5).tan();
-        let mode = match settings.mode {
-            Mode::Shaded => 0,
-            Mode::Levels => 1,
-            Mode::Normals => 2,
-            Mode::Radius => 3,
-            Mode::Points => 4,
-            Mode::Mesh => 5,
-            Mode::Edl => 6,
-            Mode::Elevation => 7,
-            Mode::Classification => 8,
-            Mode::Intensity => 9,
-            Mode::Returns => 10,
-        };
+        let mode = settings.mode as u32;
         let light = settings.light.normalize_or(Vec3::Z);
         let [r, g, b] = settings.background.map(srgb_to_linear);
         let (elevation_up, elevation_range) = heights(meta);

@@ -11,17 +11,16 @@
 //!
 //! [`Renderer`] composes them.
 
+pub mod bindings;
 pub mod camera;
 mod counters;
 mod cull;
-mod frame;
+pub mod frame;
 mod fullscreen;
 mod gbuffer;
 pub mod gpu;
 mod gpu_scene;
 mod mesh;
-pub mod metrics;
-pub mod perceptual;
 mod plan;
 mod readback;
 pub mod renderer;
@@ -29,14 +28,15 @@ pub mod residency;
 pub mod settings;
 mod shaders;
 mod shading;
+mod splat_path;
 mod splats;
 mod streamed;
 mod targets;
 mod upload;
 
-pub use crate::tree::scene::{MeshData, Scene};
 pub use camera::{Camera, OrbitAxes};
 pub use counters::{CounterReadback, GpuCounters};
+pub use frame::{linear_to_srgb, srgb_to_linear};
 pub use fullscreen::{fragment_texture, fullscreen_pipeline};
 pub use gpu::Gpu;
 pub use gpu_scene::{GpuScene, MeshUpload, SliceUpload};

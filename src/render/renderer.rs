@@ -25,6 +25,7 @@ use super::plan::{EncodedFrame, plan};
 use super::readback;
 use super::settings::{Culling, Mode, Settings};
 use super::shading::ShadingPass;
+use super::splat_path::SplatPath;
 use super::splats::SplatPasses;
 use super::targets::{FrameTargets, check_size, stamp};
 use super::upload;
@@ -148,46 +149,15 @@ impl Renderer {
         let clear_end = one_pass.then_some(stamp::VISIBILITY_END);
         let clear_stamps = targets.timestamps(Some(stamp::START), clear_end);
         g.pass(encoder, "clear", Writes::All, true, clear_stamps);
-        let pipelines = self.splats.of(compute);
-        let draw = |encoder: &mut wgpu::CommandEncoder, label, writes, pipeline, end| {
-            let mut pass = g.pass(encoder, label, writes, false, targets.timestamps(None, end));
-            let depth = (writes == Writes::Attributes).then_some(&targets.depth_bind);
-            let binds = (&targets.frame_bind, depth);
-            self.splats
-                .draw(&mut pass, pipeline, binds, &shares, compute);
-        };
-        let attributes_end = Some(stamp::ATTRIBUTES_END);
         match (settings.mode, &gpu_scene.mesh) {
             (Mode::Mesh, Some(mesh)) => {
-                let stamps = targets.timestamps(None, attributes_end);
+                let stamps = targets.timestamps(None, Some(stamp::ATTRIBUTES_END));
                 self.mesh
                     .encode(encoder, g, &targets.frame_bind, mesh, stamps)
             }
-            (Mode::Points, _) => draw(
-                encoder,
-                "points",
-                Writes::All,
-                &pipelines.points,
-                attributes_end,
-            ),
-            _ => {
-                let visibility_end = Some(stamp::VISIBILITY_END);
-                draw(
-                    encoder,
-                    "visibility",
-                    Writes::Depth,
-                    &pipelines.visibility,
-                    visibility_end,
-                );
-                let attributes = pipelines.attributes(settings.mode);
-                draw(
-                    encoder,
-                    "attributes",
-                    Writes::Attributes,
-                    attributes,
-                    attributes_end,
-                );
-            }
+            _ => self
+                .splats
+                .encode(encoder, targets, &shares, settings.mode, compute),
         }
         self.shading.encode(encoder, targets);
         if let Some((set, resolve)) = &targets.queries {
@@ -256,7 +226,7 @@ impl Renderer {
         range: std::ops::Range<usize>,
     ) -> SliceUpload {
         let attributes = scene.attributes().get(range.clone()).unwrap_or(&[]);
-        let max_ranges = super::streamed::max_ranges(scene, &range);
+        let max_ranges = upload::max_ranges(scene, &range);
         let slice = (
             &scene.nodes()[range.clone()],
             &scene.shapes()[range.clone()],

@@ -1,4 +1,4 @@
-//! Which slices of a list stay on the GPU under a memory budget (issue 16): the policy
+//! Which slices of a list stay on the GPU under a memory budget: the policy
 //! alone, without the GPU, so that tests can drive it.
 //!
 //! After each frame the caller hands over the slices the frame's asked ε wanted

@@ -2,44 +2,147 @@
 
 use glam::{DVec3, Vec3};
 
-/// Display modes (DESIGN.md §7b).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+/// Display modes (DESIGN.md §7b). The discriminant is the mode's number in the frame
+/// uniform; WGSL gets each as `MODE_<NAME>` from [`Mode::wgsl_constants`].
+#[repr(u32)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Mode {
     /// Real colours (grey when the model has none), lit.
-    Shaded,
+    Shaded = 0,
     /// Colour by tree level.
-    Levels,
+    Levels = 1,
     /// View-space normals as colours.
-    Normals,
+    Normals = 2,
     /// Colour by splat radius (blue small, red large).
-    Radius,
+    Radius = 3,
     /// Plain points: no blending, nearest splat wins.
-    Points,
+    Points = 4,
     /// The mesh the model came from (reference; needs a PLY with faces).
-    Mesh,
+    Mesh = 5,
     /// Eye-dome lighting (Boucheny 2009): the colours, unlit, darkened where the depth
     /// steps away from the eye around a pixel; shape without normals.
-    Edl,
+    Edl = 6,
     /// Colour by height over the model's range (a ramp from low blue to high red), lit.
-    Elevation,
+    Elevation = 7,
     /// LiDAR: colour by ASPRS class (ground brown, vegetation greens, buildings red,
     /// water blue…), lit.
-    Classification,
+    Classification = 8,
     /// LiDAR: intensity as grey between the model's 1st and 99th percentiles, lit.
-    Intensity,
+    Intensity = 9,
     /// LiDAR: colour by return (single yellow, first green, intermediate blue, last
     /// red), lit.
-    Returns,
+    Returns = 10,
+}
+
+impl Mode {
+    /// Every mode, in the order of their numbers.
+    pub const ALL: [Mode; 11] = [
+        Mode::Shaded,
+        Mode::Levels,
+        Mode::Normals,
+        Mode::Radius,
+        Mode::Points,
+        Mode::Mesh,
+        Mode::Edl,
+        Mode::Elevation,
+        Mode::Classification,
+        Mode::Intensity,
+        Mode::Returns,
+    ];
+
+    /// The mode's name on the command line and in WGSL (`MODE_` + upper case).
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Shaded => "shaded",
+            Mode::Levels => "levels",
+            Mode::Normals => "normals",
+            Mode::Radius => "radius",
+            Mode::Points => "points",
+            Mode::Mesh => "mesh",
+            Mode::Edl => "edl",
+            Mode::Elevation => "elevation",
+            Mode::Classification => "classification",
+            Mode::Intensity => "intensity",
+            Mode::Returns => "returns",
+        }
+    }
+
+    /// What the mode shows, in one line.
+    pub fn description(self) -> &'static str {
+        match self {
+            Mode::Shaded => "Real colours (grey when the model has none), lit",
+            Mode::Levels => "Colour by tree level",
+            Mode::Normals => "View-space normals as colours",
+            Mode::Radius => "Colour by splat radius (blue small, red large)",
+            Mode::Points => "Plain points: no blending, nearest splat wins",
+            Mode::Mesh => "The mesh the model came from (reference; needs a PLY with faces)",
+            Mode::Edl => {
+                "Eye-dome lighting (Boucheny 2009): the colours, unlit, darkened where the \
+                 depth steps away from the eye around a pixel; shape without normals"
+            }
+            Mode::Elevation => {
+                "Colour by height over the model's range (a ramp from low blue to high red), lit"
+            }
+            Mode::Classification => {
+                "LiDAR: colour by ASPRS class (ground brown, vegetation greens, buildings \
+                 red, water blue…), lit"
+            }
+            Mode::Intensity => {
+                "LiDAR: intensity as grey between the model's 1st and 99th percentiles, lit"
+            }
+            Mode::Returns => {
+                "LiDAR: colour by return (single yellow, first green, intermediate blue, \
+                 last red), lit"
+            }
+        }
+    }
+
+    /// The WGSL constants of every mode: `const MODE_SHADED: u32 = 0u;` …
+    pub fn wgsl_constants() -> String {
+        Mode::ALL
+            .iter()
+            .map(|m| {
+                let name = m.name().to_uppercase();
+                format!("const MODE_{name}: u32 = {}u;\n", *m as u32)
+            })
+            .collect()
+    }
 }
 
 /// How the splats of the prefix are culled (DESIGN.md §6).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Culling {
     /// In the vertex stage: every node of the prefix is drawn as a quad; culled ones
     /// collapse to a point outside the clip volume.
     Vertex,
     /// A compute pass tests each node once and compacts the survivors into an indirect draw.
     Compute,
+}
+
+impl Culling {
+    pub const ALL: [Culling; 2] = [Culling::Vertex, Culling::Compute];
+
+    /// The strategy's name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Culling::Vertex => "vertex",
+            Culling::Compute => "compute",
+        }
+    }
+
+    /// What the strategy does, in one line.
+    pub fn description(self) -> &'static str {
+        match self {
+            Culling::Vertex => {
+                "In the vertex stage: every node of the prefix is drawn as a quad; culled \
+                 ones collapse to a point outside the clip volume"
+            }
+            Culling::Compute => {
+                "A compute pass tests each node once and compacts the survivors into an \
+                 indirect draw"
+            }
+        }
+    }
 }
 
 /// How a frame is drawn.

@@ -12,7 +12,7 @@
 //! broken shader fails `cargo test` without a GPU.
 
 use super::settings::Mode;
-use crate::tree::record::{NO_CLIP, WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
+use crate::surfel::clip::{NO_CLIP, WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
 
 /// Threads per workgroup of the compute passes (`@workgroup_size(WORKGROUP_SIZE)`).
 pub const WORKGROUP_SIZE: u32 = 256;
@@ -107,6 +107,7 @@ pub fn constants_wgsl() -> String {
     for (name, value) in values {
         out.push_str(&format!("const {name}: u32 = {value}u;\n"));
     }
+    out.push_str(&Mode::wgsl_constants());
     out
 }
 

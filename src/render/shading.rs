@@ -3,6 +3,7 @@
 //! a movable light, two-sided); background where nothing contributed. Written linear
 //! into the sRGB output. WGSL: `shaders/shade.wgsl`.
 
+use super::bindings::{Slot, shade};
 use super::fullscreen::{fragment_texture, fullscreen_pipeline};
 use super::gbuffer::{GBuffer, store};
 use super::shaders::module;
@@ -19,11 +20,11 @@ impl ShadingPass {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gbuffer"),
             entries: &[
-                fragment_texture(0),
-                fragment_texture(1),
-                fragment_texture(2),
+                fragment_texture(shade::COLOR_SUM.binding),
+                fragment_texture(shade::NORMAL_SUM.binding),
+                fragment_texture(shade::COVERAGE.binding),
                 // The depth, as an unfilterable float texture (see shade.wgsl).
-                fragment_texture(3),
+                fragment_texture(shade::DEPTH.binding),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -39,18 +40,18 @@ impl ShadingPass {
 
     /// The bind group of `gbuffer`'s sums for this pass.
     pub fn bind(&self, device: &wgpu::Device, gbuffer: &GBuffer) -> wgpu::BindGroup {
-        let view = |binding, view| wgpu::BindGroupEntry {
-            binding,
+        let view = |slot: Slot, view| wgpu::BindGroupEntry {
+            binding: slot.binding,
             resource: wgpu::BindingResource::TextureView(view),
         };
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("gbuffer"),
             layout: &self.layout,
             entries: &[
-                view(0, &gbuffer.color_view),
-                view(1, &gbuffer.normal_view),
-                view(2, &gbuffer.coverage_view),
-                view(3, &gbuffer.depth_view),
+                view(shade::COLOR_SUM, &gbuffer.color_view),
+                view(shade::NORMAL_SUM, &gbuffer.normal_view),
+                view(shade::COVERAGE, &gbuffer.coverage_view),
+                view(shade::DEPTH, &gbuffer.depth_view),
             ],
         })
     }

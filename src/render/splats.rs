@@ -18,14 +18,18 @@ use std::sync::OnceLock;
 use wgpu::CompareFunction::{Greater, GreaterEqual};
 
 use super::Gpu;
+use super::bindings::{Slot, splat as slots};
 use super::cull::Compaction;
 use super::fullscreen::fragment_texture;
-use super::gbuffer::{ADD, GBuffer, color_targets, depth_state, target};
+use super::gbuffer::{ADD, GBuffer, Writes, color_targets, depth_state, target};
 use super::gpu_scene::Share;
 use super::settings::Mode;
 use super::shaders::{ColorSource, QuadReach, SplatClass, module};
+use super::splat_path::SplatPath;
+use super::targets::{FrameTargets, stamp};
+use crate::io::geometry::PointAttributes;
+use crate::surfel::shape::SplatShape;
 use crate::tree::NodeRecord;
-use crate::tree::record::{PointAttributes, SplatShape};
 
 /// The splat pipelines of one culling strategy. Pass 2 draws two kinds of splat (WGSL
 /// `SPLAT_CLASS`, `on_outline` in `shaders/shape.wgsl`) with two pipelines: those whose
@@ -60,9 +64,9 @@ pub(super) struct SplatPasses {
 const NO_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 
 /// A read-only storage buffer of bind group 1 for the vertex stage.
-fn vertex_storage(binding: u32, min_size: u64) -> wgpu::BindGroupLayoutEntry {
+fn vertex_storage(slot: Slot, min_size: u64) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
-        binding,
+        binding: slot.binding,
         visibility: wgpu::ShaderStages::VERTEX,
         ty: wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Storage { read_only: true },
@@ -212,9 +216,9 @@ impl SplatPipelines {
 impl SplatPasses {
     pub fn new(gpu: &Gpu, frame_layout: &wgpu::BindGroupLayout) -> SplatPasses {
         let device = &gpu.device;
-        let node = std::mem::size_of::<NodeRecord>() as u64;
-        let shape = std::mem::size_of::<SplatShape>() as u64;
-        let attribute = std::mem::size_of::<PointAttributes>() as u64;
+        let node = size_of::<NodeRecord>() as u64;
+        let shape = size_of::<SplatShape>() as u64;
+        let attribute = size_of::<PointAttributes>() as u64;
         let bind_layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(label),
@@ -224,21 +228,24 @@ impl SplatPasses {
         let nodes_layout = bind_layout(
             "nodes",
             &[
-                vertex_storage(0, node),
-                vertex_storage(2, shape),
-                vertex_storage(3, attribute),
+                vertex_storage(slots::NODES, node),
+                vertex_storage(slots::SHAPES, shape),
+                vertex_storage(slots::ATTRIBUTES, attribute),
             ],
         );
         let compacted_layout = bind_layout(
             "compacted nodes",
             &[
-                vertex_storage(0, node),
-                vertex_storage(1, 4),
-                vertex_storage(2, shape),
-                vertex_storage(3, attribute),
+                vertex_storage(slots::NODES, node),
+                vertex_storage(slots::SURVIVORS, size_of::<u32>() as u64),
+                vertex_storage(slots::SHAPES, shape),
+                vertex_storage(slots::ATTRIBUTES, attribute),
             ],
         );
-        let depth_layout = bind_layout("pass 1 depth", &[fragment_texture(0)]);
+        let depth_layout = bind_layout(
+            "pass 1 depth",
+            &[fragment_texture(slots::VISIBLE_DEPTH.binding)],
+        );
         let pipeline_layout = |groups: &[&wgpu::BindGroupLayout]| {
             let groups: Vec<_> = groups.iter().map(|&g| Some(g)).collect();
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -289,7 +296,7 @@ impl SplatPasses {
             label: Some("pass 1 depth"),
             layout: &self.depth_layout,
             entries: &[wgpu::BindGroupEntry {
-                binding: 0,
+                binding: slots::VISIBLE_DEPTH.binding,
                 resource: wgpu::BindingResource::TextureView(&view),
             }],
         })
@@ -312,7 +319,7 @@ impl SplatPasses {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, frame_bind, &[]);
             if let Some(depth) = depth_bind {
-                pass.set_bind_group(2, depth, &[]);
+                pass.set_bind_group(slots::VISIBLE_DEPTH.group, depth, &[]);
             }
             for share in shares.iter().filter(|s| s.count > 0) {
                 if compacted {
@@ -329,12 +336,62 @@ impl SplatPasses {
     }
 
     /// The pipelines of a culling strategy.
-    pub fn of(&self, compacted: bool) -> &SplatPipelines {
+    fn of(&self, compacted: bool) -> &SplatPipelines {
         if compacted {
             &self.compacted
         } else {
             &self.direct
         }
+    }
+}
+
+/// The splat passes through the raster pipeline: each pass one render pass over the
+/// G-buffer, its pipelines drawing every slice's share.
+impl SplatPath for SplatPasses {
+    fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &FrameTargets,
+        shares: &[Share],
+        mode: Mode,
+        compacted: bool,
+    ) {
+        let pipelines = self.of(compacted);
+        let g = &targets.gbuffer;
+        let draw = |encoder: &mut wgpu::CommandEncoder, label, writes, pipeline, end| {
+            let mut pass = g.pass(encoder, label, writes, false, targets.timestamps(None, end));
+            let depth = (writes == Writes::Attributes).then_some(&targets.depth_bind);
+            let binds = (&targets.frame_bind, depth);
+            self.draw(&mut pass, pipeline, binds, shares, compacted);
+        };
+        let attributes_end = Some(stamp::ATTRIBUTES_END);
+        if mode == Mode::Points {
+            draw(
+                encoder,
+                "points",
+                Writes::All,
+                &pipelines.points,
+                attributes_end,
+            );
+            return;
+        }
+        let visibility_end = Some(stamp::VISIBILITY_END);
+        let visibility = &pipelines.visibility;
+        draw(
+            encoder,
+            "visibility",
+            Writes::Depth,
+            visibility,
+            visibility_end,
+        );
+        let attributes = pipelines.attributes(mode);
+        draw(
+            encoder,
+            "attributes",
+            Writes::Attributes,
+            attributes,
+            attributes_end,
+        );
     }
 }
 

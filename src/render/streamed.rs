@@ -18,7 +18,11 @@ impl Renderer {
     pub fn slice_bytes(&self, scene: &Scene, gpu: &GpuScene, k: usize) -> u64 {
         let range = gpu.slice_range(k);
         let has_attributes = scene.meta().has_attributes;
-        upload::slice_bytes(range.len(), has_attributes, max_ranges(scene, &range))
+        upload::slice_bytes(
+            range.len(),
+            has_attributes,
+            upload::max_ranges(scene, &range),
+        )
     }
 
     /// A scene's list planned for a GPU memory `budget` (bytes), with its first slice (the
@@ -70,15 +74,4 @@ impl Renderer {
             }
         }
     }
-}
-
-/// The chunks that overlap a node range: the most test ranges a frame hands its slice.
-pub(super) fn max_ranges(scene: &Scene, range: &std::ops::Range<usize>) -> usize {
-    let chunks = scene.index.chunks();
-    // The chunks are in list order: those overlapping start at the one holding range.start.
-    let first = chunks.partition_point(|c| c.range().end <= range.start);
-    chunks[first..]
-        .iter()
-        .take_while(|c| c.range().start < range.end)
-        .count()
 }

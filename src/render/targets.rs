@@ -94,7 +94,7 @@ impl FrameTargets {
             label: Some("frame"),
             layout: frame_layout,
             entries: &[wgpu::BindGroupEntry {
-                binding: 0,
+                binding: super::bindings::FRAME.binding,
                 resource: frame_buffer.as_entire_binding(),
             }],
         });

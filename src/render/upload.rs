@@ -6,13 +6,16 @@
 
 use wgpu::util::DeviceExt;
 
+use super::bindings::{self as slots, Slot, splat};
 use super::cull::{Compaction, CullPass, TestRange};
 use super::gpu::Gpu;
 use super::gpu_scene::{GpuScene, Slice, SliceUpload};
 use super::shaders::WORKGROUP_SIZE;
 use super::splats::SplatPasses;
+use crate::io::geometry::PointAttributes;
+use crate::surfel::shape::SplatShape;
 use crate::tree::NodeRecord;
-use crate::tree::record::{PointAttributes, SplatShape};
+use crate::tree::scene::Scene;
 
 /// Nodes per slice at most: one dispatch of 65,535 workgroups covers a slice.
 const MAX_SLICE_NODES: u64 = 65_535 * WORKGROUP_SIZE as u64;
@@ -81,12 +84,12 @@ pub(super) fn empty_gpu_scene(
 fn bind(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
-    buffers: &[(u32, &wgpu::Buffer)],
+    buffers: &[(Slot, &wgpu::Buffer)],
 ) -> wgpu::BindGroup {
     let entries: Vec<wgpu::BindGroupEntry> = buffers
         .iter()
-        .map(|(binding, b)| wgpu::BindGroupEntry {
-            binding: *binding,
+        .map(|(slot, b)| wgpu::BindGroupEntry {
+            binding: slot.binding,
             resource: b.as_entire_binding(),
         })
         .collect();
@@ -157,25 +160,45 @@ pub(super) fn upload_slice(
         direct: bind(
             device,
             &splats.nodes_layout,
-            &[(0, &nodes), (2, &shapes), (3, &attributes)],
+            &[
+                (splat::NODES, &nodes),
+                (splat::SHAPES, &shapes),
+                (splat::ATTRIBUTES, &attributes),
+            ],
         ),
         cull: bind(
             device,
             &cull.layout,
             &[
-                (0, &nodes),
-                (1, &survivors),
-                (2, &compaction),
-                (3, &ranges),
-                (4, &shapes),
+                (slots::cull::NODES, &nodes),
+                (slots::cull::SURVIVORS, &survivors),
+                (slots::cull::COMPACTION, &compaction),
+                (slots::cull::RANGES, &ranges),
+                (slots::cull::SHAPES, &shapes),
             ],
         ),
         compacted: bind(
             device,
             &splats.compacted_layout,
-            &[(0, &nodes), (1, &survivors), (2, &shapes), (3, &attributes)],
+            &[
+                (splat::NODES, &nodes),
+                (splat::SURVIVORS, &survivors),
+                (splat::SHAPES, &shapes),
+                (splat::ATTRIBUTES, &attributes),
+            ],
         ),
         compaction,
         ranges,
     })
+}
+
+/// The chunks that overlap a node range: the most test ranges a frame hands its slice.
+pub(super) fn max_ranges(scene: &Scene, range: &std::ops::Range<usize>) -> usize {
+    let chunks = scene.index.chunks();
+    // The chunks are in list order: those overlapping start at the one holding range.start.
+    let first = chunks.partition_point(|c| c.range().end <= range.start);
+    chunks[first..]
+        .iter()
+        .take_while(|c| c.range().start < range.end)
+        .count()
 }

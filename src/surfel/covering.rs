@@ -58,7 +58,7 @@ pub const RADIUS_RANK: usize = 6;
 /// Which distinct neighbour sets the radius of a cloud's point that closes no gap. On a
 /// boundary its neighbours fill a half-disc, whose 12th lies about 2 spacings out: two
 /// facing boundaries then bridge a gap of about 4 spacings, as a triangulation that
-/// drops edges over 4 median edges does (issue 13's references); the 6th left the
+/// drops edges over 4 median edges does (the references of docs/point-clouds.md); the 6th left the
 /// tile's scan shadows open (holes 0.58 % against 0.47 %).
 pub const BOUNDARY_RANK: usize = 12;
 /// Largest radius of a point that closes no gap, in neighbourhood spacings.

@@ -5,7 +5,7 @@
 //! coverings (sized to close every gap of the sampling in the splat's own plane) grew
 //! into discs tens of pixels wide along its depth edges and its far, sparse rows, and
 //! a quarter to nearly half of the image error of `kinect_rgb` came from pixels they
-//! drew where the frame's own triangulation shows the background (issue 13).
+//! drew where the frame's own triangulation shows the background.
 //!
 //! * [`angular_pitch`]: the sensor's pixel pitch, as the median angle between a sample
 //!   and its nearest neighbour seen from the sensor (neighbouring pixels of one
@@ -26,7 +26,7 @@ use super::shape::MIN_RATIO;
 /// `cloud_quality ../shared/data/kinect_rgb.ply --grid 640x480` (4 views, medians;
 /// FLIP, worst view's holes): no cap 0.2966, 0.067 %; 3 pitches 0.2593, 0.375 %; 2.5
 /// pitches 0.2519, 0.645 %; 2 pitches 0.2455, 1.34 %; 1.5 pitches 0.2327, 2.87 %. Three
-/// is the tightest that keeps every view's holes under issue 13's 0.5 %.
+/// is the tightest that keeps every view's holes under 0.5 %.
 pub const MAX_PITCHES: f32 = 3.0;
 
 /// Largest ratio of the 90th to the 10th percentile of the angles between neighbours,

@@ -7,7 +7,7 @@
 //! vertical ones, one pixel pitch apart, where W is the grid's width. The grid is the
 //! frame's own neighbourhood: it joins the samples each pixel saw to those its
 //! neighbours saw, which no nearest-neighbour search over a quantised depth can tell
-//! apart from the next depth step's (issue 13).
+//! apart from the next depth step's.
 //!
 //! [`frame_triangles`] joins the grid's neighbouring pixels ([`sensor_grid_within`]) but
 //! not across a depth edge, or a surface seen nearly edge-on ([`MAX_EDGE_PITCHES`]);

@@ -3,7 +3,7 @@
 //! planes across its depth axis. A neighbourhood that lies on one such plane sees the
 //! step's tread, not the surface: its fit faces along the depth axis whatever the
 //! surface's slope, and on a floor seen at a slant such splats read as bright dashes
-//! once lit (issue 13, `kinect_rgb`: 18,061 of its 259,847 fits). The surface's slope
+//! once lit (`kinect_rgb`: 18,061 of its 259,847 fits). The surface's slope
 //! shows only across steps, in the fits of the neighbourhoods that span two or more.
 //!
 //! * [`quantised_axis`]: the coordinate axis a frame's depth is stored along, when its

@@ -1,4 +1,4 @@
-//! Splats of a mesh's long triangles, each in its own plane (issue 13): a sensor
+//! Splats of a mesh's long triangles, each in its own plane: a sensor
 //! frame's grid ([`super::grid`]) and a terrain's TIN ([`super::terrain`]).
 //!
 //! A frame's grid triangles join neighbouring pixels. Where the sensor quantises depth,
@@ -26,9 +26,9 @@ use rayon::prelude::*;
 use super::clip::Clip;
 use super::field::{fit_color_field, fit_field, unit_rgb};
 use super::mesh::face_disks;
-use super::mesh::{RADIUS_MARGIN, triangle_terms};
 use super::ring::{clip_at_border, ring_shapes};
 use super::shape::{Fit, MIN_RATIO, Shape, tangent_frame};
+use super::triangle::{RADIUS_MARGIN, triangle_terms};
 use super::{DEFAULT_COLOR, Surfel, SurfelStats};
 use crate::io::PointAttributes;
 
@@ -150,7 +150,7 @@ impl Reach {
     /// ([`super::grid`]). Its risers are needles a sensor pixel wide; as thin as they
     /// are, they missed the pixel centres that the triangulation at 1× covers, on
     /// orbits beside the sensor (kinect_rgb's worst view's holes 0.39 → 0.86 %, over
-    /// issue 13's 0.5 %, for FLIP 0.118 → 0.108).
+    /// the bound of 0.5 %, for FLIP 0.118 → 0.108).
     pub const CORNERS: Reach = Reach {
         scale: 1.0,
         min_ratio: MIN_RATIO,
@@ -166,7 +166,7 @@ struct Corner {
 }
 
 /// The splat of one triangle (see the module doc), in the corners' unit; None when it
-/// is degenerate ([`super::mesh::DEGENERATE`]).
+/// is degenerate ([`super::triangle::DEGENERATE`]).
 fn triangle_splat(corners: [Corner; 3], colored: bool, reach: Reach) -> Option<Surfel> {
     let [a, b, c] = corners.map(|k| k.position);
     let (cross, _, degenerate) = triangle_terms(a, b, c);

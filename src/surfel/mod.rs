@@ -23,6 +23,7 @@ pub mod pca;
 pub mod ring;
 pub mod shape;
 pub mod terrain;
+pub mod triangle;
 pub mod walls;
 
 use bytemuck::{Pod, Zeroable};

@@ -32,8 +32,8 @@ use rayon::prelude::*;
 use super::Surfel;
 use super::corners::corners_by_vertex;
 use super::field::{fit_color_field, fit_field, unit_rgb};
-use super::mesh::{RADIUS_MARGIN, triangle_terms};
 use super::shape::{Clip, Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
+use super::triangle::{RADIUS_MARGIN, triangle_terms};
 
 /// Vertex v's position, normal and tangent frame, made once per vertex: each of its
 /// ring's vertices is seen from it two to four times.

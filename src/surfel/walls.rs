@@ -1,4 +1,4 @@
-//! A terrain's walls: surfels where an airborne scan has no samples (issue 13).
+//! A terrain's walls: surfels where an airborne scan has no samples.
 //!
 //! An airborne tile is a height field. Its samples lie on roofs, streets and canopies,
 //! and none on the walls between them, which the scanner sees edge-on or not at all.

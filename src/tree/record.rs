@@ -8,11 +8,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-/// The second stream of a node: its ellipse and normal field (read by the splat passes).
-pub use crate::io::PointAttributes;
-pub use crate::surfel::clip::{NO_CLIP, WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
-pub use crate::surfel::octahedral::{oct_decode, oct_encode};
-pub use crate::surfel::shape::SplatShape;
+use crate::surfel::octahedral::{oct_decode, oct_encode};
 use half::f16;
 
 /// One node of the sequential list.

@@ -1,10 +1,11 @@
 //! The fuzzer's seeds, made by the project's own writers: small meshes and clouds in
-//! every encoding, the inputs of issue 10's defects, `.spt` files built from them, and
+//! every encoding, the inputs of the defects in tests/all/hostile_inputs.rs, `.spt` files built from them, and
 //! small LAS and LAZ tiles written by the `las` crate (the tests' fixtures).
 
 use std::path::Path;
 
-use spt::io::ply::{Encoding, PlyLayout, PolyMesh, Scalar, read_ply, write_ply};
+use spt::io::ply::{Encoding, PlyLayout, PolyMesh, read_ply, write_ply};
+use spt::io::scalar::Scalar;
 use spt::surfel::leaf_surfels;
 use spt::tree::build_sequential_list;
 use spt::tree::spt_file::write_to;
@@ -137,7 +138,7 @@ fn ascii_points(header_extra: &str, rows: &[&str]) -> Vec<u8> {
     s.into_bytes()
 }
 
-#[path = "../../tests/common/las_files.rs"]
+#[path = "../../tests/all/common/las_files.rs"]
 #[allow(dead_code)]
 mod las_files;
 

@@ -8,9 +8,10 @@ use std::time::Instant;
 use indicatif::ProgressBar;
 
 use crate::apps::stats::quantile;
-use crate::render::metrics::compare;
-use crate::render::perceptual::{flip_mean, ssim_mean};
-use crate::render::{Camera, FrameTargets, GpuScene, Image, Renderer, Scene, Settings};
+use crate::eval::metrics::compare;
+use crate::eval::perceptual::{flip_mean, ssim_mean};
+use crate::render::{Camera, FrameTargets, GpuScene, Image, Renderer, Settings};
+use crate::tree::scene::Scene;
 
 /// How many frames, and where progress goes.
 pub struct Frames<'a> {
@@ -39,7 +40,7 @@ pub struct Measured {
     pub gpu_ms_p95: Option<f64>,
     /// Submit to read-back done, per frame.
     pub wall_ms_median: f64,
-    /// Means over the cameras of [`crate::render::metrics::Comparison`]'s figures.
+    /// Means over the cameras of [`crate::eval::metrics::Comparison`]'s figures.
     pub psnr_db: f64,
     pub hole_rate: f64,
     pub spill_rate: f64,

@@ -18,11 +18,10 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::render::perceptual::downsample;
+use crate::eval::perceptual::downsample;
 
-use crate::render::{
-    Camera, Culling, FrameTargets, Gpu, GpuScene, Mode, Renderer, Scene, Settings,
-};
+use crate::render::{Camera, Culling, FrameTargets, Gpu, GpuScene, Mode, Renderer, Settings};
+use crate::tree::scene::Scene;
 use measure::{Frames, Measured, Reference, measure};
 use report::{Environment, Row, Strategy, culling_name};
 

@@ -7,8 +7,8 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use super::report::{Environment, Row, Strategy, culling_name};
+use crate::io::png::write_png;
 use crate::render::Culling;
-use crate::render::metrics::save_png;
 
 const SIZE: (u32, u32) = (1200, 800);
 
@@ -155,5 +155,5 @@ pub fn write(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result<()>
         .chunks_exact(3)
         .flat_map(|p| [p[0], p[1], p[2], 255])
         .collect();
-    save_png(path, SIZE.0, SIZE.1, &rgba)
+    write_png(path, SIZE.0, SIZE.1, &rgba)
 }

@@ -3,10 +3,10 @@
 //! radii scaled by √(L / n) so that the n disks cover the area the L leaves covered,
 //! each with its own shape (ellipse, normal field and clip line over the scaled radius).
 
-use crate::render::Scene;
 use crate::surfel::shape::{Clip, SplatShape};
 use crate::tree::chunks::Chunk;
 use crate::tree::record::NodeRecord;
+use crate::tree::scene::Scene;
 use crate::tree::{SequentialList, TreeMeta};
 
 /// f16 +∞: every subset node is a root, drawn at any ε.

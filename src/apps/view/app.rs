@@ -21,7 +21,7 @@ use super::present::{Presented, Presenter};
 use super::viewer::Viewer;
 use crate::apps::stats::Summary;
 use crate::apps::text::count;
-use crate::render::metrics::save_png;
+use crate::io::png::write_png;
 use crate::render::{Gpu, Renderer};
 
 /// Sent to the event loop from other threads: something finished, redraw.
@@ -498,7 +498,7 @@ impl App {
 
 fn save_screenshot(viewer: &Viewer, path: &Path) -> anyhow::Result<()> {
     let (width, height, rgba) = viewer.read_pixels()?;
-    save_png(path, width, height, &rgba)
+    write_png(path, width, height, &rgba)
 }
 
 /// The viewer's meaning of a key, if any.

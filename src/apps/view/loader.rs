@@ -9,8 +9,9 @@ use std::thread::JoinHandle;
 use std::time::Instant;
 
 use crate::render::residency::Residency;
-use crate::render::{GpuScene, MeshUpload, Renderer, Scene, SliceUpload};
+use crate::render::{GpuScene, MeshUpload, Renderer, SliceUpload};
 use crate::tree::report::{Report, Step};
+use crate::tree::scene::Scene;
 
 /// The stage a load is in, how far along it is, and when each stage started.
 #[derive(Default)]

@@ -5,6 +5,7 @@ use std::sync::Arc;
 
 use winit::window::Window;
 
+use crate::render::bindings::present;
 use crate::render::{FrameTargets, Renderer, fragment_texture, fullscreen_pipeline, shader_module};
 
 pub struct Presenter {
@@ -72,7 +73,7 @@ impl Presenter {
         let device = &gpu.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("present"),
-            entries: &[fragment_texture(0)],
+            entries: &[fragment_texture(present::FINISHED.binding)],
         });
         let module = shader_module(device, "present");
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -180,7 +181,7 @@ impl Presenter {
             label: Some("present"),
             layout: &self.layout,
             entries: &[wgpu::BindGroupEntry {
-                binding: 0,
+                binding: present::FINISHED.binding,
                 resource: wgpu::BindingResource::TextureView(&source),
             }],
         });

@@ -9,7 +9,8 @@ use std::sync::{Arc, mpsc};
 use std::thread::JoinHandle;
 
 use crate::render::residency::Residency;
-use crate::render::{GpuScene, Renderer, Scene, SliceUpload};
+use crate::render::{GpuScene, Renderer, SliceUpload};
+use crate::tree::scene::Scene;
 
 /// Uploads asked and not arrived at most: enough to keep the uploading thread busy,
 /// few enough that a camera that moves on redirects the stream quickly.

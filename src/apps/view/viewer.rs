@@ -17,8 +17,9 @@ use crate::render::camera::bounding_sphere;
 use crate::render::residency::Residency;
 use crate::render::{
     Camera, CounterReadback, EncodedFrame, FrameTargets, GpuCounters, GpuScene, MeshUpload, Mode,
-    OrbitAxes, Renderer, Scene, Settings, SliceUpload,
+    OrbitAxes, Renderer, Settings, SliceUpload,
 };
+use crate::tree::scene::Scene;
 
 /// A model ready to draw.
 pub struct Model {

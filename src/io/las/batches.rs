@@ -9,7 +9,7 @@ use las::{PointData, PointDataBuilder, Reader};
 
 use super::{BATCH, LAZ_BATCH, LasError, fill_contained, open_checked};
 use crate::io::PointAttributes;
-use crate::io::stream::PointBatch;
+use crate::io::format::PointBatch;
 
 /// A LAS or LAZ file open for reading in batches.
 pub struct LasBatches {

@@ -22,13 +22,15 @@ use serde::Serialize;
 
 mod batches;
 mod checks;
+mod format;
 
 use super::geometry::{Geometry, GeometryStats, PointAttributes, assemble};
-use super::ply::fields::{Field, VertexFields, VertexRows};
-use super::ply::scalar::Scalar;
+use super::rows::{Field, VertexFields, VertexRows};
+use super::scalar::Scalar;
 pub use batches::LasBatches;
 pub use checks::MAX_CHUNK_BYTES;
 use checks::{check_layout, check_laz};
+pub use format::LasFormat;
 
 /// LAS points decoded at a time: a batch's records (about 2 MB) stay in cache while each
 /// field is taken out of them.
@@ -82,11 +84,6 @@ pub struct LasModel {
     pub stats: GeometryStats,
     pub file_bytes: u64,
     pub load_time: Duration,
-}
-
-/// Whether `bytes` (a file's first bytes) start as a LAS file does.
-pub fn is_las(bytes: &[u8]) -> bool {
-    bytes.starts_with(b"LASF")
 }
 
 /// Reads a LAS or LAZ file.

@@ -3,9 +3,10 @@
 
 use super::error::Problem;
 use super::faces::Faces;
-use super::fields::{ColumnRows, Plan};
+use super::fields::Plan;
 use super::header::{Element, Header, PropertyKind};
-use super::scalar::Scalar;
+use crate::io::rows::ColumnRows;
+use crate::io::scalar::Scalar;
 
 pub(super) struct Tokens<'a> {
     pub(super) data: &'a [u8],

@@ -10,9 +10,10 @@ use rayon::prelude::*;
 
 use super::error::Problem;
 use super::faces::{Faces, check_index};
-use super::fields::{ColumnRows, FixedRows, Plan};
+use super::fields::{Plan, fixed_rows};
 use super::header::{Element, Header, PropertyKind};
-use super::scalar::Scalar;
+use crate::io::rows::{ColumnRows, FixedRows};
+use crate::io::scalar::Scalar;
 
 /// Vertex rows of a binary payload: in place when their size is fixed, else decoded.
 pub enum VertexSource<'a> {
@@ -308,7 +309,7 @@ pub fn decode<'a>(data: &'a [u8], header: &Header, plan: &Plan) -> Result<Decode
                 .ok_or_else(|| truncated(e, ((data.len() - pos) / stride.max(1)) as u64))?;
             if ei == plan.vertex_element {
                 let rows = &data[pos..pos + len];
-                vertices = Some(VertexSource::Fixed(FixedRows::new(
+                vertices = Some(VertexSource::Fixed(fixed_rows(
                     rows,
                     e,
                     &plan.vertex_fields,

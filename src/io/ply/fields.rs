@@ -1,12 +1,10 @@
-//! Which properties of a PLY file the engine uses, and random access to them.
-//!
-//! The decoders hand the vertex rows to the geometry stage through [`VertexRows`]: a
-//! fixed-layout binary element is read in place ([`FixedRows`], no copy), anything else
-//! is first decoded into columns ([`ColumnRows`]).
+//! Which properties of a PLY file the engine uses ([`Plan`]), as the fields of the
+//! format-neutral row model ([`crate::io::rows`]): a fixed-layout binary element is read
+//! in place ([`fixed_rows`], no copy), anything else is first decoded into columns.
 
 use super::error::Problem;
 use super::header::{Element, Header, PropertyKind};
-use super::scalar::Scalar;
+use crate::io::rows::{Field, FixedRows, VertexFields};
 
 const X: &[&str] = &["x"];
 const Y: &[&str] = &["y"];
@@ -19,30 +17,6 @@ const GREEN: &[&str] = &["green", "diffuse_green", "g"];
 const BLUE: &[&str] = &["blue", "diffuse_blue", "b"];
 const ALPHA: &[&str] = &["alpha", "diffuse_alpha", "a"];
 const FACE_INDICES: &[&str] = &["vertex_indices", "vertex_index"];
-
-/// A vertex property the engine reads: its index among the element's properties and type.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Field {
-    pub property: usize,
-    pub scalar: Scalar,
-}
-
-/// The vertex fields used, in a fixed order: x y z, then nx ny nz if all three are
-/// present, then red green blue \[alpha\] if the three colours are present.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct VertexFields {
-    pub fields: Vec<Field>,
-    pub has_normals: bool,
-    /// 0, 3 or 4 colour channels.
-    pub color_channels: usize,
-}
-
-impl VertexFields {
-    pub const NORMAL: usize = 3;
-    pub fn color_start(&self) -> usize {
-        if self.has_normals { 6 } else { 3 }
-    }
-}
 
 /// What the decoders must extract: element indices and fields.
 #[derive(Debug, Clone)]
@@ -151,97 +125,26 @@ fn index_list(e: &Element) -> Result<Option<usize>, Problem> {
     }
 }
 
-/// Random access to the used fields of the vertex rows, whatever the encoding.
-pub trait VertexRows: Sync {
-    fn len(&self) -> usize;
-    /// Field `f` (an index into [`VertexFields::fields`]) of row `i`, as f64.
-    fn get(&self, i: usize, f: usize) -> f64;
-
-    /// x y z of row `i`.
-    #[inline(always)]
-    fn position(&self, i: usize) -> [f64; 3] {
-        [self.get(i, 0), self.get(i, 1), self.get(i, 2)]
-    }
-}
-
-/// Vertex rows of a binary element whose rows all have the same size, read in place.
-pub struct FixedRows<'a> {
-    pub data: &'a [u8],
-    pub stride: usize,
-    /// Byte offset within the row and type of each used field.
-    pub fields: Vec<(usize, Scalar)>,
-    pub big_endian: bool,
-    /// Offset of x when x y z are consecutive little-endian floats (the common layout,
-    /// read without per-value dispatch).
-    xyz_f32_le: Option<usize>,
-}
-
-impl<'a> FixedRows<'a> {
-    pub fn new(data: &'a [u8], e: &Element, used: &VertexFields, big_endian: bool) -> Self {
-        let mut offsets = Vec::with_capacity(e.properties.len());
-        let mut at = 0;
-        for p in &e.properties {
-            offsets.push(at);
-            if let PropertyKind::Scalar(s) = p.kind {
-                at += s.size();
-            }
-        }
-        let fields: Vec<(usize, Scalar)> = used
-            .fields
-            .iter()
-            .map(|f| (offsets[f.property], f.scalar))
-            .collect();
-        let x = fields[0].0;
-        let packed = fields[..3]
-            .iter()
-            .enumerate()
-            .all(|(k, &(off, s))| s == Scalar::F32 && off == x + 4 * k);
-        FixedRows {
-            data,
-            stride: at,
-            fields,
-            big_endian,
-            xyz_f32_le: (packed && !big_endian).then_some(x),
+/// The vertex rows of binary element `e` (every property a scalar) in `data`, read in
+/// place: each used field's byte offset within the row, from the properties' sizes.
+pub fn fixed_rows<'a>(
+    data: &'a [u8],
+    e: &Element,
+    used: &VertexFields,
+    big_endian: bool,
+) -> FixedRows<'a> {
+    let mut offsets = Vec::with_capacity(e.properties.len());
+    let mut at = 0;
+    for p in &e.properties {
+        offsets.push(at);
+        if let PropertyKind::Scalar(s) = p.kind {
+            at += s.size();
         }
     }
-}
-
-impl VertexRows for FixedRows<'_> {
-    fn len(&self) -> usize {
-        self.data.len().checked_div(self.stride).unwrap_or(0)
-    }
-
-    #[inline(always)]
-    fn get(&self, i: usize, f: usize) -> f64 {
-        let (off, s) = self.fields[f];
-        s.read(&self.data[i * self.stride + off..], self.big_endian)
-    }
-
-    #[inline(always)]
-    fn position(&self, i: usize) -> [f64; 3] {
-        match self.xyz_f32_le {
-            Some(x) => {
-                let r: &[u8; 12] = self.data[i * self.stride + x..][..12].try_into().unwrap();
-                let f = |k: usize| f32::from_le_bytes([r[k], r[k + 1], r[k + 2], r[k + 3]]) as f64;
-                [f(0), f(4), f(8)]
-            }
-            None => [self.get(i, 0), self.get(i, 1), self.get(i, 2)],
-        }
-    }
-}
-
-/// Vertex fields decoded into one column per field.
-pub struct ColumnRows {
-    pub columns: Vec<Vec<f64>>,
-}
-
-impl VertexRows for ColumnRows {
-    fn len(&self) -> usize {
-        self.columns.first().map_or(0, Vec::len)
-    }
-
-    #[inline(always)]
-    fn get(&self, i: usize, f: usize) -> f64 {
-        self.columns[f][i]
-    }
+    let fields = used
+        .fields
+        .iter()
+        .map(|f| (offsets[f.property], f.scalar))
+        .collect();
+    FixedRows::new(data, at, fields, big_endian)
 }

@@ -10,7 +10,7 @@ use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{self, DefaultElement, PropertyType, ScalarType};
 
 use super::error::Problem;
-use super::scalar::Scalar;
+use crate::io::scalar::Scalar;
 
 /// Longest header accepted (comments included).
 pub const MAX_HEADER_BYTES: usize = 1 << 20;

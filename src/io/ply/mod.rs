@@ -10,8 +10,8 @@ pub(crate) mod binary;
 mod error;
 pub(crate) mod faces;
 pub(crate) mod fields;
+mod format;
 pub mod header;
-pub mod scalar;
 pub mod stream;
 pub mod write;
 
@@ -19,8 +19,8 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 pub use error::{Location, PlyError};
+pub use format::PlyFormat;
 pub use header::{Element, Encoding, Header, Property, PropertyKind};
-pub use scalar::Scalar;
 pub use stream::{PlyStream, VertexBatch};
 pub use write::{FaceList, PlyLayout, PolyMesh, write_ply};
 

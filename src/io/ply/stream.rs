@@ -19,9 +19,10 @@ use super::ascii::Tokens;
 use super::binary::{truncated, walk_row};
 use super::error::Problem;
 use super::faces::Faces;
-use super::fields::{ColumnRows, FixedRows, Plan, VertexRows};
+use super::fields::{Plan, fixed_rows};
 use super::header::{self, Element, Encoding, Header, PropertyKind};
 use crate::io::geometry::{row_color, row_normal};
+use crate::io::rows::{ColumnRows, VertexRows};
 
 /// Rows decoded per window.
 pub const WINDOW: usize = 1 << 16;
@@ -270,7 +271,7 @@ impl PlyStream {
             match cursor.fixed_rows(e, row, n) {
                 Some(rows) => {
                     let rows = rows.map_err(|p| p.in_file(&self.path))?;
-                    let rows = FixedRows::new(rows, e, &self.plan.vertex_fields, big);
+                    let rows = fixed_rows(rows, e, &self.plan.vertex_fields, big);
                     batch.extend(&rows, &self.plan);
                 }
                 None => {

@@ -6,7 +6,7 @@ use std::io::Write;
 use std::path::Path;
 
 use super::header::Encoding;
-use super::scalar::Scalar;
+use crate::io::scalar::Scalar;
 
 /// Polygons as one flat index array plus the size of each polygon.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]

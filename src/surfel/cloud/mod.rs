@@ -14,10 +14,9 @@
 //!   terrain's edge sample at its wall (counted: [`SurfelStats::clipped_boundaries`]);
 //! * walls: a terrain's steep edges stand on wall surfels of their own ([`walls`]).
 //!
-//! A terrain whose samples make a TIN is drawn from it instead ([`super::terrain`],
-//! since 2026-11-24, twenty-ninth session, which also removed the TIN's shading from
-//! here, `cloud/tin.rs`); the terrain rules here (the tile's spacing, walls) now serve
-//! a terrain whose samples make no triangle, or whose file gives every normal.
+//! A terrain whose samples make a TIN is drawn from it instead ([`super::terrain`]);
+//! the terrain rules here (the tile's spacing, walls) serve a terrain whose samples
+//! make no triangle, or whose file gives every normal.
 //!
 //! Duplicated samples do not shrink a radius (only distinct neighbours count). A surfel
 //! whose neighbours all coincide with it takes the median radius of the others
@@ -43,7 +42,7 @@ use smoothed::{Steps, smoothed_disks};
 /// Neighbourhood size, the point itself included. An RGB-D frame's quantised depth
 /// puts a 16-neighbourhood at its far wall on one step of one row, whose normal faces
 /// the sensor and whose ellipse leaves streaks of holes between the steps; 24 see the
-/// next step (issue 13: the frame's holes 0.93 % → 0.10 %).
+/// next step (the frame's holes 0.93 % → 0.10 %, docs/point-clouds.md).
 pub const K: usize = 24;
 
 /// Radius for surfels without a measured one: the median of the measured radii, or
@@ -203,14 +202,14 @@ pub const TILE_SPACINGS: f32 = 1.5;
 /// spacing; returns how many it shortened. A minor semi-axis already within the cap is
 /// kept.
 ///
-/// An airborne scanner samples the ground evenly, and its triangulation (issue 13's
+/// An airborne scanner samples the ground evenly, and its triangulation (docs/point-clouds.md's
 /// reference) joins no samples further apart than 4 median edges. The covering, counted
 /// in each sample's own neighbourhood, does not know the tile: where the returns thin
 /// out (water, scan shadows) their neighbourhood spacing grows with them, and their
 /// disks closed those gaps by the tens of spacings (autzen_trim's river: one sheet of
 /// disks up to 164 feet across, where the reference leaves it open); on the scan lines
 /// its major semi-axes reach a median 2.3 s across them (terrain_utm; minor 1.4 s), and
-/// blur what the samples resolve. Held to 1.5 s, both tiles' FLIP fell (README, issue 13)
+/// blur what the samples resolve. Held to 1.5 s, both tiles' FLIP fell (docs/point-clouds.md)
 /// while their holes stayed under 0.4 %: neighbouring splats and pass 3's gap fill close
 /// what the shortened axes open.
 fn cap_to_tile_spacing(disks: &mut [(Vec3, Covering)]) -> u64 {

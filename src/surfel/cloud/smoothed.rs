@@ -56,7 +56,7 @@ impl Steps {
 /// neighbours' fitted normals (each the plane of its own neighbourhood, turned); its
 /// covering is measured in the plane of its own fit, where its sampling's gaps lie.
 ///
-/// A quantised frame's step treads (`kinect_rgb`, issue 13, `cloud_quality --grid
+/// A quantised frame's step treads (`kinect_rgb`, `cloud_quality --grid
 /// 640x480`, 4 views, medians): FLIP 0.2983 → 0.2966, holes 0.082 % → 0.023 % (worst
 /// view 0.126 % → 0.067 %), and the bright dashes across its floor on view 0 (treads
 /// seen from behind, lit from above) are gone. Replacing every fit of the frame by the

@@ -30,7 +30,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
 use super::spill::{Grid, Scan, job_paths, writers};
-use crate::io::stream::ModelStream;
+use crate::io::formats::ModelStream;
 
 /// `own` of a vertex that belongs to no job (one the scan drops: its triangles are
 /// dropped, as the whole-file reader drops them).

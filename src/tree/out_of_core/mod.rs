@@ -46,14 +46,14 @@ use std::path::Path;
 
 use glam::{DVec3, IVec3};
 
-use crate::io::stream::ModelStream;
+use crate::io::formats::ModelStream;
 use crate::tree::TreeMeta;
 use job::{Model, Part};
 use spill::{GRID, Grid};
 
 /// Bytes of memory a job takes per point at its peak (its surfels, k-d tree, nodes and
 /// list), halo included. Measured on the 200 M-point `gen_cloud` tile's jobs of 6.7 M
-/// points: 160 before issue 13's terrain normals, about 300 since (each sample's 24
+/// points: 160, and about 300 with a terrain's averaged normals (each sample's 24
 /// neighbours are kept between the fits and their mean, `surfel::cloud`).
 pub const BYTES_PER_JOB_POINT: u64 = 320;
 

@@ -12,8 +12,9 @@ use std::path::{Path, PathBuf};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, IVec3};
 
+use crate::io::format::PointBatch;
+use crate::io::formats::ModelStream;
 use crate::io::rebase::{MAX_OFFSET, SAMPLE, sample_window, within};
-use crate::io::stream::{ModelStream, PointBatch};
 use crate::io::{Bounds, PointAttributes};
 
 /// Cells per axis of the counting grid.

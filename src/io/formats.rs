@@ -1,0 +1,82 @@
+//! The formats the engine reads, and a file read in its own: [`FORMATS`] in the order
+//! they are tried, [`format_of`] a file by its first bytes, [`read_model`] the whole
+//! file, [`ModelStream`] a batch at a time.
+
+use std::io::Read;
+use std::path::Path;
+
+use super::format::{Format, HEAD_BYTES, PointBatch, PointStream};
+use super::las::LasFormat;
+use super::model::{Model, ModelError};
+use super::ply::PlyFormat;
+
+/// Every format the engine reads, in the order they are tried. The last (PLY) also
+/// reads any file that no format recognises, and its reader says what is wrong with it.
+pub const FORMATS: &[&dyn Format] = &[&LasFormat, &PlyFormat];
+
+/// The format of the file at `path`, from its first bytes.
+pub fn format_of(path: &Path) -> Result<&'static dyn Format, ModelError> {
+    let mut head = [0u8; HEAD_BYTES];
+    let mut n = 0;
+    let mut file = std::fs::File::open(path).map_err(|e| ModelError::io(path, &e))?;
+    while n < head.len() {
+        match file.read(&mut head[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(ModelError::io(path, &e)),
+        }
+    }
+    let last = *FORMATS.last().expect("a format");
+    Ok(FORMATS
+        .iter()
+        .copied()
+        .find(|f| f.recognises(&head[..n]))
+        .unwrap_or(last))
+}
+
+/// Reads a model file of any format the engine reads, by its first bytes (a file that
+/// no format recognises is read as PLY, whose reader says what is wrong with it).
+pub fn read_model(path: &Path) -> Result<Model, ModelError> {
+    format_of(path)?.read(path)
+}
+
+/// A model file open for reading a batch at a time, whatever its format.
+pub struct ModelStream(Box<dyn PointStream>);
+
+impl ModelStream {
+    /// Opens `path` in its format ([`format_of`]).
+    pub fn open(path: &Path) -> Result<ModelStream, ModelError> {
+        Ok(ModelStream(format_of(path)?.stream(path)?))
+    }
+
+    /// Points (vertex rows) the file declares.
+    pub fn point_count(&self) -> u64 {
+        self.0.point_count()
+    }
+
+    /// Whether the file has faces: a mesh.
+    pub fn has_faces(&self) -> bool {
+        self.0.has_faces()
+    }
+
+    /// Whether the file gives normals (PLY's `nx ny nz`).
+    pub fn has_normals(&self) -> bool {
+        self.0.has_normals()
+    }
+
+    /// Whether the points carry LiDAR attributes (LAS and LAZ).
+    pub fn has_attributes(&self) -> bool {
+        self.0.has_attributes()
+    }
+
+    /// Calls `f` on every batch of points, in file order.
+    pub fn points(&self, mut f: impl FnMut(&PointBatch)) -> Result<(), ModelError> {
+        self.0.points(&mut f)
+    }
+
+    /// Calls `f` on the triangles, a batch at a time, in file order (none for a cloud).
+    pub fn triangles(&self, mut f: impl FnMut(&[[u32; 3]])) -> Result<(), ModelError> {
+        self.0.triangles(&mut f)
+    }
+}

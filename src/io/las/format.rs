@@ -1,0 +1,83 @@
+//! LAS and LAZ as one of the engine's formats ([`crate::io::format`]): the whole file
+//! ([`super::read_las`]) or a batch of points at a time ([`LasBatches`]).
+
+use std::path::{Path, PathBuf};
+
+use super::{LasBatches, read_las};
+use crate::io::format::PointBatch;
+use crate::io::format::{Format, PointStream};
+use crate::io::model::{Model, ModelError, Summary};
+
+/// ASPRS LAS 1.0–1.4, and LAZ (LASzip-compressed LAS).
+pub struct LasFormat;
+
+impl Format for LasFormat {
+    fn recognises(&self, head: &[u8]) -> bool {
+        head.starts_with(b"LASF")
+    }
+
+    fn read(&self, path: &Path) -> Result<Model, ModelError> {
+        let m = read_las(path)?;
+        let kind = if m.summary.compressed { "LAZ" } else { "LAS" };
+        let format = format!(
+            "{kind} {}, point format {}",
+            m.summary.version, m.summary.point_format
+        );
+        Ok(Model {
+            summary: Summary {
+                format,
+                las: Some(m.summary),
+                ..Summary::default()
+            },
+            geometry: m.geometry,
+            stats: m.stats,
+            file_bytes: m.file_bytes,
+            load_time: m.load_time,
+        })
+    }
+
+    fn stream(&self, path: &Path) -> Result<Box<dyn PointStream>, ModelError> {
+        let points = LasBatches::open(path)?.point_count();
+        Ok(Box::new(LasStream {
+            path: path.to_owned(),
+            points,
+        }))
+    }
+}
+
+/// A LAS or LAZ file read a batch at a time: each pass over the points opens it anew.
+struct LasStream {
+    path: PathBuf,
+    points: u64,
+}
+
+impl PointStream for LasStream {
+    fn point_count(&self) -> u64 {
+        self.points
+    }
+
+    fn has_faces(&self) -> bool {
+        false
+    }
+
+    fn has_normals(&self) -> bool {
+        false
+    }
+
+    fn has_attributes(&self) -> bool {
+        true
+    }
+
+    fn points(&self, f: &mut dyn FnMut(&PointBatch)) -> Result<(), ModelError> {
+        let mut batch = PointBatch::default();
+        let mut reader = LasBatches::open(&self.path)?;
+        while reader.next_batch(&mut batch)? {
+            f(&batch);
+        }
+        Ok(())
+    }
+
+    fn triangles(&self, _: &mut dyn FnMut(&[[u32; 3]])) -> Result<(), ModelError> {
+        Ok(())
+    }
+}

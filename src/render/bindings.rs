@@ -1,0 +1,127 @@
+//! The bind slots that the passes share with their WGSL: one [`Slot`] per resource a
+//! shader declares with `@group(g) @binding(b)`. Rust builds every bind group layout and
+//! bind group from these constants; the test below reflects each composed shader with
+//! naga and fails when a WGSL declaration and its slot disagree, or when a shader
+//! declares a resource no slot names.
+
+/// Where a shader resource is bound: its bind group, its binding, and the name of the
+/// WGSL variable that declares it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Slot {
+    pub group: u32,
+    pub binding: u32,
+    pub name: &'static str,
+}
+
+const fn slot(group: u32, binding: u32, name: &'static str) -> Slot {
+    Slot {
+        group,
+        binding,
+        name,
+    }
+}
+
+/// The frame uniform (`shaders/common.wgsl`), group 0 of every pass.
+pub const FRAME: Slot = slot(0, 0, "frame");
+
+/// Group 1 of the cull pass (`shaders/cull.wgsl`): one slice of the list.
+pub mod cull {
+    use super::{Slot, slot};
+    pub const NODES: Slot = slot(1, 0, "nodes");
+    pub const SURVIVORS: Slot = slot(1, 1, "survivors");
+    pub const COMPACTION: Slot = slot(1, 2, "compaction");
+    pub const RANGES: Slot = slot(1, 3, "ranges");
+    pub const SHAPES: Slot = slot(1, 4, "shapes");
+    pub const ALL: &[Slot] = &[super::FRAME, NODES, SURVIVORS, COMPACTION, RANGES, SHAPES];
+}
+
+/// Groups 1 and 2 of the splat passes (`shaders/splat.wgsl`): one slice of the list
+/// (survivors only after compute culling), and pass 1's depth for pass 2.
+pub mod splat {
+    use super::{Slot, slot};
+    pub const NODES: Slot = slot(1, 0, "nodes");
+    pub const SURVIVORS: Slot = slot(1, 1, "survivors");
+    pub const SHAPES: Slot = slot(1, 2, "shapes");
+    pub const ATTRIBUTES: Slot = slot(1, 3, "attributes");
+    pub const VISIBLE_DEPTH: Slot = slot(2, 0, "visible_depth");
+    pub const ALL: &[Slot] = &[
+        super::FRAME,
+        NODES,
+        SURVIVORS,
+        SHAPES,
+        ATTRIBUTES,
+        VISIBLE_DEPTH,
+    ];
+}
+
+/// Group 1 of pass 3 (`shaders/shade.wgsl`): the G-buffer.
+pub mod shade {
+    use super::{Slot, slot};
+    pub const COLOR_SUM: Slot = slot(1, 0, "color_sum");
+    pub const NORMAL_SUM: Slot = slot(1, 1, "normal_sum");
+    pub const COVERAGE: Slot = slot(1, 2, "coverage");
+    pub const DEPTH: Slot = slot(1, 3, "depth");
+    pub const ALL: &[Slot] = &[super::FRAME, COLOR_SUM, NORMAL_SUM, COVERAGE, DEPTH];
+}
+
+/// The viewer's presentation pass (`shaders/present.wgsl`): the finished frame.
+pub mod present {
+    use super::{Slot, slot};
+    pub const FINISHED: Slot = slot(0, 0, "finished");
+    pub const ALL: &[Slot] = &[FINISHED];
+}
+
+/// Every pipeline module and the slots it may declare.
+pub const MODULES: &[(&str, &[Slot])] = &[
+    ("cull", cull::ALL),
+    ("splat", splat::ALL),
+    ("shade", shade::ALL),
+    ("mesh", &[FRAME]),
+    ("present", present::ALL),
+];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Where the resources `source` (module `module`) declares disagree with `slots`:
+    /// a binding elsewhere than its slot, or a resource no slot names.
+    fn mismatches(module: &str, source: &str, slots: &[Slot]) -> Vec<String> {
+        let parsed = naga::front::wgsl::parse_str(source).expect("parses");
+        let mut wrong = Vec::new();
+        for (_, var) in parsed.global_variables.iter() {
+            let (Some(b), Some(name)) = (&var.binding, &var.name) else {
+                continue;
+            };
+            match slots.iter().find(|s| s.name == name) {
+                None => wrong.push(format!("{module}.wgsl: `{name}` has no Rust slot")),
+                Some(s) if (s.group, s.binding) != (b.group, b.binding) => wrong.push(format!(
+                    "{module}.wgsl: `{name}` at @group({}) @binding({}), Rust says ({}, {})",
+                    b.group, b.binding, s.group, s.binding
+                )),
+                Some(_) => {}
+            }
+        }
+        wrong
+    }
+
+    #[test]
+    fn every_wgsl_binding_is_its_rust_slot() {
+        for (module, slots) in MODULES {
+            let source = crate::render::shaders::compose(module);
+            assert!(source.contains("@binding"), "{module} declares no resource");
+            let wrong = mismatches(module, &source, slots);
+            assert!(wrong.is_empty(), "{wrong:#?}");
+        }
+    }
+
+    #[test]
+    fn a_moved_or_unknown_binding_is_caught() {
+        let cull = crate::render::shaders::compose("cull");
+        let moved = cull.replace("@group(1) @binding(4)", "@group(1) @binding(5)");
+        assert_eq!(mismatches("cull", &moved, cull::ALL).len(), 1);
+        let renamed = cull.replace("var<storage, read> ranges", "var<storage, read> spans");
+        let renamed = renamed.replace("ranges[", "spans[");
+        assert_eq!(mismatches("cull", &renamed, cull::ALL).len(), 1);
+    }
+}

@@ -1,0 +1,30 @@
+//! The integration tests, one crate (one binary to link): each module holds the tests
+//! of one area, `common` their shared helpers. The tests that measure allocations are
+//! in `tests/allocation/`, a binary of their own.
+
+mod common;
+
+mod bad_input;
+mod bench;
+mod cli_help;
+mod cloud_quality;
+mod docs;
+mod hostile_inputs;
+mod layers;
+mod out_of_core;
+mod ply_roundtrip;
+mod ply_tristrips;
+mod render_chunks;
+mod render_flip;
+mod render_lidar;
+mod render_lod_ewa;
+mod render_quality;
+mod render_streaming;
+mod shared_data;
+mod spt_file;
+mod surfel_hard_cases;
+mod surfel_properties;
+mod tree_hard_cases;
+mod tree_properties;
+mod viewer_interaction;
+mod viewer_window;
