@@ -1,6 +1,6 @@
 #import constants
 // Shared by every pass: the per-frame uniforms, node record decoding, the selection
-// test (DESIGN.md §5) and view rays. Passes import it (`#import common`).
+// test (docs/design.md §5) and view rays. Passes import it (`#import common`).
 
 struct Frame {
     // World-aligned camera-relative → view space (a rotation).

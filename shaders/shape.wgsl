@@ -1,7 +1,7 @@
 #import common
 #import constants
 
-// A splat's shape beyond its node record (src/surfel/shape.rs packs it; DESIGN.md §7):
+// A splat's shape beyond its node record (src/surfel/shape.rs packs it; docs/design.md §7):
 // its ellipse's frame, its normal field, its clip, and which of the two pass 2 shaders
 // draws it. Imported by the splat passes and by the cull pass, which sorts survivors by
 // that last test.

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Convert benchmark: `spt convert` on a happy-Buddha-size model (543,232 vertices, the
 # 2006 report's reference) and on the Lucy-size model (14,028,800 vertices / 28,057,600
-# triangles), median of RUNS runs per stage, as a Markdown table for the README.
+# triangles), median of RUNS runs per stage, as a Markdown table for docs/load-and-convert.md.
 #
 #   tools/bench_convert.sh           # RUNS=3
 set -euo pipefail

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Load benchmark on the Lucy-size model (14,028,800 vertices / 28,057,600 triangles,
 # 533 MB binary PLY): page-cache read speed of the file, then `spt info` (load MB/s,
-# surfels/s, peak memory), median of RUNS runs, as a Markdown table for the README.
+# surfels/s, peak memory), median of RUNS runs, as a Markdown table for docs/load-and-convert.md.
 #
 #   tools/bench_load.sh            # RUNS=5
 #   RUNS=9 tools/bench_load.sh

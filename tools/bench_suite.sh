@@ -2,17 +2,17 @@
 # The whole speed-against-error suite: `spt bench` on the default model, the
 # shared scans (bunny, dragon40k, terrain_utm, kinect_rgb) and the Lucy-size generated
 # model, each into docs/bench/<model>/ (results.csv, summary.md, speed_vs_error.png),
-# then the README's performance section (between the bench markers) rewritten from
-# every model's results in docs/bench.
+# then the section of the docs between the bench markers rewritten from every model's
+# results: docs/speed-vs-error.md for a software rasterizer, docs/gpu.md for a real GPU.
 #
 #   tools/bench_suite.sh                  # every model
-#   ONLY="bunny dragon40k" tools/bench_suite.sh   # these again; the README keeps the rest
+#   ONLY="bunny dragon40k" tools/bench_suite.sh   # these again; the page keeps the rest
 #   SPT_BACKEND=vulkan tools/bench_suite.sh
 #   SPT=path/spt GEN_MODEL=path/gen_model BENCH_DIR=docs/bench/gpu tools/bench_suite.sh
 #                                         # prebuilt binaries (a machine without cargo)
 #
-# Results on a software rasterizer and on a real GPU go to different sections: the
-# README section is named after the adapter kind (CPU for lavapipe/llvmpipe, else GPU).
+# Results on a software rasterizer and on a real GPU go to different pages, by the
+# adapter kind (CPU for lavapipe/llvmpipe, else GPU).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 data=${SPT_DATA:-../shared/data}
@@ -61,19 +61,19 @@ for model in "${models[@]}"; do
     echo
     sed -n 's/^\([0-9]*×[0-9]*, error against the [^.]*\)\..*/\1./p' "$out/summary.md"
     echo
-    echo "![speed against error, $name]($out/speed_vs_error.png)"
+    echo "![speed against error, $name](${out#docs/}/speed_vs_error.png)"
     echo
     # The equal-budget comparison and the stability check, from the summary.
     awk '/^### SPT against a random subset/ {on=1; next} /^### / {on=0} on' "$out/summary.md"
     awk '/^### Stability/ {on=1; next} /^### / {on=0} on' "$out/summary.md"
-    echo "Every configuration: [$out/summary.md]($out/summary.md), [$out/results.csv]($out/results.csv)."
+    echo "Every configuration: [$out/summary.md](${out#docs/}/summary.md), [$out/results.csv](${out#docs/}/results.csv)."
     echo
   } >> "$section"
 done
 
 case "$adapter" in
-  *llvmpipe*|*lavapipe*|*softpipe*|*SwiftShader*) kind=CPU ;;
-  *) kind=GPU ;;
+  *llvmpipe*|*lavapipe*|*softpipe*|*SwiftShader*) kind=CPU page=docs/speed-vs-error.md ;;
+  *) kind=GPU page=docs/gpu.md ;;
 esac
 start="<!-- bench:$kind:start -->"
 end="<!-- bench:$kind:end -->"
@@ -89,17 +89,16 @@ block=$(mktemp)
   cat "$section"
   echo "$end"
 } > "$block"
-if grep -qF "$start" README.md; then
+if grep -qF "$start" "$page"; then
   awk -v start="$start" -v end="$end" -v block="$block" '
     $0 == start {while ((getline line < block) > 0) print line; skip=1; next}
     $0 == end {skip=0; next}
-    !skip' README.md > README.md.tmp
+    !skip' "$page" > "$page.tmp"
 else
-  cp README.md README.md.tmp
-  printf '\n#### %s\n\n' "$kind" >> README.md.tmp
-  cat "$block" >> README.md.tmp
+  cp "$page" "$page.tmp"
+  cat "$block" >> "$page.tmp"
 fi
-mv README.md.tmp README.md
+mv "$page.tmp" "$page"
 rm -f "$section" "$block"
-echo "README: performance section ($kind) rewritten" >&2
+echo "$page: the bench section ($kind) rewritten" >&2
 exit "$status"

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The same crop of several images of one size, enlarged without filtering and joined
-left to right with a black gap (the README's close-ups of `cloud_quality --images`).
+left to right with a black gap (close-ups of `cloud_quality --images` for docs/).
 
     python3 tools/crop_pair.py OUT.png A.png B.png [C.png ...] --box X,Y,W,H [--zoom 2]
 

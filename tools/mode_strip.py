@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """One picture of a model in several display modes, left to right, each drawn by
-`spt render` with the same camera (the README's mode pictures).
+`spt render` with the same camera (the mode pictures of docs/).
 
     python3 tools/mode_strip.py MODEL OUT.png --modes shaded,classification,intensity \\
         [--size 640x360] [--orbit AZ,EL,DIST] [--spt target/release/spt]

@@ -3,7 +3,7 @@
 //! against the mesh rendered at 4×4 the size and averaged in linear light; and, with
 //! `--crops`, each image (`view{k}_image{i}.png`, i in the order printed), the FLIP maps,
 //! and side-by-side close-ups (splats | mesh reference) enlarged 3× without filtering,
-//! for the README. Each figure of a view is followed by its three parts: the pixels
+//! for docs/image-quality.md. Each figure of a view is followed by its three parts: the pixels
 //! both images cover away from the reference's outlines, those near one (within 2
 //! pixels of a coverage step or an occluding edge), and those only one image covers.
 //!

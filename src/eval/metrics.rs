@@ -1,4 +1,4 @@
-//! Image error against a reference (DESIGN.md §9): PSNR over the pixels either image
+//! Image error against a reference (docs/design.md §9): PSNR over the pixels either image
 //! covers, hole rate (covered by the reference, not by the test image) and spill rate
 //! (the reverse), both relative to the reference's covered pixels.
 

@@ -1,4 +1,4 @@
-//! Image error against a reference (DESIGN.md §9), for tests, benchmarks and quality
+//! Image error against a reference (docs/design.md §9), for tests, benchmarks and quality
 //! tools; not used to draw. [`metrics`]: PSNR, holes and spill; [`perceptual`]: FLIP
 //! and SSIM against a supersampled reference. Built with the `eval` feature.
 

@@ -1,4 +1,4 @@
-//! Perceptual image error (DESIGN.md §9): NVIDIA FLIP (the `nv-flip` crate, which
+//! Perceptual image error (docs/design.md §9): NVIDIA FLIP (the `nv-flip` crate, which
 //! wgpu's own tests use) and SSIM, each averaged over the pixels either image covers,
 //! against an antialiased reference: a frame rendered at k×k the size with each k×k
 //! block averaged in linear light ([`downsample`]).

@@ -1,7 +1,9 @@
-//! Rendering (DESIGN.md §6–7): the GPU, cameras, and the three-pass deferred EWA
-//! splatting renderer with its mesh reference pass, drawing a [`Scene`] of the tree
-//! layer (the only layer it imports). One module per pass, each with its layouts,
-//! pipeline, encoding and WGSL (`shaders/`, composed by [`shaders`]):
+//! Rendering (docs/design.md §6–7): the GPU, cameras, and the three-pass deferred EWA
+//! splatting renderer with its mesh reference pass, drawing a
+//! [`crate::tree::scene::Scene`] (it imports tree and surfel, and of io only the data
+//! model; files are opened through the tree). One module per pass, each with its
+//! layouts, pipeline, encoding and WGSL (`shaders/`, composed by [`shaders`]; the bind
+//! slots they share in [`bindings`]; the splat passes behind [`splat_path`]):
 //!
 //! ```text
 //! plan ─► cull ─► splats (visibility, attributes; or points) | mesh ─► shading
@@ -11,11 +13,11 @@
 //!
 //! [`Renderer`] composes them.
 
-pub mod bindings;
+pub(crate) mod bindings;
 pub mod camera;
 mod counters;
 mod cull;
-pub mod frame;
+mod frame;
 mod fullscreen;
 mod gbuffer;
 pub mod gpu;

@@ -1,4 +1,4 @@
-//! What the CPU decides for a frame before the GPU draws it (DESIGN.md §5): ε from the
+//! What the CPU decides for a frame before the GPU draws it (docs/design.md §5): ε from the
 //! budget in pixels, the eye the level of detail is chosen for, the chunks the view
 //! cone can see and, by binary search, each one's prefix: the list ranges to hand over.
 //! While a model uploads, or where a GPU memory budget keeps only part of it there, ε

@@ -2,7 +2,7 @@
 
 use glam::{DVec3, Vec3};
 
-/// Display modes (DESIGN.md §7b). The discriminant is the mode's number in the frame
+/// Display modes (docs/design.md §7b). The discriminant is the mode's number in the frame
 /// uniform; WGSL gets each as `MODE_<NAME>` from [`Mode::wgsl_constants`].
 #[repr(u32)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -109,7 +109,7 @@ impl Mode {
     }
 }
 
-/// How the splats of the prefix are culled (DESIGN.md §6).
+/// How the splats of the prefix are culled (docs/design.md §6).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Culling {
     /// In the vertex stage: every node of the prefix is drawn as a quad; culled ones

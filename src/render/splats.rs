@@ -1,4 +1,4 @@
-//! The splat passes (DESIGN.md §7): pass 1, visibility (depth only, pushed back), and
+//! The splat passes (docs/design.md §7): pass 1, visibility (depth only, pushed back), and
 //! pass 2, attributes (additive (colour·w, w) and (normal·w, z·w) into the G-buffer),
 //! or plain points (no blending) instead of both. One instanced quad of 4 vertices per
 //! node: every node of the prefix, culled in the vertex stage ("direct"), or the

@@ -1,4 +1,4 @@
-//! The covering ellipse of a cloud's sample among its neighbours (DESIGN.md §2): the
+//! The covering ellipse of a cloud's sample among its neighbours (docs/design.md §2): the
 //! splat that closes the gaps of the sampling around the point without growing into a
 //! blob, however anisotropic the sampling (an RGB-D frame's depth steps, a LiDAR
 //! swath's scan lines).

@@ -1,4 +1,4 @@
-//! A mesh splat's shading normal field, fitted to the triangles' own (DESIGN.md §2).
+//! A mesh splat's shading normal field, fitted to the triangles' own (docs/design.md §2).
 //!
 //! Pass 2 blends the overlapping splats' fields, each weighted by its kernel; the mesh
 //! shades with the barycentric blend of its vertex normals. A field anchored at the

@@ -1,4 +1,4 @@
-//! An organised frame's pixel grid, found from its file's row order (DESIGN.md §2).
+//! An organised frame's pixel grid, found from its file's row order (docs/design.md §2).
 //!
 //! An RGB-D camera (PCL's organised clouds, a depth map written out as points) writes
 //! one row per pixel, row-major, with NaN where the pixel saw nothing; the reader drops

@@ -1,4 +1,4 @@
-//! Surfels of a triangle mesh, one per vertex (DESIGN.md §2).
+//! Surfels of a triangle mesh, one per vertex (docs/design.md §2).
 //!
 //! * normal: normalize(Σ over incident triangles of (b − a) × (c − a)), the
 //!   area-weighted face normals; a file's non-zero normal is kept instead.

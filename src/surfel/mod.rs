@@ -1,4 +1,4 @@
-//! Leaf surfels: one disk per sample, ready for the tree builder (DESIGN.md §2).
+//! Leaf surfels: one disk per sample, ready for the tree builder (docs/design.md §2).
 //!
 //! Every surfel leaving this module has a finite position, a unit normal and a finite
 //! radius > 0, on any input. All geometric work is done on positions multiplied by a

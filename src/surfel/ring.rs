@@ -1,4 +1,4 @@
-//! Ellipses and normal fields of mesh vertices from their one-ring (DESIGN.md §2).
+//! Ellipses and normal fields of mesh vertices from their one-ring (docs/design.md §2).
 //!
 //! In the tangent frame (t₁, t₂) of vertex i, each neighbour j sharing a triangle adds
 //! its offset d = (pⱼ − pᵢ)·(t₁, t₂) and normal change Δn = (nⱼ − nᵢ)·(t₁, t₂) to a

@@ -1,4 +1,4 @@
-//! A splat's shape beyond its disk (DESIGN.md §2): an ellipse in the tangent plane and a
+//! A splat's shape beyond its disk (docs/design.md §2): an ellipse in the tangent plane and a
 //! linear normal field (Phong splatting: Botsch, Spernat and Kobbelt 2004).
 //!
 //! With n the splat's unit normal, R its radius (the ellipse's major semi-axis), u the

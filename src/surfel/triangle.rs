@@ -1,5 +1,5 @@
 //! One triangle's terms, shared by the mesh rule and the splats of its ring and of long
-//! triangles: its cross product, covering radius and whether it is degenerate (DESIGN.md
+//! triangles: its cross product, covering radius and whether it is degenerate (docs/design.md
 //! §2), computed in f64, and the margin that keeps f32 radii covering.
 
 use glam::DVec3;

@@ -1,4 +1,4 @@
-//! LiDAR attributes of internal nodes (DESIGN.md §3's aggregation, for what a LAS point
+//! LiDAR attributes of internal nodes (docs/design.md §3's aggregation, for what a LAS point
 //! carries): each child weighs by the area of its splat, π r² · ratio (r the major
 //! semi-axis), so that a node shows what covers most of the surface it stands for.
 //!

@@ -1,4 +1,4 @@
-//! Chunks (DESIGN.md §5, "Chunks"): the list cut into contiguous ranges, each a
+//! Chunks (docs/design.md §5, "Chunks"): the list cut into contiguous ranges, each a
 //! sequential list of its own (sorted by parent error, descending) with its own box of
 //! node centres, so that each frame the CPU culls whole chunks by the frustum and finds
 //! each visible chunk's prefix from the chunk's own distance to the eye.
@@ -19,7 +19,7 @@
 //! draw, so the CPU skips it whole ([`super::select::PrefixIndex::ranges`]).
 //!
 //! **Why selection stays hole-free across chunk boundaries.** Every node keeps its
-//! own record (e, e_parent, δ), so the exact test of DESIGN.md §5 draws the same nodes
+//! own record (e, e_parent, δ), so the exact test of docs/design.md §5 draws the same nodes
 //! whatever the chunks are, and that set covers every leaf. What the chunks change is
 //! only what the CPU hands over: in chunk c, the nodes past the first i with
 //! `e_parent[i] ≤ ε · (d_min(c) − Δ_c[i])` cannot pass the test, because d_min(c), the

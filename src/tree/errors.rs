@@ -1,4 +1,4 @@
-//! Node disks and errors (DESIGN.md §3–4; Dachsbacher, Vogelgsang, Stamminger 2003).
+//! Node disks and errors (docs/design.md §3–4; Dachsbacher, Vogelgsang, Stamminger 2003).
 //!
 //! For a node with children (pᵢ, nᵢ, rᵢ), area weights aᵢ = rᵢ²:
 //!

@@ -1,4 +1,4 @@
-//! The hierarchy over the leaf surfels (DESIGN.md §3).
+//! The hierarchy over the leaf surfels (docs/design.md §3).
 //!
 //! A range of surfels is split in two at the midpoint of the longest axis of its
 //! centres' bounding box (an in-place partition), and each half once more: two binary

@@ -1,4 +1,4 @@
-//! Sequential point trees (DESIGN.md §3–5): the hierarchy over the leaf surfels, node
+//! Sequential point trees (docs/design.md §3–5): the hierarchy over the leaf surfels, node
 //! disks and errors, and the flattened list sorted by parent error that each frame
 //! draws a prefix of.
 //!

@@ -1,4 +1,4 @@
-//! The ellipse and normal field of an internal node from its children's (DESIGN.md §3),
+//! The ellipse and normal field of an internal node from its children's (docs/design.md §3),
 //! so that level of detail keeps the shading of the leaves.
 //!
 //! Each child contributes its centre (with its normal) and [`RIM_SAMPLES`] points of its

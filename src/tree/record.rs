@@ -1,5 +1,5 @@
 //! The node record: one entry of the sequential list, as stored in `.spt` files and
-//! uploaded to the GPU. 32 bytes (DESIGN.md §6).
+//! uploaded to the GPU. 32 bytes (docs/design.md §6).
 //!
 //! Errors are stored as IEEE half floats of `value / error_scale` (the model's size),
 //! always rounded *up*: a node never looks finer than it is, `δ` never shrinks (the

@@ -1,4 +1,4 @@
-//! The selection of the nodes to draw (DESIGN.md §5): the CPU's part each frame (which
+//! The selection of the nodes to draw (docs/design.md §5): the CPU's part each frame (which
 //! chunks, and which prefix of each, the GPU tests), and the CPU reference that tests
 //! and the renderer's tests use as ground truth.
 //!

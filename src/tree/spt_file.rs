@@ -1,4 +1,4 @@
-//! `.spt` files: a sequential point tree, ready to memory-map and upload (DESIGN.md §8).
+//! `.spt` files: a sequential point tree, ready to memory-map and upload (docs/design.md §8).
 //!
 //! ```text
 //! offset  size  field (little-endian)

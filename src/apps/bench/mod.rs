@@ -1,4 +1,4 @@
-//! `spt bench MODEL --out DIR`: speed against error (DESIGN.md §9). For each camera path
+//! `spt bench MODEL --out DIR`: speed against error (docs/design.md §9). For each camera path
 //! (orbits near, mid and far, and a fly-through into the model) and each ε of the sweep,
 //! SPT with both culling strategies; at the orbits, a random subset of leaves with as
 //! many splats drawn as SPT drew; leaves only (no LOD) at ε = 0. Each configuration:

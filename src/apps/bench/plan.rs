@@ -1,4 +1,4 @@
-//! What `spt bench` measures (DESIGN.md §9): camera paths and the ε sweep.
+//! What `spt bench` measures (docs/design.md §9): camera paths and the ε sweep.
 //!
 //! Orbits at the distances where the model's bounding sphere fills about 100 %, 25 % and
 //! 6 % of the image height: a sphere of radius R at distance d fills R / (d tan(fov/2))

@@ -1,4 +1,4 @@
-//! The random-subset level of detail that SPT is compared with (DESIGN.md §9): `n`
+//! The random-subset level of detail that SPT is compared with (docs/design.md §9): `n`
 //! leaves drawn uniformly at random without replacement (seeded, so runs repeat), their
 //! radii scaled by √(L / n) so that the n disks cover the area the L leaves covered,
 //! each with its own shape (ellipse, normal field and clip line over the scaled radius).
