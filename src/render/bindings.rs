@@ -32,6 +32,7 @@ pub mod cull {
     pub const COMPACTION: Slot = slot(1, 2, "compaction");
     pub const RANGES: Slot = slot(1, 3, "ranges");
     pub const SHAPES: Slot = slot(1, 4, "shapes");
+    #[cfg(test)]
     pub const ALL: &[Slot] = &[super::FRAME, NODES, SURVIVORS, COMPACTION, RANGES, SHAPES];
 }
 
@@ -44,6 +45,7 @@ pub mod splat {
     pub const SHAPES: Slot = slot(1, 2, "shapes");
     pub const ATTRIBUTES: Slot = slot(1, 3, "attributes");
     pub const VISIBLE_DEPTH: Slot = slot(2, 0, "visible_depth");
+    #[cfg(test)]
     pub const ALL: &[Slot] = &[
         super::FRAME,
         NODES,
@@ -61,6 +63,7 @@ pub mod shade {
     pub const NORMAL_SUM: Slot = slot(1, 1, "normal_sum");
     pub const COVERAGE: Slot = slot(1, 2, "coverage");
     pub const DEPTH: Slot = slot(1, 3, "depth");
+    #[cfg(test)]
     pub const ALL: &[Slot] = &[super::FRAME, COLOR_SUM, NORMAL_SUM, COVERAGE, DEPTH];
 }
 
@@ -68,10 +71,12 @@ pub mod shade {
 pub mod present {
     use super::{Slot, slot};
     pub const FINISHED: Slot = slot(0, 0, "finished");
+    #[cfg(test)]
     pub const ALL: &[Slot] = &[FINISHED];
 }
 
 /// Every pipeline module and the slots it may declare.
+#[cfg(test)]
 pub const MODULES: &[(&str, &[Slot])] = &[
     ("cull", cull::ALL),
     ("splat", splat::ALL),

@@ -13,7 +13,7 @@
 //!
 //! [`Renderer`] composes them.
 
-pub(crate) mod bindings;
+pub mod bindings;
 pub mod camera;
 mod counters;
 mod cull;
