@@ -6,16 +6,16 @@
 //! live in [`crate::tree::spt_file`]).
 
 pub mod atomic;
-pub mod bounds;
+pub(crate) mod bounds;
 pub mod format;
 pub mod formats;
-pub mod geometry;
+pub(crate) mod geometry;
 pub mod las;
 pub mod model;
 pub mod ply;
 pub mod png;
 pub mod rebase;
-pub mod rows;
+pub(crate) mod rows;
 pub mod scalar;
 pub(crate) mod syncing_file;
 pub mod torus_knot;

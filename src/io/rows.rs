@@ -34,9 +34,6 @@ impl VertexFields {
 /// Random access to the used fields of the vertex rows, whatever the encoding.
 pub trait VertexRows: Sync {
     fn len(&self) -> usize;
-    fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
     /// Field `f` (an index into [`VertexFields::fields`]) of row `i`, as f64.
     fn get(&self, i: usize, f: usize) -> f64;
 

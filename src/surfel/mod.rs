@@ -7,24 +7,24 @@
 //! scaled by 10⁻⁷ or 10⁷ gets the same surfels up to that scale, no threshold depends
 //! on the model's units, and a stray sample far away changes neither.
 
-pub mod clip;
-pub mod cloud;
+pub(crate) mod clip;
+pub(crate) mod cloud;
 mod corners;
-pub mod covering;
-pub mod field;
-pub mod footprint;
+pub(crate) mod covering;
+pub(crate) mod field;
+pub(crate) mod footprint;
 pub mod grid;
-pub mod isolated;
-pub mod levels;
+pub(crate) mod isolated;
+pub(crate) mod levels;
 pub mod long_triangles;
-pub mod mesh;
+pub(crate) mod mesh;
 pub mod octahedral;
-pub mod pca;
-pub mod ring;
+pub(crate) mod pca;
+pub(crate) mod ring;
 pub mod shape;
 pub mod terrain;
-pub mod triangle;
-pub mod walls;
+pub(crate) mod triangle;
+pub(crate) mod walls;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};

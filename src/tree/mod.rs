@@ -9,12 +9,12 @@
 //! [`scene`] opens a model from a file (a PLY built through these stages, or an `.spt`
 //! file), telling a [`report::Report`] each step.
 
-pub mod attributes;
+pub(crate) mod attributes;
 pub mod chunks;
 pub mod errors;
-pub mod hierarchy;
+pub(crate) mod hierarchy;
 pub mod out_of_core;
-pub mod parent_shape;
+pub(crate) mod parent_shape;
 pub mod record;
 pub mod report;
 pub mod scene;

@@ -31,7 +31,7 @@ use crate::common;
 
 use spt::apps::cloud_quality::{CloudAndReference, Triangulation, ViewFigures, measure};
 use spt::apps::stats::quantile;
-use spt::render::{Camera, Settings, settings::Mode};
+use spt::render::{Camera, Mode, Settings};
 
 /// Largest median FLIP at ε = 1 px over the leaves' median FLIP, at most 10 % more. It
 /// was 1.25 on the tiles and 1.55 on the frame until a node's errors saw its children

@@ -11,9 +11,9 @@ mod error;
 pub(crate) mod faces;
 pub(crate) mod fields;
 mod format;
-pub mod header;
+pub(crate) mod header;
 pub mod stream;
-pub mod write;
+pub(crate) mod write;
 
 use std::path::Path;
 use std::time::{Duration, Instant};

@@ -35,12 +35,12 @@
 //!
 //! Normals that the file gives are kept, for a cloud's points as for a mesh's vertices.
 
-pub mod assemble;
-pub mod job;
-pub mod mesh_job;
-pub mod mesh_spill;
-pub mod order;
-pub mod spill;
+pub(crate) mod assemble;
+pub(crate) mod job;
+pub(crate) mod mesh_job;
+pub(crate) mod mesh_spill;
+pub(crate) mod order;
+pub(crate) mod spill;
 
 use std::path::Path;
 
