@@ -32,7 +32,11 @@ same() { # NAME: compares old/NAME with new/NAME
 for model in data/torus_knot.ply "$data/bunny.ply" "$data/autzen_trim.laz"; do
   name=$(basename "${model%.*}")
   runs=()
-  for mode in $modes; do runs+=("$mode:--mode $mode"); done
+  for mode in $modes; do
+    # A cloud has no mesh to draw.
+    [ "$mode" = mesh ] && [[ "$model" == *.la[sz] ]] && continue
+    runs+=("$mode:--mode $mode")
+  done
   runs+=("leaves:--error-px 0" "no_ewa:--no-ewa" "back_faces:--cull-back-faces")
   for run in "${runs[@]}"; do
     tag=${run%%:*}
