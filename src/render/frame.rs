@@ -45,8 +45,6 @@ pub(super) struct FrameUniform {
     pub elevation_pad: f32,
 }
 
-const _: () = assert!(std::mem::size_of::<FrameUniform>() == 304);
-
 /// The layout of bind group 0 of every pass: the frame uniform.
 pub(super) fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

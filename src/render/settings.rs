@@ -211,3 +211,23 @@ pub const PREFILTER_PX: f32 = 1.0;
 /// push blends a fold's hidden side into its front (1 radius: FLIP 0.083 on the default
 /// model's leaves, against 0.079 at 0.25; tools/quality.rs).
 pub const DEPTH_PUSH: f32 = 0.25;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every mode is listed once, at the index of its number, under a name of its own,
+    /// and reaches WGSL as `MODE_<NAME>` with that number.
+    #[test]
+    fn every_mode_has_one_number_name_and_wgsl_constant() {
+        let wgsl = Mode::wgsl_constants();
+        for (i, mode) in Mode::ALL.iter().enumerate() {
+            assert_eq!(*mode as usize, i, "{mode:?}");
+            let name = mode.name();
+            assert_eq!(Mode::ALL.iter().filter(|m| m.name() == name).count(), 1);
+            let line = format!("const MODE_{}: u32 = {i}u;", name.to_uppercase());
+            assert!(wgsl.contains(&line), "{line}");
+        }
+        assert_eq!(wgsl.lines().count(), Mode::ALL.len());
+    }
+}
