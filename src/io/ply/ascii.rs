@@ -1,5 +1,7 @@
-//! ASCII payloads: whitespace-separated numbers, read as a token stream with line
-//! numbers kept for error messages. Rows are not required to end at line breaks.
+//! ASCII payloads: whitespace-separated numbers, one row per line, read as a token
+//! stream with line numbers kept for error messages. A row whose line holds fewer or
+//! more values than the header declares is an error naming its element, row and line:
+//! read on as one stream, every later row would shift silently.
 
 use super::error::Problem;
 use super::faces::Faces;
@@ -33,9 +35,37 @@ impl<'a> Tokens<'a> {
         (self.pos > start).then(|| &self.data[start..self.pos])
     }
 
-    /// The next token as a value of type `s`, or an error naming the row.
-    fn value(&mut self, e: &Element, row: u64, s: Scalar) -> Result<f64, Problem> {
-        let Some(tok) = self.next() else {
+    /// Whether the rest of the current line holds nothing but blanks (and a CR).
+    fn line_ends(&self) -> bool {
+        self.data[self.pos..]
+            .iter()
+            .take_while(|&&b| b != b'\n')
+            .all(|b| b.is_ascii_whitespace())
+    }
+
+    /// The next token as a value of type `s`, on the row's line `row_line` (the line of
+    /// the row's first value when `None`), or an error naming the row.
+    fn value(
+        &mut self,
+        e: &Element,
+        row: u64,
+        s: Scalar,
+        row_line: Option<usize>,
+    ) -> Result<f64, Problem> {
+        let next = self.next();
+        if let Some(line) = row_line.filter(|l| next.is_some() && self.line != *l) {
+            return Err(Problem::row(
+                &e.name,
+                row,
+                format!(
+                    "the line ends before the row does: it holds fewer values than the \
+                     header declares ({})",
+                    declared(e)
+                ),
+            )
+            .at_line(line));
+        }
+        let Some(tok) = next else {
             return Err(Problem::row(
                 &e.name,
                 row,
@@ -74,12 +104,13 @@ impl<'a> Tokens<'a> {
         values: &mut Vec<f64>,
         mut visit: impl FnMut(usize, &[f64]) -> Result<(), Problem>,
     ) -> Result<(), Problem> {
+        let mut row_line = None;
         for (pi, p) in e.properties.iter().enumerate() {
             values.clear();
             match p.kind {
-                PropertyKind::Scalar(s) => values.push(self.value(e, row, s)?),
+                PropertyKind::Scalar(s) => values.push(self.value(e, row, s, row_line)?),
                 PropertyKind::List { count, item } => {
-                    let n = self.value(e, row, count)?;
+                    let n = self.value(e, row, count, row_line)?;
                     if n < 0.0 {
                         return Err(Problem::row(
                             &e.name,
@@ -88,15 +119,41 @@ impl<'a> Tokens<'a> {
                         )
                         .at_line(self.line));
                     }
+                    let line = row_line.unwrap_or(self.line);
                     for _ in 0..n as u64 {
-                        values.push(self.value(e, row, item)?);
+                        values.push(self.value(e, row, item, Some(line))?);
                     }
                 }
             }
+            row_line.get_or_insert(self.line);
             visit(pi, values).map_err(|p| p.at_line(self.line))?;
+        }
+        if !self.line_ends() {
+            return Err(Problem::row(
+                &e.name,
+                row,
+                format!(
+                    "the line holds more values than the header declares for a row ({})",
+                    declared(e)
+                ),
+            )
+            .at_line(self.line));
         }
         Ok(())
     }
+}
+
+/// What the header declares for a row of `e`: its properties' names, lists marked.
+fn declared(e: &Element) -> String {
+    let names: Vec<String> = e
+        .properties
+        .iter()
+        .map(|p| match p.kind {
+            PropertyKind::Scalar(_) => p.name.clone(),
+            PropertyKind::List { .. } => format!("a list '{}'", p.name),
+        })
+        .collect();
+    names.join(" ")
 }
 
 /// The decoded parts of an ASCII payload.

@@ -48,6 +48,12 @@ pub fn fixtures(dir: &Path) -> Vec<Fixture> {
     bad_index[n - 4..].copy_from_slice(&99i32.to_le_bytes());
     let mut negative_index = good.clone();
     negative_index[n - 4..].copy_from_slice(&(-5i32).to_le_bytes());
+    // ASCII rows end at their line: the line of vertex row 0, the first after the header.
+    let row0_line = ascii[..ascii.find("end_header").unwrap()].lines().count() + 2;
+    let row0_line: &'static str = Box::leak(format!("(line {row0_line})").into_boxed_str());
+    let extra_value = ascii.replacen("0 0 0\n", "0 0 0 9\n", 1);
+    let short_row = ascii.replacen("1 0 0\n", "1 0\n", 1);
+    let face_extra = ascii.replacen("3 0 1 2\n", "3 0 1 2 0.5 0.5\n", 1);
     let noise: Vec<u8> = (0..4096u32)
         .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
         .collect();
@@ -62,6 +68,9 @@ pub fn fixtures(dir: &Path) -> Vec<Fixture> {
         Fixture { name: "negative_index.ply", bytes: negative_index, expect: &["element 'face', row 1", "vertex index -5"] },
         Fixture { name: "ascii_index_out_of_range.ply", bytes: ascii.replace("3 0 2 3", "3 0 2 7").into_bytes(), expect: &["element 'face', row 1", "line", "vertex index 7"] },
         Fixture { name: "ascii_not_a_number.ply", bytes: ascii.replacen("1 0 0", "1 zero 0", 1).into_bytes(), expect: &["element 'vertex', row 1", "expected a float value, found 'zero'"] },
+        Fixture { name: "ascii_extra_value.ply", bytes: extra_value.into_bytes(), expect: Box::leak(Box::new(["element 'vertex', row 0", row0_line, "more values than the header declares", "(x y z)"])) },
+        Fixture { name: "ascii_short_row.ply", bytes: short_row.into_bytes(), expect: &["element 'vertex', row 1", "fewer values than the header declares"] },
+        Fixture { name: "ascii_face_extra.ply", bytes: face_extra.into_bytes(), expect: &["element 'face', row 0", "more values", "a list 'vertex_indices'"] },
         Fixture { name: "noise.ply", bytes: noise, expect: &["not a PLY file"] },
         Fixture { name: "empty.ply", bytes: vec![], expect: &["empty"] },
         Fixture { name: "no_end_header.ply", bytes: b"ply\nformat ascii 1.0\nelement vertex 1\n".to_vec(), expect: &["no 'end_header'"] },
