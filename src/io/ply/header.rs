@@ -111,10 +111,21 @@ impl Header {
     }
 }
 
+/// The first line of `bytes`, its newline (and CR) left out.
+fn first_line(bytes: &[u8]) -> &[u8] {
+    let line = bytes.split(|&b| b == b'\n').next().unwrap_or(&[]);
+    line.strip_suffix(b"\r").unwrap_or(line)
+}
+
+/// Whether `bytes` start with the line `ply`, blanks after it allowed (some writers leave
+/// one, and other readers take it).
+fn starts_with_magic(bytes: &[u8]) -> bool {
+    bytes[..bytes.len().min(64)].contains(&b'\n') && first_line(bytes).trim_ascii_end() == b"ply"
+}
+
 /// Finds the end of the header: the byte after the newline that ends `end_header`.
 fn header_end(bytes: &[u8]) -> Result<usize, Problem> {
-    let magic_ok = bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n");
-    if !magic_ok {
+    if !starts_with_magic(bytes) {
         return Err(Problem::file(
             "not a PLY file: it does not start with the line 'ply'",
         ));
@@ -161,6 +172,11 @@ pub(crate) fn parse_header(bytes: &[u8]) -> Result<Header, Problem> {
     let end = header_end(bytes)?;
     let text = std::str::from_utf8(&bytes[..end])
         .map_err(|e| Problem::file(format!("the header is not text: {e}")))?;
+    // The header parser wants the magic line bare: blanks after `ply` go (lines keep
+    // their numbers; the payload offset is `end`, in the file's own bytes).
+    let magic = first_line(text.as_bytes()).len();
+    let bare = format!("ply{}", &text[magic..]);
+    let text = if magic > 3 { bare.as_str() } else { text };
     let parser = Parser::<DefaultElement>::new();
     let mut reader = Reader::new(Cursor::new(text.as_bytes()));
     let parsed = parser.read_header(&mut reader).map_err(|e| {
@@ -222,4 +238,27 @@ pub(crate) fn parse_header(bytes: &[u8]) -> Result<Header, Problem> {
         elements,
         payload_offset: end,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_magic_line_may_end_in_blanks() {
+        let body = "format ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+                    property float z\nend_header\n0 0 0\n";
+        for magic in ["ply\n", "ply \n", "ply\t \r\n", "ply\r\n"] {
+            let file = format!("{magic}{body}");
+            let h = parse_header(file.as_bytes()).unwrap_or_else(|e| panic!("{magic:?}: {e:?}"));
+            assert_eq!(h.elements[0].count, 1);
+            assert_eq!(&file[h.payload_offset..], "0 0 0\n", "{magic:?}");
+        }
+        for not_ply in ["plyx\n", " ply\n", "ply", "PLY\n"] {
+            assert!(
+                parse_header(format!("{not_ply}{body}").as_bytes()).is_err(),
+                "{not_ply:?}"
+            );
+        }
+    }
 }
