@@ -10,7 +10,7 @@ use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::{bytes, count, readable};
 use crate::io::formats::read_model;
 use crate::io::las::LasSummary;
-use crate::io::model::{ElementSummary, Model};
+use crate::io::model::{ElementSummary, Model, Summary};
 use crate::io::rebase::MAX_OFFSET;
 use crate::io::{Bounds, GeometryStats};
 use crate::surfel::{LeafSurfels, NormalsTurned, SurfelStats, leaf_surfels};
@@ -95,16 +95,23 @@ impl ModelInfo {
         let (radius_min, radius_median, radius_max) = leaves.radius_range().unwrap_or_default();
         let load_seconds = model.load_time.as_secs_f64();
         let g = &model.geometry;
-        let s = &model.summary;
+        let Summary {
+            format,
+            comments,
+            obj_info,
+            elements,
+            skipped_elements,
+            las,
+        } = model.summary;
         Ok(ModelInfo {
             file: path.display().to_string(),
             bytes: model.file_bytes,
-            format: s.format.clone(),
-            comments: s.comments.clone(),
-            obj_info: s.obj_info.clone(),
-            elements: s.elements.clone(),
-            las: s.las.clone(),
-            skipped_elements: s.skipped_elements.clone(),
+            format,
+            comments,
+            obj_info,
+            elements,
+            las,
+            skipped_elements,
             bounds: g.bounds,
             core: g.core,
             origin: g.origin.to_array(),

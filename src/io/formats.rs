@@ -16,22 +16,15 @@ pub const FORMATS: &[&dyn Format] = &[&LasFormat, &PlyFormat];
 
 /// The format of the file at `path`, from its first bytes.
 pub fn format_of(path: &Path) -> Result<&'static dyn Format, ModelError> {
-    let mut head = [0u8; HEAD_BYTES];
-    let mut n = 0;
-    let mut file = std::fs::File::open(path).map_err(|e| ModelError::io(path, &e))?;
-    while n < head.len() {
-        match file.read(&mut head[n..]) {
-            Ok(0) => break,
-            Ok(k) => n += k,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(ModelError::io(path, &e)),
-        }
-    }
+    let mut head = Vec::with_capacity(HEAD_BYTES);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(HEAD_BYTES as u64).read_to_end(&mut head))
+        .map_err(|e| ModelError::io(path, &e))?;
     let last = *FORMATS.last().expect("a format");
     Ok(FORMATS
         .iter()
         .copied()
-        .find(|f| f.recognises(&head[..n]))
+        .find(|f| f.recognises(&head))
         .unwrap_or(last))
 }
 

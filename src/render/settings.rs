@@ -2,35 +2,22 @@
 
 use glam::{DVec3, Vec3};
 
-/// Display modes (docs/design.md §7b). The discriminant is the mode's number in the frame
-/// uniform; WGSL gets each as `MODE_<NAME>` from [`Mode::wgsl_constants`].
+/// Display modes (docs/design.md §7b); what each shows: [`Mode::description`]. The
+/// discriminant is the mode's number in the frame uniform; WGSL gets each as
+/// `MODE_<NAME>` from [`Mode::wgsl_constants`].
 #[repr(u32)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Mode {
-    /// Real colours (grey when the model has none), lit.
     Shaded = 0,
-    /// Colour by tree level.
     Levels = 1,
-    /// View-space normals as colours.
     Normals = 2,
-    /// Colour by splat radius (blue small, red large).
     Radius = 3,
-    /// Plain points: no blending, nearest splat wins.
     Points = 4,
-    /// The mesh the model came from (reference; needs a PLY with faces).
     Mesh = 5,
-    /// Eye-dome lighting (Boucheny 2009): the colours, unlit, darkened where the depth
-    /// steps away from the eye around a pixel; shape without normals.
     Edl = 6,
-    /// Colour by height over the model's range (a ramp from low blue to high red), lit.
     Elevation = 7,
-    /// LiDAR: colour by ASPRS class (ground brown, vegetation greens, buildings red,
-    /// water blue…), lit.
     Classification = 8,
-    /// LiDAR: intensity as grey between the model's 1st and 99th percentiles, lit.
     Intensity = 9,
-    /// LiDAR: colour by return (single yellow, first green, intermediate blue, last
-    /// red), lit.
     Returns = 10,
 }
 
@@ -109,13 +96,11 @@ impl Mode {
     }
 }
 
-/// How the splats of the prefix are culled (docs/design.md §6).
+/// How the splats of the prefix are culled (docs/design.md §6); each strategy:
+/// [`Culling::description`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Culling {
-    /// In the vertex stage: every node of the prefix is drawn as a quad; culled ones
-    /// collapse to a point outside the clip volume.
     Vertex,
-    /// A compute pass tests each node once and compacts the survivors into an indirect draw.
     Compute,
 }
 

@@ -175,8 +175,13 @@ pub(crate) fn parse_header(bytes: &[u8]) -> Result<Header, Problem> {
     // The header parser wants the magic line bare: blanks after `ply` go (lines keep
     // their numbers; the payload offset is `end`, in the file's own bytes).
     let magic = first_line(text.as_bytes()).len();
-    let bare = format!("ply{}", &text[magic..]);
-    let text = if magic > 3 { bare.as_str() } else { text };
+    let bare;
+    let text = if magic > 3 {
+        bare = format!("ply{}", &text[magic..]);
+        bare.as_str()
+    } else {
+        text
+    };
     let parser = Parser::<DefaultElement>::new();
     let mut reader = Reader::new(Cursor::new(text.as_bytes()));
     let parsed = parser.read_header(&mut reader).map_err(|e| {
