@@ -55,7 +55,7 @@ impl CloudAndReference {
     }
 
     fn build(path: &Path, triangulation: Triangulation, bounds: bool) -> anyhow::Result<Self> {
-        let mut geometry: Geometry = read_model(path)?.geometry;
+        let mut geometry: Geometry = read_model(path)?.drawable(path)?.geometry;
         geometry.triangles.clear();
         let triangles = match triangulation {
             Triangulation::Grid { width, height } => sensor_grid(&geometry, width, height)

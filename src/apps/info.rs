@@ -188,6 +188,9 @@ impl ModelInfo {
                 count(g.outliers)
             );
         }
+        if g.z_absent {
+            vertices += ", no z in the file: read as z = 0";
+        }
         field(out, "vertices", vertices);
         if g.triangle_strips > 0 {
             field(
@@ -226,6 +229,14 @@ impl ModelInfo {
         let yes = |b: bool| if b { "yes" } else { "no" };
         let mut out = String::new();
         self.header_lines(&mut out);
+        if self.geometry.vertices_in_file == 0 {
+            field(
+                &mut out,
+                "vertices",
+                "none: the file holds no points, nothing to draw".to_owned(),
+            );
+            return out;
+        }
         self.geometry_lines(&mut out);
         let mut line = |k: &str, v: String| field(&mut out, k, v);
         line(
@@ -234,7 +245,11 @@ impl ModelInfo {
                 "faces {}, normals {}, colours {}",
                 yes(self.present.faces),
                 yes(self.present.normals),
-                yes(self.present.colors)
+                if self.geometry.colors_all_zero {
+                    "no (the file's are zero everywhere: shaded grey)"
+                } else {
+                    yes(self.present.colors)
+                }
             ),
         );
         line(
@@ -332,11 +347,13 @@ fn las_lines(s: &LasSummary, out: &mut String) {
             .collect::<Vec<_>>()
             .join(", ")
     };
-    line("by return", counts(&s.by_return, &|r| format!("#{r}")));
-    line(
-        "by class",
-        counts(&s.by_class, &|c| format!("{c} ({})", asprs_class(c))),
-    );
+    if s.points > 0 {
+        line("by return", counts(&s.by_return, &|r| format!("#{r}")));
+        line(
+            "by class",
+            counts(&s.by_class, &|c| format!("{c} ({})", asprs_class(c))),
+        );
+    }
     if let Some((lo, hi)) = s.intensity {
         line("intensity", format!("{lo} – {hi}"));
     }

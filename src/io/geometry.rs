@@ -14,7 +14,7 @@ use serde::Serialize;
 use crate::io::bounds::Bounds;
 use crate::io::ply::faces::Faces;
 use crate::io::rebase;
-use crate::io::rows::{ColumnRows, Field, VertexFields, VertexRows};
+use crate::io::rows::{ColumnRows, Field, Flat, VertexFields, VertexRows};
 use crate::io::scalar::Scalar;
 
 /// A model ready for the surfel builder.
@@ -89,6 +89,7 @@ impl Geometry {
                 .collect(),
             has_normals: false,
             color_channels: 0,
+            z_absent: false,
         };
         assemble(&ColumnRows { columns }, &fields, None)
     }
@@ -156,6 +157,11 @@ pub struct GeometryStats {
     /// Triangles that use a dropped vertex (non-finite or out of range).
     pub triangles_dropped_nonfinite: u64,
     pub normals_given_invalid: u64,
+    /// The file gives colours, but black everywhere (a writer's empty fields): they
+    /// are dropped, and the model is shaded as one without colours.
+    pub colors_all_zero: bool,
+    /// The vertices have x and y but no z: they lie in the plane z = 0.
+    pub z_absent: bool,
 }
 
 /// `v` at unit length, in f32: divided by its largest component first and normalized
@@ -207,9 +213,23 @@ pub(crate) fn row_color<R: VertexRows>(rows: &R, fields: &VertexFields, i: usize
 
 const CHUNK: usize = 1 << 15;
 
-/// Builds the geometry from decoded vertex rows and faces.
-/// Fails only when no vertex can be kept.
+/// Builds the geometry from decoded vertex rows and faces (rows without z in the plane
+/// z = 0). Fails only when rows are given and none can be kept.
 pub(crate) fn assemble<R: VertexRows>(
+    rows: &R,
+    fields: &VertexFields,
+    faces: Option<Faces>,
+) -> Result<(Geometry, GeometryStats), String> {
+    let (geometry, mut stats) = if fields.z_absent {
+        assemble_rows(&Flat(rows), fields, faces)
+    } else {
+        assemble_rows(rows, fields, faces)
+    }?;
+    stats.z_absent = fields.z_absent;
+    Ok((geometry, stats))
+}
+
+fn assemble_rows<R: VertexRows>(
     rows: &R,
     fields: &VertexFields,
     faces: Option<Faces>,
@@ -258,6 +278,10 @@ pub(crate) fn assemble<R: VertexRows>(
                 .map(|&i| color(i as usize))
                 .collect(),
         }
+    });
+    let colors = colors.filter(|c: &Vec<[u8; 4]>| {
+        stats.colors_all_zero = c.par_iter().all(|c| c[..3] == [0; 3]);
+        !stats.colors_all_zero
     });
     let mut triangles = Vec::new();
     if let Some(f) = faces {

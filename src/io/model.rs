@@ -58,6 +58,10 @@ pub enum ModelError {
     Las(#[from] LasError),
     #[error("{}: cannot read: {message}", path.display())]
     Io { path: PathBuf, message: String },
+    /// A valid file without points: `spt info` describes it, nothing else has anything
+    /// to do with it.
+    #[error("{}: the file holds no points: nothing to draw", path.display())]
+    Empty { path: PathBuf },
 }
 
 impl ModelError {
@@ -67,5 +71,17 @@ impl ModelError {
             path: path.to_owned(),
             message: error.to_string(),
         }
+    }
+}
+
+impl Model {
+    /// The model read, or [`ModelError::Empty`] when it has no vertex to draw.
+    pub fn drawable(self, path: &Path) -> Result<Model, ModelError> {
+        if self.geometry.positions.is_empty() {
+            return Err(ModelError::Empty {
+                path: path.to_owned(),
+            });
+        }
+        Ok(self)
     }
 }

@@ -182,17 +182,25 @@ pub fn within(p: [f64; 3], origin: DVec3, reach: f64) -> bool {
     (0..3).all(|k| (p[k] - origin[k]).abs() <= reach)
 }
 
-/// Chooses the origin of `rows` and the rows kept. Fails only when none is kept.
+/// Chooses the origin of `rows` and the rows kept. A file without rows has the empty
+/// frame (origin zero, empty boxes); one with rows fails when none is kept.
 pub(crate) fn frame<R: VertexRows>(rows: &R) -> Result<Frame, String> {
     let n = rows.len() as u64;
+    if n == 0 {
+        return Ok(Frame {
+            origin: DVec3::ZERO,
+            bounds: Bounds::empty(),
+            core: Bounds::empty(),
+            outliers: 0,
+            nonfinite: 0,
+            out_of_range: 0,
+            kept: None,
+        });
+    }
     let m = measure(rows, &is_finite);
     let finite = m.kept;
     if finite == 0 {
-        return Err(if n == 0 {
-            "the model has no vertex".to_owned()
-        } else {
-            format!("none of the {n} vertices has finite coordinates")
-        });
+        return Err(format!("none of the {n} vertices has finite coordinates"));
     }
     let reach = MAX_OFFSET / 2.0;
     let (m, kept) =

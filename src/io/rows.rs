@@ -22,6 +22,9 @@ pub struct VertexFields {
     pub has_normals: bool,
     /// 0, 3 or 4 colour channels.
     pub color_channels: usize,
+    /// The file has x and y but no z (a plan's or a map's points): the z field reads
+    /// x's property, and [`Flat`] rows give 0 in its place.
+    pub z_absent: bool,
 }
 
 impl VertexFields {
@@ -41,6 +44,26 @@ pub trait VertexRows: Sync {
     #[inline(always)]
     fn position(&self, i: usize) -> [f64; 3] {
         [self.get(i, 0), self.get(i, 1), self.get(i, 2)]
+    }
+}
+
+/// Rows without z: field 2 reads 0 ([`VertexFields::z_absent`]).
+pub struct Flat<'a, R>(pub &'a R);
+
+impl<R: VertexRows> VertexRows for Flat<'_, R> {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    #[inline(always)]
+    fn get(&self, i: usize, f: usize) -> f64 {
+        if f == 2 { 0.0 } else { self.0.get(i, f) }
+    }
+
+    #[inline(always)]
+    fn position(&self, i: usize) -> [f64; 3] {
+        let [x, y, _] = self.0.position(i);
+        [x, y, 0.0]
     }
 }
 

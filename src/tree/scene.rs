@@ -165,7 +165,7 @@ pub fn ordered_from_file(path: &Path, report: &dyn Report) -> anyhow::Result<Ord
 /// The read step: the model in `path`.
 fn read_step(path: &Path, report: &dyn Report) -> anyhow::Result<Model> {
     report.step(Step::Read, 0);
-    let model = read_model(path)?;
+    let model = read_model(path)?.drawable(path)?;
     report.finished(Finished::Read(&model));
     Ok(model)
 }

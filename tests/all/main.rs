@@ -9,6 +9,7 @@ mod bench;
 mod cli_help;
 mod cloud_quality;
 mod docs;
+mod file_quirks;
 mod hostile_inputs;
 mod layers;
 mod out_of_core;

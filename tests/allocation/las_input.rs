@@ -1,6 +1,6 @@
 //! LAS and LAZ in: a small file written by the `las` crate reads back with its
 //! points, colours and counts; damaged copies (truncated LAS and LAZ, a point count of
-//! 10⁹ in a small file, a zero scale factor, a file that only starts with `LASF`) are
+//! 10⁹ in a small file, a VLR counted but missing, a zero scale factor, a file that only starts with `LASF`) are
 //! refused with an error that names the file and the problem, `spt info` exits 1 on
 //! them without panicking, and no allocation exceeds 8 MiB meanwhile (a 10⁹-point
 //! header would ask for tens of GB). Alone in its binary: the allocation counter sees
@@ -8,7 +8,7 @@
 
 use crate::common;
 
-use crate::common::las_files::{POINT_COUNT_AT, X_SCALE_AT, sample};
+use crate::common::las_files::{POINT_COUNT_AT, VLR_COUNT_AT, X_SCALE_AT, sample};
 use spt::io::las::read_las;
 
 #[test]
@@ -103,6 +103,11 @@ fn damaged() -> Vec<Damaged> {
             name: "zero_scale.las",
             bytes: patch(las.clone(), X_SCALE_AT, &0f64.to_le_bytes()),
             expect: &["x scale factor is 0"],
+        },
+        Damaged {
+            name: "vlr_count.las",
+            bytes: patch(las.clone(), VLR_COUNT_AT, &1u32.to_le_bytes()),
+            expect: &["1 VLR", "only 0 lie before the point data"],
         },
         Damaged {
             name: "only_magic.las",

@@ -254,9 +254,9 @@ fn frame_progress(args: &BenchArgs, paths: &[(String, Vec<Camera>)]) -> Progress
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let args = effective_args(args)?;
+    let scene = Scene::open(&args.model)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot make the folder", args.out.display()))?;
-    let scene = Scene::open(&args.model)?;
     let gpu = Gpu::new(args.backend.as_deref())?;
     let env = environment(&args, &scene, &gpu);
     println!("adapter   {}", env.label());

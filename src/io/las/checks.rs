@@ -43,6 +43,7 @@ pub(super) fn check_layout(file: &mut File, len: u64) -> Result<(), String> {
         .large_file
         .map_or(0, |l| l.number_of_point_records)
         .max(u64::from(raw.number_of_point_records));
+    check_vlrs(file, &raw, data)?;
     let compressed = raw.point_data_record_format & 0x80 != 0;
     if !compressed {
         let record = u64::from(raw.point_data_record_length);
@@ -52,11 +53,32 @@ pub(super) fn check_layout(file: &mut File, len: u64) -> Result<(), String> {
                 "the header says {count} points of {record} bytes, but the file holds at most {room} (truncated?)"
             ));
         }
-    } else {
-        check_chunk_table(file, len, data)?;
     }
     if let Some(evlr) = raw.evlr {
         check_evlr(file, len, evlr.start_of_first_evlr)?;
+    }
+    Ok(())
+}
+
+/// The VLRs the header counts must each start before the point data: the decoder
+/// reads them one after the other from the end of the header, and one counted but
+/// missing would be read from the points (or past the end of the file).
+fn check_vlrs(file: &mut File, raw: &las::raw::Header, data: u64) -> Result<(), String> {
+    let declared = raw.number_of_variable_length_records;
+    let mut at = u64::from(raw.header_size);
+    for k in 0..declared {
+        // A VLR's 54-byte header gives the u16 length of its data at byte 20.
+        let length = (at + 54 <= data)
+            .then(|| bytes_at(file, at + 20, 2))
+            .flatten()
+            .map(|b| u64::from(u16::from_le_bytes([b[0], b[1]])));
+        let Some(length) = length else {
+            return Err(format!(
+                "the header counts {declared} VLR(s), but only {k} lie before the point data \
+                 (byte {data})"
+            ));
+        };
+        at += 54 + length;
     }
     Ok(())
 }
@@ -111,11 +133,25 @@ fn check_evlr(file: &mut File, len: u64, start: u64) -> Result<(), String> {
 /// allocates a whole chunk at once, however few points the file holds.
 pub const MAX_CHUNK_BYTES: u64 = 8 << 20;
 
+/// How a LAZ file's points are compressed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum LazLayout {
+    /// In chunks listed by a chunk table (LASzip 2 and later): decoded in parallel.
+    Chunked,
+    /// One stream of points without chunks or table (LASzip 1's point-wise
+    /// compressor): decoded in order, on one core.
+    PointWise,
+}
+
+/// The LASzip VLR's code of the point-wise compressor.
+const POINT_WISE: u8 = 1;
+
 /// What the LAZ decoder would trust without checking: its VLR's record size must be the
 /// header's, its chunks no larger than [`MAX_CHUNK_BYTES`], its chunk table's byte
 /// counts must add up to no more than the compressed data, and its chunks must hold at
-/// least the points the header announces.
-pub(super) fn check_laz(file: &mut File, header: &las::Header) -> Result<(), String> {
+/// least the points the header announces. A point-wise file has no chunks: its points
+/// are decoded one batch at a time, each bounded by the file's size.
+pub(super) fn check_laz(file: &mut File, header: &las::Header) -> Result<LazLayout, String> {
     let vlr = header
         .all_vlrs()
         .find(|v| v.user_id == laz::LazVlr::USER_ID && v.record_id == laz::LazVlr::RECORD_ID)
@@ -130,6 +166,10 @@ pub(super) fn check_laz(file: &mut File, header: &las::Header) -> Result<(), Str
             laz_vlr.items_size()
         ));
     }
+    // The VLR's first field is its compressor (`from_buffer` refused unknown ones).
+    if vlr.data[..2] == [POINT_WISE, 0] {
+        return Ok(LazLayout::PointWise);
+    }
     let chunk = u64::from(laz_vlr.chunk_size());
     if !laz_vlr.uses_variable_size_chunks() && chunk * record > MAX_CHUNK_BYTES {
         return Err(format!(
@@ -137,6 +177,8 @@ pub(super) fn check_laz(file: &mut File, header: &las::Header) -> Result<(), Str
         ));
     }
     let data = header_offset_to_points(file)?;
+    let len = file.metadata().map_err(|e| e.to_string())?.len();
+    check_chunk_table(file, len, data)?;
     file.seek(SeekFrom::Start(data))
         .map_err(|e| e.to_string())?;
     let table = laz::laszip::ChunkTable::read_from(BufReader::new(&mut *file), &laz_vlr)
@@ -171,7 +213,7 @@ pub(super) fn check_laz(file: &mut File, header: &las::Header) -> Result<(), Str
              header) or a chunk of {largest} points: it is damaged"
         ));
     }
-    Ok(())
+    Ok(LazLayout::Chunked)
 }
 
 /// Each item of a LASzip VLR must state its type's own size (LAS 1.4 and LASzip: the

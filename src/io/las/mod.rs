@@ -23,13 +23,14 @@ use serde::Serialize;
 mod batches;
 mod checks;
 mod format;
+mod point_wise;
 
 use super::geometry::{Geometry, GeometryStats, PointAttributes, assemble};
 use super::rows::{Field, VertexFields, VertexRows};
 use super::scalar::Scalar;
 pub use batches::LasBatches;
 pub use checks::MAX_CHUNK_BYTES;
-use checks::{check_layout, check_laz};
+use checks::{LazLayout, check_layout, check_laz};
 pub use format::LasFormat;
 
 /// LAS points decoded at a time: a batch's records (about 2 MB) stay in cache while each
@@ -70,7 +71,8 @@ pub struct LasSummary {
     pub offset: [f64; 3],
     /// "WKT" or "GeoTIFF keys" when the file carries a CRS.
     pub crs: Option<String>,
-    /// "16-bit" or "8-bit (in 16-bit fields)" when the points have RGB.
+    /// "16-bit", "8-bit (in 16-bit fields)" or "zero everywhere (shaded grey)" when
+    /// the points have RGB.
     pub colors: Option<String>,
     pub system_identifier: String,
     pub generating_software: String,
@@ -122,8 +124,10 @@ fn open_checked(path: &Path) -> Result<(Reader, u64), LasError> {
     check_layout(&mut file, file_bytes).map_err(fail)?;
     file.seek(SeekFrom::Start(0)).map_err(io)?;
     let header = las::Header::new(BufReader::new(&mut file)).map_err(|e| fail(format!("{e}")))?;
-    if header.point_format().is_compressed {
-        check_laz(&mut file, &header).map_err(fail)?;
+    if header.point_format().is_compressed
+        && check_laz(&mut file, &header).map_err(fail)? == LazLayout::PointWise
+    {
+        return Ok((point_wise::reader(path).map_err(fail)?, file_bytes));
     }
     file.seek(SeekFrom::Start(0)).map_err(io)?;
     let reader = Reader::new(BufReader::new(file)).map_err(|e| fail(format!("{e}")))?;
@@ -177,6 +181,7 @@ impl LasPoints {
             fields,
             has_normals: false,
             color_channels: if self.rgb.is_some() { 3 } else { 0 },
+            z_absent: false,
         }
     }
 }
@@ -243,9 +248,6 @@ fn decode(reader: &mut Reader, file_bytes: u64) -> Result<LasPoints, String> {
         points.return_number.extend(batch.return_number());
         points.number_of_returns.extend(batch.number_of_returns());
     }
-    if points.xyz.is_empty() {
-        return Err("the file holds no points".to_owned());
-    }
     Ok(points)
 }
 
@@ -292,8 +294,10 @@ fn summarize(header: &las::Header, points: &LasPoints, eight_bit: bool) -> LasSu
     } else {
         None
     };
-    let colors = points.rgb.as_ref().map(|_| {
-        if eight_bit {
+    let colors = points.rgb.as_ref().map(|rgb| {
+        if rgb.iter().all(|c| *c == [0; 3]) {
+            "zero everywhere (shaded grey)".to_owned()
+        } else if eight_bit {
             "8-bit (in 16-bit fields)".to_owned()
         } else {
             "16-bit".to_owned()

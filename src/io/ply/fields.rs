@@ -63,15 +63,19 @@ impl Plan {
             .ok_or_else(|| Problem::file("the file has no 'vertex' element: no model to read"))?;
         let v = &header.elements[vertex_element];
         let mut fields = Vec::new();
-        for (axis, names) in [X, Y, Z].iter().enumerate() {
+        for (axis, names) in [X, Y].iter().enumerate() {
             let f = scalar_field(v, names)?.ok_or_else(|| {
                 Problem::file(format!(
                     "element 'vertex' has no property '{}'",
-                    ["x", "y", "z"][axis]
+                    ["x", "y"][axis]
                 ))
             })?;
             fields.push(f);
         }
+        // Points without z lie in the plane z = 0 (`Flat` rows).
+        let z = scalar_field(v, Z)?;
+        let z_absent = z.is_none();
+        fields.push(z.unwrap_or(fields[0]));
         let normals = all_fields(v, &[NX, NY, NZ])?;
         let has_normals = normals.is_some();
         fields.extend(normals.unwrap_or_default());
@@ -97,6 +101,7 @@ impl Plan {
                 fields,
                 has_normals,
                 color_channels,
+                z_absent,
             },
             faces,
             strips,

@@ -50,7 +50,8 @@ impl VertexBatch {
     fn extend<R: VertexRows>(&mut self, rows: &R, plan: &Plan) {
         let fields = &plan.vertex_fields;
         for i in 0..rows.len() {
-            self.xyz.push(rows.position(i));
+            let [x, y, z] = rows.position(i);
+            self.xyz.push([x, y, if fields.z_absent { 0.0 } else { z }]);
             if fields.has_normals {
                 self.normals.push(row_normal(rows, i));
             }

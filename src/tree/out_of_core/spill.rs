@@ -14,6 +14,7 @@ use glam::{DVec3, IVec3};
 
 use crate::io::format::PointBatch;
 use crate::io::formats::ModelStream;
+use crate::io::model::ModelError;
 use crate::io::rebase::{MAX_OFFSET, SAMPLE, sample_window, within};
 use crate::io::{Bounds, PointAttributes};
 
@@ -90,7 +91,9 @@ impl Scan {
                     inliers += 1;
                 }
             }
-            has_color |= !b.rgb.is_empty();
+            // Colours zero everywhere are a writer's empty fields, as the whole-file
+            // readers take them: shaded grey.
+            has_color |= b.rgb.iter().any(|c| *c != [0; 3]);
             eight_bit &= b.rgb.iter().flatten().all(|&c| c <= 255);
         })?;
         self.count = count;
@@ -120,6 +123,12 @@ pub fn scan(input: &ModelStream, path: &Path) -> anyhow::Result<Scan> {
             rows += 1;
         }
     })?;
+    if rows == 0 {
+        return Err(ModelError::Empty {
+            path: path.to_owned(),
+        }
+        .into());
+    }
     let none = || anyhow::anyhow!("{}: the file holds no finite point", path.display());
     let (median, window) = sample_window(&sample).ok_or_else(none)?;
     let mut scan = Scan {

@@ -75,9 +75,8 @@ pub fn fixtures(dir: &Path) -> Vec<Fixture> {
         Fixture { name: "empty.ply", bytes: vec![], expect: &["empty"] },
         Fixture { name: "no_end_header.ply", bytes: b"ply\nformat ascii 1.0\nelement vertex 1\n".to_vec(), expect: &["no 'end_header'"] },
         Fixture { name: "bad_header_line.ply", bytes: b"ply\nformat ascii 1.0\nelement vertex 1\nproperty flaot x\nend_header\n".to_vec(), expect: &["header line 4"] },
-        Fixture { name: "no_vertex_rows.ply", bytes: b"ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n".to_vec(), expect: &["no vertex"] },
         Fixture { name: "no_vertex_element.ply", bytes: b"ply\nformat ascii 1.0\nelement point 1\nproperty float x\nend_header\n1\n".to_vec(), expect: &["no 'vertex' element"] },
-        Fixture { name: "no_z.ply", bytes: b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n1 2\n".to_vec(), expect: &["no property 'z'"] },
+        Fixture { name: "no_y.ply", bytes: b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float z\nend_header\n1 2\n".to_vec(), expect: &["no property 'y'"] },
         Fixture { name: "all_nan.ply", bytes: b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\nnan 0 0\n0 inf 0\n".to_vec(), expect: &["none of the 2 vertices has finite coordinates"] },
     ]
 }

@@ -58,4 +58,5 @@ pub fn sample_of_format(n: usize, format: u8, compressed: bool) -> Vec<u8> {
 
 /// Offsets in a LAS 1.2 header (ASPRS LAS 1.2, table 4).
 pub const POINT_COUNT_AT: usize = 107;
+pub const VLR_COUNT_AT: usize = 100;
 pub const X_SCALE_AT: usize = 131;
