@@ -77,9 +77,11 @@ fn main() -> anyhow::Result<()> {
         Format::BinaryBigEndian => Encoding::BinaryBigEndian,
     };
     let mut layout = PlyLayout::standard(encoding, &mesh);
-    layout.comments = vec![format!(
-        "spt gen_model: bumpy (2,3) torus knot, {segments} segments x {sides} sides"
-    )];
+    // The knot winds about z: say so, for readers that would take a PLY as y-up.
+    layout.comments = vec![
+        format!("spt gen_model: bumpy (2,3) torus knot, {segments} segments x {sides} sides"),
+        "up_axis z".to_owned(),
+    ];
     write_ply(&output, &mesh, &layout)?;
     println!(
         "wrote {} ({} vertices, {} triangles, {} bytes)",

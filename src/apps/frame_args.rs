@@ -5,6 +5,8 @@ use anyhow::bail;
 use glam::{DVec3, Vec3};
 
 use crate::render::{Camera, Culling, Mode, OrbitAxes, Settings};
+use crate::io::up::UpAxis;
+use crate::tree::TreeMeta;
 use crate::tree::scene::Scene;
 
 /// The options `spt render` (and the viewer's screenshots) take.
@@ -14,10 +16,10 @@ pub struct RenderArgs {
     #[arg(long, default_value = "1024x768", value_parser = parse_size)]
     pub size: (u32, u32),
     /// Orbit camera: azimuth and elevation in degrees, distance in bounding-sphere radii,
-    /// about z up, or for a sensor frame (a cloud seen from its file's origin) about its
-    /// image's up, azimuth 0 and elevation 0 looking from the sensor (default: the
-    /// whole model framed from azimuth 30, elevation 20; 45 for a terrain; a sensor
-    /// frame from its sensor).
+    /// about the model's up (--up), or for a sensor frame (a cloud seen from its file's
+    /// origin) about its image's up, azimuth 0 and elevation 0 looking from the sensor
+    /// (default: the whole model framed from azimuth 30, elevation 20; 45 for a
+    /// terrain; a sensor frame from its sensor).
     #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, conflicts_with_all = ["eye", "target"])]
     pub orbit: Option<[f64; 3]>,
     /// Eye position in the model file's coordinates (with --target).
@@ -26,6 +28,10 @@ pub struct RenderArgs {
     /// Point looked at, in the model file's coordinates (with --eye).
     #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, requires = "eye")]
     pub target: Option<[f64; 3]>,
+    /// Which axis is up (default: the one the file gives, z for LAS and LAZ; else z for
+    /// a terrain, y for other models; a sensor frame is seen as its sensor saw it).
+    #[arg(long, value_enum, allow_hyphen_values = true)]
+    pub up: Option<UpAxis>,
     /// Vertical field of view, degrees.
     #[arg(long, default_value_t = 45.0)]
     pub fov: f64,
@@ -137,13 +143,18 @@ impl RenderArgs {
         }
     }
 
+    /// The orbit axes of `scene`'s model, about `--up` when given.
+    pub fn axes(&self, scene: &Scene) -> OrbitAxes {
+        OrbitAxes::of(&with_up(scene.meta(), self.up))
+    }
+
     pub fn camera(&self, scene: &Scene) -> anyhow::Result<Camera> {
         let fov = self.fov.to_radians();
         if !(0.01..3.1).contains(&fov) {
             bail!("--fov must be between 1 and 177 degrees");
         }
         let aspect = self.size.0 as f64 / self.size.1 as f64;
-        let meta = scene.meta();
+        let meta = &with_up(scene.meta(), self.up);
         Ok(match (self.orbit, self.eye, self.target) {
             (Some([az, el, dist]), _, _) => Camera::orbit(meta, az, el, dist, fov),
             (None, Some(eye), Some(target)) => {
@@ -160,6 +171,25 @@ impl RenderArgs {
             }
             _ => Camera::framed(meta, scene.index.chunks(), fov, aspect),
         })
+    }
+}
+
+/// `meta` with `up` as its up axis when given.
+pub fn with_up(meta: &TreeMeta, up: Option<UpAxis>) -> TreeMeta {
+    TreeMeta {
+        up: up.or(meta.up),
+        ..meta.clone()
+    }
+}
+
+/// `--up`'s values: the axes by their names.
+impl clap::ValueEnum for UpAxis {
+    fn value_variants<'a>() -> &'a [Self] {
+        &UpAxis::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
     }
 }
 

@@ -1,6 +1,8 @@
 //! `spt info FILE [--json]`: what a model file (PLY, LAS, LAZ) holds, how it loads and
 //! the leaf surfels it gives; or what an `.spt` file holds and whether its checksum holds.
 
+use crate::io::up::UpAxis;
+use crate::tree::up::up_of_shape;
 use std::path::Path;
 use std::time::Instant;
 
@@ -79,6 +81,10 @@ pub struct ModelInfo {
     /// Centre of `core`: every position is stored relative to it.
     pub origin: [f64; 3],
     pub present: Present,
+    /// The axis the model is shown standing on (`None`: a sensor frame, seen as its
+    /// sensor saw it), and why.
+    pub up: Option<UpAxis>,
+    pub up_because: &'static str,
     pub geometry: GeometryStats,
     pub surfels: SurfelInfo,
     pub timing: Timing,
@@ -102,7 +108,16 @@ impl ModelInfo {
             elements,
             skipped_elements,
             las,
+            up: file_up,
         } = model.summary;
+        let shape_up = up_of_shape(leaves.normals_turned, &g.bounds, g.origin);
+        let up_because = match (file_up, shape_up) {
+            (Some(_), _) if las.is_some() => "LAS and LAZ are z-up",
+            (Some(_), _) => "a comment of the header says so",
+            (None, None) => "a sensor frame: seen as its sensor saw it",
+            (None, Some(UpAxis::Z)) => "a terrain: flat in z",
+            (None, _) => "the default of models whose file does not say",
+        };
         Ok(ModelInfo {
             file: path.display().to_string(),
             bytes: model.file_bytes,
@@ -115,6 +130,8 @@ impl ModelInfo {
             bounds: g.bounds,
             core: g.core,
             origin: g.origin.to_array(),
+            up: file_up.or(shape_up),
+            up_because,
             present: Present {
                 faces: !g.triangles.is_empty(),
                 normals: g.normals.is_some(),
@@ -223,10 +240,31 @@ impl ModelInfo {
         }
     }
 
+    /// What the file gives (faces, normals, colours) and the up axis chosen.
+    fn present_lines(&self, out: &mut String) {
+        let yes = |b: bool| if b { "yes" } else { "no" };
+        let colours = if self.geometry.colors_all_zero {
+            "no (the file's are zero everywhere: shaded grey)"
+        } else {
+            yes(self.present.colors)
+        };
+        let (faces, normals) = (yes(self.present.faces), yes(self.present.normals));
+        field(
+            out,
+            "present",
+            format!("faces {faces}, normals {normals}, colours {colours}"),
+        );
+        let up = self.up.map_or("none", UpAxis::name);
+        field(
+            out,
+            "up",
+            format!("{up} ({}; --up overrides)", self.up_because),
+        );
+    }
+
     /// The report as a person reads it.
     pub fn to_text(&self) -> String {
         let s = &self.surfels;
-        let yes = |b: bool| if b { "yes" } else { "no" };
         let mut out = String::new();
         self.header_lines(&mut out);
         if self.geometry.vertices_in_file == 0 {
@@ -238,20 +276,8 @@ impl ModelInfo {
             return out;
         }
         self.geometry_lines(&mut out);
+        self.present_lines(&mut out);
         let mut line = |k: &str, v: String| field(&mut out, k, v);
-        line(
-            "present",
-            format!(
-                "faces {}, normals {}, colours {}",
-                yes(self.present.faces),
-                yes(self.present.normals),
-                if self.geometry.colors_all_zero {
-                    "no (the file's are zero everywhere: shaded grey)"
-                } else {
-                    yes(self.present.colors)
-                }
-            ),
-        );
         line(
             "surfels",
             format!(

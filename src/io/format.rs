@@ -13,6 +13,7 @@ use super::PointAttributes;
 use super::geometry::channel;
 use super::model::{Model, ModelError};
 use super::scalar::Scalar;
+use super::up::UpAxis;
 
 /// How many of a file's first bytes [`Format::recognises`] is shown.
 pub const HEAD_BYTES: usize = 16;
@@ -41,6 +42,8 @@ pub trait PointStream: Send + Sync {
     fn has_normals(&self) -> bool;
     /// Whether the points carry LiDAR attributes.
     fn has_attributes(&self) -> bool;
+    /// The up axis the file gives ([`crate::io::model::Summary::up`]).
+    fn up(&self) -> Option<UpAxis>;
     /// Calls `f` on every batch of points, in file order.
     fn points(&self, f: &mut dyn FnMut(&PointBatch)) -> Result<(), ModelError>;
     /// Calls `f` on the triangles, a batch at a time, in file order (none for a cloud).

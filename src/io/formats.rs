@@ -9,6 +9,7 @@ use super::format::{Format, HEAD_BYTES, PointBatch, PointStream};
 use super::las::LasFormat;
 use super::model::{Model, ModelError};
 use super::ply::PlyFormat;
+use super::up::UpAxis;
 
 /// Every format the engine reads, in the order they are tried. The last (PLY) also
 /// reads any file that no format recognises, and its reader says what is wrong with it.
@@ -61,6 +62,11 @@ impl ModelStream {
     /// Whether the points carry LiDAR attributes (LAS and LAZ).
     pub fn has_attributes(&self) -> bool {
         self.0.has_attributes()
+    }
+
+    /// The up axis the file gives ([`crate::io::model::Summary::up`]).
+    pub fn up(&self) -> Option<UpAxis> {
+        self.0.up()
     }
 
     /// Calls `f` on every batch of points, in file order.

@@ -20,6 +20,7 @@ pub mod scalar;
 pub(crate) mod syncing_file;
 pub mod torus_knot;
 pub mod triangulate;
+pub mod up;
 
 pub use bounds::Bounds;
 pub use geometry::{Geometry, GeometryStats, PointAttributes};

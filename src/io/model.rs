@@ -9,6 +9,7 @@ use serde::Serialize;
 
 use super::las::{LasError, LasSummary};
 use super::ply::PlyError;
+use super::up::UpAxis;
 use super::{Geometry, GeometryStats};
 
 /// What a file says of itself, in terms every format fills (those a format does not
@@ -29,6 +30,9 @@ pub struct Summary {
     /// What a LAS or LAZ file says of itself (software, counts by class and return,
     /// scale, offset, CRS).
     pub las: Option<LasSummary>,
+    /// The up axis the file gives: z for LAS and LAZ, a PLY header's comment's
+    /// ([`UpAxis::from_comments`]); `None` when it gives none.
+    pub up: Option<UpAxis>,
 }
 
 /// One element of a file: its name, row count and property declarations.

@@ -5,6 +5,7 @@
 
 use glam::{DVec3, Mat4};
 
+use crate::io::up::UpAxis;
 use crate::tree::TreeMeta;
 use crate::tree::chunks::Chunk;
 use crate::tree::select::ViewCone;
@@ -43,6 +44,31 @@ impl OrbitAxes {
         up: DVec3::Z,
     };
 
+    /// The axes about `up`: north the axis a viewer of such models faces at azimuth 0
+    /// (z up: +y, the eye on the −y side; y up: −z, the eye on the +z side, as in
+    /// OpenGL and MeshLab; x up: +y), so that east (the image's right) is +x for both
+    /// usual ups. A negative up keeps its positive's north: the image turns over.
+    pub fn about(up: UpAxis) -> OrbitAxes {
+        let north = match up {
+            UpAxis::Z | UpAxis::NegZ | UpAxis::X | UpAxis::NegX => DVec3::Y,
+            UpAxis::Y | UpAxis::NegY => DVec3::NEG_Z,
+        };
+        OrbitAxes {
+            north,
+            up: up.vector(),
+        }
+    }
+
+    /// The axes of a tree: about its up axis ([`TreeMeta::up`], [`OrbitAxes::about`]),
+    /// or, for a tree without one, a sensor frame's ([`OrbitAxes::of_sensor`]) or
+    /// [`OrbitAxes::Z_UP`].
+    pub fn of(meta: &TreeMeta) -> OrbitAxes {
+        match meta.up {
+            Some(up) => OrbitAxes::about(up),
+            None => OrbitAxes::of_sensor(meta),
+        }
+    }
+
     /// A sensor frame's ([`TreeMeta::sensor`]): north along its optical axis, the
     /// coordinate axis nearest the direction from the sensor to the model's centre, so
     /// that azimuth 0, elevation 0 looks the way the sensor did. Up, for an optical
@@ -50,7 +76,7 @@ impl OrbitAxes {
     /// on the axis put x to the image's right (OpenCV: y down, z forward, so up is −y;
     /// OpenGL: y up, z backward, so up is +y); with x or y on it (a robot's x forward),
     /// z. [`OrbitAxes::Z_UP`] for every other model.
-    pub fn of(meta: &TreeMeta) -> OrbitAxes {
+    pub fn of_sensor(meta: &TreeMeta) -> OrbitAxes {
         let Some(sensor) = meta.sensor() else {
             return OrbitAxes::Z_UP;
         };
@@ -136,25 +162,41 @@ impl Camera {
     /// angles (its near face is as wide as its far one), the chunks' boxes hug the
     /// samples.
     pub fn framed(meta: &TreeMeta, chunks: &[Chunk], fov_y: f64, aspect: f64) -> Camera {
-        let (azimuth, elevation) = if OrbitAxes::of(meta) != OrbitAxes::Z_UP {
-            (0.0, 0.0)
-        } else if meta.is_flat() {
-            (30.0, 45.0)
-        } else {
-            (30.0, 20.0)
-        };
-        Camera::framed_from(meta, chunks, [azimuth, elevation], fov_y, aspect)
+        let axes = OrbitAxes::of(meta);
+        if meta.up.is_none() && meta.sensor().is_some() {
+            return Camera::framed_from(axes, meta, chunks, [0.0, 0.0], fov_y, aspect);
+        }
+        Camera::framed_about(axes, meta, chunks, fov_y, aspect)
     }
 
-    /// [`Camera::framed`] seen from a given `[azimuth, elevation]` (degrees).
+    /// [`Camera::framed`] of a model turned about `axes` (not a sensor's): from
+    /// elevation 45° for a terrain standing on z, 20° otherwise, at azimuth 30°.
+    pub fn framed_about(
+        axes: OrbitAxes,
+        meta: &TreeMeta,
+        chunks: &[Chunk],
+        fov_y: f64,
+        aspect: f64,
+    ) -> Camera {
+        let elevation = if meta.is_flat() && axes.up.z != 0.0 {
+            45.0
+        } else {
+            20.0
+        };
+        Camera::framed_from(axes, meta, chunks, [30.0, elevation], fov_y, aspect)
+    }
+
+    /// [`Camera::framed`] about `axes`, seen from a given `[azimuth, elevation]`
+    /// (degrees).
     pub fn framed_from(
+        axes: OrbitAxes,
         meta: &TreeMeta,
         chunks: &[Chunk],
         [azimuth_deg, elevation_deg]: [f64; 2],
         fov_y: f64,
         aspect: f64,
     ) -> Camera {
-        let probe = Camera::orbit(meta, azimuth_deg, elevation_deg, 1.0, fov_y);
+        let probe = Camera::orbit_about(axes, meta, [azimuth_deg, elevation_deg, 1.0], fov_y);
         let (centre, radius) = bounding_sphere(meta);
         let forward = (probe.target - probe.eye).normalize();
         let right = forward.cross(probe.up).normalize_or(DVec3::X);
@@ -177,7 +219,7 @@ impl Camera {
                 .max(toward + corner.dot(up).abs() / tan_y);
         }
         let distance = (distance * 1.05).max(radius * 1e-3) / radius;
-        Camera::orbit(meta, azimuth_deg, elevation_deg, distance, fov_y)
+        Camera::orbit_about(axes, meta, [azimuth_deg, elevation_deg, distance], fov_y)
     }
 
     /// The near plane for an image of `aspect` (width / height): as far as it can be
@@ -250,10 +292,9 @@ impl Camera {
     }
 }
 
-/// The model's up ([`OrbitAxes::of`]) and its node centres' lowest and highest heights
-/// along it, relative to its origin: what the elevation ramp spans.
-pub fn heights(meta: &TreeMeta) -> (DVec3, [f32; 2]) {
-    let up = OrbitAxes::of(meta).up;
+/// The node centres' lowest and highest heights along `up` (the camera's), relative to
+/// the model's origin: what the elevation ramp spans.
+pub fn heights(meta: &TreeMeta, up: DVec3) -> [f32; 2] {
     let (lo, hi) = (
         meta.centre_min.map(f64::from),
         meta.centre_max.map(f64::from),
@@ -263,7 +304,7 @@ pub fn heights(meta: &TreeMeta) -> (DVec3, [f32; 2]) {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), h| {
             (a.min(h), b.max(h))
         });
-    (up, [low as f32, high as f32])
+    [low as f32, high as f32]
 }
 
 /// The eight corners of the box `lo`–`hi`.
@@ -394,23 +435,35 @@ mod tests {
     }
 
     #[test]
-    fn heights_run_along_the_model_s_up() {
+    fn heights_run_along_the_given_up() {
         let mut frame = cloud([-1.0, -1.5, 0.8], [1.8, 0.4, 3.8]);
         (frame.centre_min, frame.centre_max) = ([-1.0, -2.0, -1.5], [2.0, 3.0, 1.5]);
-        assert_eq!(heights(&frame), (-DVec3::Y, [-3.0, 2.0]));
-        let mesh = oriented(frame);
-        assert_eq!(heights(&mesh), (DVec3::Z, [-1.5, 1.5]));
+        assert_eq!(heights(&frame, -DVec3::Y), [-3.0, 2.0]);
+        assert_eq!(heights(&frame, DVec3::Z), [-1.5, 1.5]);
     }
 
     #[test]
-    fn meshes_terrains_and_clouds_around_their_origin_orbit_about_z() {
+    fn models_orbit_about_their_up_axis_with_x_to_the_right() {
+        // The shape's rule: a cloud around its origin and a mesh stand on y, a terrain
+        // on z; a tree without an axis (an older file) orbits about z.
         let around = cloud([-1.0; 3], [1.0; 3]);
         assert_eq!(OrbitAxes::of(&around), OrbitAxes::Z_UP);
-        let tile = cloud([500.0, 700.0, 10.0], [900.0, 1100.0, 40.0]);
+        assert_eq!(around.clone().with_file_up(None).up, Some(UpAxis::Y));
+        let tile = cloud([500.0, 700.0, 10.0], [900.0, 1100.0, 40.0]).with_file_up(None);
         assert_eq!(OrbitAxes::of(&tile), OrbitAxes::Z_UP);
-        let mesh = oriented(cloud([-1.0, -1.5, 0.8], [1.8, 0.4, 3.8]));
-        assert_eq!(OrbitAxes::of(&mesh), OrbitAxes::Z_UP);
+        let mesh = oriented(cloud([-1.0, -1.5, 0.8], [1.8, 0.4, 3.8])).with_file_up(None);
+        assert_eq!(mesh.up, Some(UpAxis::Y));
+        // The file's word wins.
+        assert_eq!(mesh.clone().with_file_up(Some(UpAxis::Z)).up, Some(UpAxis::Z));
+        // y up: seen from +z, x to the right.
         let c = Camera::orbit(&mesh, 0.0, 0.0, 2.0, 1.0);
-        assert!(c.eye.y < c.target.y && c.up == DVec3::Z, "{c:?}");
+        assert!(c.eye.z > c.target.z && c.up == DVec3::Y, "{c:?}");
+        for up in UpAxis::ALL {
+            let axes = OrbitAxes::about(up);
+            assert_eq!(axes.north.dot(axes.up), 0.0, "{up:?}");
+            if matches!(up, UpAxis::Y | UpAxis::Z) {
+                assert_eq!(axes.east(), DVec3::X, "{up:?}");
+            }
+        }
     }
 }

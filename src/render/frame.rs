@@ -98,7 +98,8 @@ impl FrameUniform {
         let mode = settings.mode as u32;
         let light = settings.light.normalize_or(Vec3::Z);
         let [r, g, b] = settings.background.map(srgb_to_linear);
-        let (elevation_up, elevation_range) = heights(meta);
+        let elevation_up = camera.up;
+        let elevation_range = heights(meta, elevation_up);
         FrameUniform {
             view: camera.view_rotation().to_cols_array_2d(),
             proj: camera.projection(aspect, near).to_cols_array_2d(),

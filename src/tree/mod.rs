@@ -21,6 +21,7 @@ pub mod scene;
 pub mod select;
 pub mod spt_file;
 pub mod spt_write;
+pub mod up;
 pub mod validate;
 
 use arrayvec::ArrayVec;
@@ -29,6 +30,7 @@ use half::f16;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::io::up::UpAxis;
 use crate::io::{Bounds, PointAttributes};
 use crate::surfel::LeafSurfels;
 use crate::surfel::NormalsTurned;
@@ -69,6 +71,9 @@ pub struct TreeMeta {
     pub has_attributes: bool,
     /// The leaves' 1st and 99th intensity percentiles ([`attributes::intensity_range`]).
     pub intensity_range: [u16; 2],
+    /// Which way is up ([`up`]); `None`: a sensor frame's view, or z (files written
+    /// before the axis was stored).
+    pub up: Option<UpAxis>,
 }
 
 impl TreeMeta {
@@ -125,6 +130,7 @@ impl TreeMeta {
             normals_turned: NormalsTurned::No,
             has_attributes: false,
             intensity_range: [0, 0],
+            up: None,
         }
     }
 }
@@ -456,7 +462,9 @@ pub fn build_records_scaled(
         normals_turned,
         has_attributes: !attributes.is_empty(),
         intensity_range: attributes::intensity_range(attributes.get(..n).unwrap_or(&[])),
-    };
+        up: None,
+    }
+    .with_file_up(None);
     NodeSet {
         hierarchy,
         records,

@@ -148,7 +148,10 @@ pub fn build_from_file(
     report: &dyn Report,
 ) -> anyhow::Result<(SequentialList, Option<MeshData>)> {
     let model = read_step(path, report)?;
-    Ok(build_from_geometry(model.geometry, keep_mesh, report))
+    let up = model.summary.up;
+    let (mut list, mesh) = build_from_geometry(model.geometry, keep_mesh, report);
+    list.meta = list.meta.with_file_up(up);
+    Ok((list, mesh))
 }
 
 /// Reads a model file (PLY, LAS or LAZ) and builds its tree up to the list's order
@@ -156,10 +159,13 @@ pub fn build_from_file(
 /// [`write_ordered`](super::spt_write::write_ordered), never sorting the list in memory.
 pub fn ordered_from_file(path: &Path, report: &dyn Report) -> anyhow::Result<OrderedSet> {
     let model = read_step(path, report)?;
+    let up = model.summary.up;
     let mut leaves = surfels_step(&model.geometry, report);
     drop(model);
     leaves.vertex_normals = Vec::new();
-    Ok(build_ordered(leaves, report))
+    let mut set = build_ordered(leaves, report);
+    set.meta = set.meta.with_file_up(up);
+    Ok(set)
 }
 
 /// The read step: the model in `path`.

@@ -14,7 +14,9 @@
 //!     12     4  header size (256)
 //!     16     4  flags: 1 = has colours, 2 = oriented normals, 4 = LiDAR attributes,
 //!                 8 = estimated normals turned up (a terrain's), 16 = turned toward
-//!                 the origin (a sensor frame's)
+//!                 the origin (a sensor frame's); bits 5–7: the up axis, 0 none (a
+//!                 sensor frame's view; z in files written before it was stored),
+//!                 1–6 z, y, x, −z, −y, −x
 //!     20     4  depth (largest level)
 //!     24     8  leaf count
 //!     32     8  node count
@@ -63,12 +65,15 @@ use super::select::{PrefixIndex, TreeView, block_heads, delta_suffix, delta_suff
 use super::validate;
 use super::{NodeRecord, SequentialList, TreeMeta};
 use crate::io::atomic::write_atomically;
+use crate::io::up::UpAxis;
 use crate::io::{Bounds, PointAttributes};
 use crate::surfel::NormalsTurned;
 use crate::surfel::shape::SplatShape;
 
 pub const MAGIC: &[u8; 8] = b"spt-tree";
 pub const VERSION: u32 = 8;
+/// Where the up axis's code ([`UpAxis::code`], 0 for none) lies in the flags.
+const UP_SHIFT: u32 = 5;
 /// The oldest version read: version 2 files are version 3 files without attributes.
 pub const OLDEST_READ: u32 = 2;
 pub const HEADER_BYTES: usize = 256;
@@ -152,7 +157,8 @@ pub fn header_for(m: &TreeMeta, chunks: &[Chunk], checksum: u64) -> Vec<u8> {
         | (m.oriented_normals as u32) << 1
         | (m.has_attributes as u32) << 2
         | ((m.normals_turned == NormalsTurned::Up) as u32) << 3
-        | ((m.normals_turned == NormalsTurned::TowardOrigin) as u32) << 4;
+        | ((m.normals_turned == NormalsTurned::TowardOrigin) as u32) << 4
+        | m.up.map_or(0, UpAxis::code) << UP_SHIFT;
     h.extend_from_slice(&flags.to_le_bytes());
     h.extend_from_slice(&m.depth.to_le_bytes());
     h.extend_from_slice(&m.leaf_count.to_le_bytes());
@@ -339,6 +345,11 @@ fn meta_of(b: &[u8], version: u32) -> Result<TreeMeta, String> {
             "flags {flags:#x}: estimated normals turned both up (8) and toward the origin (16)"
         ));
     }
+    let up_code = (flags >> UP_SHIFT) & 7;
+    let up = UpAxis::from_code(up_code);
+    if up_code != 0 && up.is_none() {
+        return Err(format!("flags {flags:#x}: up axis code {up_code} names no axis"));
+    }
     let v3 = |at: usize| [f64_at(b, at), f64_at(b, at + 8), f64_at(b, at + 16)];
     let f3 = |at: usize| [f32_at(b, at), f32_at(b, at + 4), f32_at(b, at + 8)];
     let mut meta = TreeMeta {
@@ -362,6 +373,7 @@ fn meta_of(b: &[u8], version: u32) -> Result<TreeMeta, String> {
         },
         has_attributes: flags & 4 != 0,
         intensity_range: [0, 2].map(|k| u16::from_le_bytes([b[200 + k], b[201 + k]])),
+        up,
     };
     if version < 8 {
         meta.normals_turned = meta.normals_turned_by_leaf_box();

@@ -8,7 +8,7 @@
 //! ```
 //!
 //! Each layer imports only those below it, `render` of `io` only the data model
-//! (`io::geometry`); no `pub use` re-exports another layer's items; and no module
+//! (`io::geometry`) and the up axis (`io::up`); no `pub use` re-exports another layer's items; and no module
 //! reaches itself through the imports of others.
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -231,7 +231,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("io", &["io"]),
     ("surfel", &["surfel", "io"]),
     ("tree", &["tree", "surfel", "io"]),
-    ("render", &["render", "tree", "surfel", "io::geometry"]),
+    ("render", &["render", "tree", "surfel", "io::geometry", "io::up"]),
     ("eval", &["eval", "render", "tree", "surfel", "io"]),
 ];
 

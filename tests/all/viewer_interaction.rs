@@ -1,7 +1,7 @@
 //! Scripted interaction with the viewer: synthetic input events
 //! go through the viewer's own handling (`Viewer::handle`, the function the window's
 //! events reach), frames are drawn headless, and the statistics the panel shows are
-//! checked: orbit, zoom, ε_px, display modes, freezing the level of detail.
+//! checked: orbit, zoom, ε_px, display modes, freezing the level of detail, the up axis.
 
 use crate::common;
 
@@ -12,7 +12,8 @@ use spt::apps::view::input::{Button, Command, Input, Move};
 use spt::apps::view::loader::Loading;
 use spt::apps::view::pacing::Pacer;
 use spt::apps::view::viewer::Viewer;
-use spt::render::{Camera, Gpu, Mode, Renderer, Settings};
+use spt::io::up::UpAxis;
+use spt::render::{Camera, Gpu, Mode, OrbitAxes, Renderer, Settings};
 
 const SIZE: (u32, u32) = (320, 240);
 
@@ -41,7 +42,8 @@ fn viewer_on(model: &std::path::Path) -> Viewer {
         SIZE.0 as f64 / SIZE.1 as f64,
     );
     let mut viewer = Viewer::new(renderer, Settings::default());
-    viewer.install(model.to_path_buf(), scene, gpu_scene, &camera);
+    let axes = OrbitAxes::of(scene.meta());
+    viewer.install(model.to_path_buf(), scene, gpu_scene, (&camera, axes));
     viewer
 }
 
@@ -291,4 +293,25 @@ fn a_frame_time_target_coarsens_moving_frames_and_rest_brings_the_users_error_ba
         "{drawn} splats at rest, {fewest} moving"
     );
     assert!(v.refine_due().is_none());
+}
+
+#[test]
+fn the_up_key_stands_the_model_on_the_next_axis_and_frames_it() {
+    let mut v = viewer_on(&common::default_model());
+    // The knot's file says z (a comment of its header).
+    assert_eq!(v.model.as_ref().unwrap().up(), Some(UpAxis::Z));
+    let (drawn0, _, image0) = frame(&mut v);
+    send(&mut v, Input::Command(Command::NextUp));
+    let m = v.model.as_ref().unwrap();
+    assert_eq!(m.up(), Some(UpAxis::Y));
+    assert_eq!(m.camera.camera().up, glam::DVec3::Y);
+    let (drawn1, _, image1) = frame(&mut v);
+    let changed = difference(&image0, &image1);
+    eprintln!("up z → y: mean pixel change {changed:.2}, {drawn0} → {drawn1} drawn");
+    assert!(drawn1 > 0 && changed > 2.0, "the model must turn ({changed})");
+    // Reset returns to the view framed on the new axis; the panel's choice sets one.
+    send(&mut v, Input::Command(Command::Reset));
+    assert_eq!(v.model.as_ref().unwrap().up(), Some(UpAxis::Y));
+    send(&mut v, Input::Command(Command::SetUp(UpAxis::NegZ)));
+    assert_eq!(v.model.as_ref().unwrap().up(), Some(UpAxis::NegZ));
 }

@@ -13,6 +13,8 @@ mod plot;
 mod random_subset;
 mod report;
 
+use crate::apps::frame_args::with_up;
+use crate::io::up::UpAxis;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
@@ -43,6 +45,9 @@ pub struct BenchArgs {
     /// Frame size, WIDTHxHEIGHT.
     #[arg(long, default_value = "512x512", value_parser = crate::apps::frame_args::parse_size)]
     pub size: (u32, u32),
+    /// Which axis is up, for the orbits (default: the model's; z for a sensor frame).
+    #[arg(long, value_enum, allow_hyphen_values = true)]
+    pub up: Option<UpAxis>,
     /// Cameras per orbit (evenly spaced azimuths, elevation 20°).
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub views: u32,
@@ -206,7 +211,7 @@ fn environment(args: &BenchArgs, scene: &Scene, gpu: &Gpu) -> Environment {
 
 /// The camera paths: the three orbits, then the fly-through.
 fn camera_paths(scene: &Scene, args: &BenchArgs) -> Vec<(String, Vec<Camera>)> {
-    let (meta, fov) = (scene.meta(), 45f64.to_radians());
+    let (meta, fov) = (&with_up(scene.meta(), args.up), 45f64.to_radians());
     let mut paths: Vec<(String, Vec<Camera>)> = plan::ORBITS
         .iter()
         .map(|(name, fill)| {

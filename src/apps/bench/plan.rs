@@ -5,7 +5,6 @@
 //! of the height, so d = R / (f tan(fov/2)). A fly-through crosses from the far distance
 //! to inside the bounding box, looking along its way.
 
-use glam::DVec3;
 
 use crate::render::camera::bounding_sphere;
 use crate::render::{Camera, OrbitAxes};
@@ -17,16 +16,21 @@ pub const ORBITS: [(&str, f64); 3] = [("near", 1.0), ("mid", 0.25), ("far", 0.06
 /// Elevation of the orbits, degrees.
 const ELEVATION_DEG: f64 = 20.0;
 
+/// The axes the benchmark's cameras turn about: the model's up axis
+/// ([`TreeMeta::up`]); z for a sensor frame (whose own view is one side of it only).
+pub fn axes(meta: &TreeMeta) -> OrbitAxes {
+    meta.up.map_or(OrbitAxes::Z_UP, OrbitAxes::about)
+}
+
 /// `views` cameras evenly spaced around the model at the distance where it fills
-/// `fill` of the image height, about z for every model (a sensor frame too), so that
-/// the benchmark's views stay those its earlier figures were taken from.
+/// `fill` of the image height, about its [`axes`].
 pub fn orbit(meta: &TreeMeta, fill: f64, views: usize, fov_y: f64) -> Vec<Camera> {
     let distance = 1.0 / (fill * (fov_y * 0.5).tan());
     (0..views)
         .map(|k| {
             let azimuth = 360.0 * k as f64 / views as f64;
             let orbit = [azimuth, ELEVATION_DEG, distance];
-            Camera::orbit_about(OrbitAxes::Z_UP, meta, orbit, fov_y)
+            Camera::orbit_about(axes(meta), meta, orbit, fov_y)
         })
         .collect()
 }
@@ -38,8 +42,8 @@ pub fn fly_through(meta: &TreeMeta, steps: usize, fov_y: f64) -> Vec<Camera> {
     let (centre, radius) = bounding_sphere(meta);
     let far = 1.0 / (ORBITS[2].1 * (fov_y * 0.5).tan());
     let near = 0.3f64;
-    let (az, el) = (30f64.to_radians(), ELEVATION_DEG.to_radians());
-    let dir = DVec3::new(az.sin() * el.cos(), -az.cos() * el.cos(), el.sin());
+    let axes = axes(meta);
+    let dir = axes.toward_eye(30.0, ELEVATION_DEG);
     (0..steps)
         .map(|k| {
             let t = k as f64 / (steps.max(2) - 1) as f64;
@@ -48,7 +52,7 @@ pub fn fly_through(meta: &TreeMeta, steps: usize, fov_y: f64) -> Vec<Camera> {
             Camera {
                 eye,
                 target: eye - dir * radius,
-                up: DVec3::Z,
+                up: axes.up,
                 fov_y,
             }
         })

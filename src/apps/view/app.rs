@@ -214,7 +214,8 @@ impl App {
                         path.display(),
                         count(scene.nodes().len() as u64),
                     );
-                    w.viewer.install(path.clone(), scene, gpu_scene, &camera);
+                    let axes = camera_args.axes(&scene);
+                    w.viewer.install(path.clone(), scene, gpu_scene, (&camera, axes));
                     w.window.set_title(&format!(
                         "spt: {}",
                         path.file_name()
@@ -523,6 +524,7 @@ fn key_input(key: &Key, pressed: bool, control: bool) -> Option<Input> {
             "f" => once(Command::Frame),
             "r" => once(Command::Reset),
             "m" => once(Command::NextMode),
+            "u" => once(Command::NextUp),
             "x" => once(Command::ToggleEwa),
             "l" => once(Command::ToggleFreeze),
             "p" => once(Command::Screenshot),

@@ -2,6 +2,8 @@
 //! these, and tests send them directly, so both go through the same handling
 //! ([`super::viewer::Viewer::handle`]).
 
+use crate::io::up::UpAxis;
+
 /// Mouse buttons that drag.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Button {
@@ -34,6 +36,10 @@ pub enum Command {
     Reset,
     /// Next display mode (M).
     NextMode,
+    /// Next up axis: z, y, x, −z, −y, −x (U).
+    NextUp,
+    /// Stand the model on this axis (the panel's "Up").
+    SetUp(UpAxis),
     /// ε_px × 2 (+).
     MoreError,
     /// ε_px ÷ 2 (−).

@@ -51,10 +51,10 @@ fn swatch(ui: &mut egui::Ui, [r, g, b]: [f32; 3], label: String) {
     });
 }
 
-/// The elevation ramp as a bar, with the model's lowest and highest node heights (the
-/// file's z, or along a sensor frame's up) at its ends.
-fn elevation_bar(ui: &mut egui::Ui, meta: &TreeMeta) {
-    let (up, [low, high]) = heights(meta);
+/// The elevation ramp as a bar, with the model's lowest and highest node heights along
+/// the view's `up` at its ends.
+fn elevation_bar(ui: &mut egui::Ui, meta: &TreeMeta, up: glam::DVec3) {
+    let [low, high] = heights(meta, up);
     let base = glam::DVec3::from(meta.origin).dot(up);
     let (lo, hi) = (base + low as f64, base + high as f64);
     ui.horizontal(|ui| {
@@ -77,12 +77,13 @@ fn elevation_bar(ui: &mut egui::Ui, meta: &TreeMeta) {
     });
 }
 
-/// The legend of `mode` for a model described by `meta`, if it has one.
-pub fn show(ui: &mut egui::Ui, mode: Mode, meta: Option<&TreeMeta>) {
+/// The legend of `mode` for a model described by `meta`, seen with `up` up, if it has
+/// one.
+pub fn show(ui: &mut egui::Ui, mode: Mode, model: Option<(&TreeMeta, glam::DVec3)>) {
     match mode {
         Mode::Elevation => {
-            if let Some(meta) = meta {
-                elevation_bar(ui, meta);
+            if let Some((meta, up)) = model {
+                elevation_bar(ui, meta, up);
             }
         }
         Mode::Classification => {

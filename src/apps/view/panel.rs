@@ -2,6 +2,7 @@
 //! messages. Buttons that act on the viewer come back as [`Command`]s, handled exactly
 //! as their keys are.
 
+use crate::io::up::UpAxis;
 use egui::{Color32, RichText};
 
 use super::input::Command;
@@ -61,14 +62,15 @@ pub fn show(ctx: &egui::Context, viewer: &mut Viewer, status: &PanelStatus) -> V
                     commands.push(Command::Screenshot);
                 }
             });
+            up_row(ui, viewer, &mut commands);
             ui.separator();
             stats_section(ui, viewer, status);
             ui.collapsing("Controls", |ui| {
                 ui.label(
                     "Left drag: orbit · Shift+left or middle drag: pan · wheel: zoom at the \
                      pointer · right drag: light\nWASD: move · Q/E: down/up · arrows: orbit\n\
-                     F: frame · R: reset · M: next mode · +/−: ε_px ×2/÷2 · X: EWA · L: freeze \
-                     LOD\nTab: hide this panel · F12 or P: screenshot · Ctrl+O: open · \
+                     F: frame · R: reset · M: next mode · U: next up axis · +/−: ε_px ×2/÷2 · \
+                     X: EWA · L: freeze LOD\nTab: hide this panel · F12 or P: screenshot · Ctrl+O: open · \
                      drop a file to open it",
                 );
             });
@@ -170,6 +172,21 @@ fn pacing_rows(ui: &mut egui::Ui, viewer: &mut Viewer) {
     ));
 }
 
+/// The axis the model stands on, to choose another.
+fn up_row(ui: &mut egui::Ui, viewer: &Viewer, commands: &mut Vec<Command>) {
+    let Some(m) = &viewer.model else { return };
+    let current = m.up();
+    egui::ComboBox::from_label("Up (U)")
+        .selected_text(current.map_or("as the sensor saw it", UpAxis::name))
+        .show_ui(ui, |ui| {
+            for axis in UpAxis::ALL {
+                if ui.selectable_label(current == Some(axis), axis.name()).clicked() {
+                    commands.push(Command::SetUp(axis));
+                }
+            }
+        });
+}
+
 fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
     let m = viewer.model.as_ref();
     let has_mesh = m.is_some_and(|m| m.gpu_scene.mesh_triangles() > 0);
@@ -189,7 +206,7 @@ fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
         ui.add(egui::Slider::new(&mut s.edl_strength, 0.0..=10.0).text("EDL strength"));
         ui.add(egui::Slider::new(&mut s.edl_radius_px, 0.5..=8.0).text("EDL radius (px)"));
     }
-    super::legend::show(ui, s.mode, m.map(|m| m.scene.meta()));
+    super::legend::show(ui, s.mode, m.map(|m| (m.scene.meta(), m.camera.axes.up)));
     ui.checkbox(&mut s.ewa, "EWA prefilter (X)");
     ui.checkbox(&mut s.cull_back_faces, "Back-face culling");
     ui.horizontal(|ui| {

@@ -3,6 +3,7 @@
 //! The window layer (`app.rs`) adds the surface, the panel and the event loop; tests
 //! drive this directly.
 
+use crate::io::up::UpAxis;
 use std::collections::{HashSet, VecDeque};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -34,6 +35,15 @@ pub struct Model {
     pub streamer: Option<Streamer>,
     pub camera: OrbitCamera,
     home: OrbitCamera,
+}
+
+impl Model {
+    /// The axis the model stands on; `None` for a sensor frame seen as its sensor saw it.
+    pub fn up(&self) -> Option<UpAxis> {
+        UpAxis::ALL
+            .into_iter()
+            .find(|a| self.camera.axes == OrbitAxes::about(*a))
+    }
 }
 
 /// What the panel shows of the recent frames.
@@ -110,17 +120,17 @@ impl Viewer {
         }
     }
 
-    /// Makes `scene` the model shown, seen by `camera`. Its list may be on the GPU only
-    /// in part: more comes with [`Viewer::add_slice`].
+    /// Makes `scene` the model shown, seen by `camera`, orbiting about `axes`. Its list
+    /// may be on the GPU only in part: more comes with [`Viewer::add_slice`].
     pub fn install(
         &mut self,
         path: PathBuf,
         scene: Arc<Scene>,
         gpu_scene: GpuScene,
-        camera: &Camera,
+        (camera, axes): (&Camera, OrbitAxes),
     ) {
         let radius = bounding_sphere(scene.meta()).1;
-        let orbit = OrbitCamera::from_camera(camera, OrbitAxes::of(scene.meta()), radius);
+        let orbit = OrbitCamera::from_camera(camera, axes, radius);
         let counters = CounterReadback::new(&self.renderer.gpu, &gpu_scene);
         if self.settings.mode == Mode::Mesh && gpu_scene.mesh_triangles() == 0 {
             self.settings.mode = Mode::Shaded;
@@ -140,6 +150,18 @@ impl Viewer {
             camera: orbit,
             home: orbit,
         });
+    }
+
+    /// Turns the model to stand on `up`: the orbit turns about it, and the model is
+    /// framed from the default direction, which becomes the starting view (R).
+    pub fn set_up(&mut self, up: UpAxis, viewport: (u32, u32)) {
+        let Some(m) = &mut self.model else { return };
+        let axes = OrbitAxes::about(up);
+        let meta = m.scene.meta();
+        let aspect = viewport.0 as f64 / viewport.1.max(1) as f64;
+        let framed = Camera::framed_about(axes, meta, m.scene.index.chunks(), m.camera.fov_y, aspect);
+        m.camera = OrbitCamera::from_camera(&framed, axes, bounding_sphere(meta).1);
+        m.home = m.camera;
     }
 
     /// The next slice of the model's list, uploaded.
@@ -249,10 +271,18 @@ impl Viewer {
                 s.mode = next_mode(s.mode, has_mesh, has_attributes);
             }
             Command::ToggleFreeze => self.set_frozen(self.settings.lod_eye.is_none()),
+            Command::NextUp => {
+                if let Some(m) = &self.model {
+                    let next = m.up().map_or(UpAxis::Z, UpAxis::next);
+                    self.set_up(next, viewport);
+                }
+            }
+            Command::SetUp(up) => self.set_up(up, viewport),
             Command::Frame => {
                 if let Some(m) = &mut self.model {
                     let aspect = viewport.0 as f64 / viewport.1.max(1) as f64;
                     let framed = Camera::framed_from(
+                        m.camera.axes,
                         m.scene.meta(),
                         m.scene.index.chunks(),
                         [m.camera.azimuth_deg, m.camera.elevation_deg],

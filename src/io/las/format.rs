@@ -7,6 +7,7 @@ use super::{LasBatches, read_las};
 use crate::io::format::PointBatch;
 use crate::io::format::{Format, PointStream};
 use crate::io::model::{Model, ModelError, Summary};
+use crate::io::up::UpAxis;
 
 /// ASPRS LAS 1.0–1.4, and LAZ (LASzip-compressed LAS).
 pub struct LasFormat;
@@ -27,6 +28,7 @@ impl Format for LasFormat {
             summary: Summary {
                 format,
                 las: Some(m.summary),
+                up: Some(UpAxis::Z),
                 ..Summary::default()
             },
             geometry: m.geometry,
@@ -66,6 +68,10 @@ impl PointStream for LasStream {
 
     fn has_attributes(&self) -> bool {
         true
+    }
+
+    fn up(&self) -> Option<UpAxis> {
+        Some(UpAxis::Z)
     }
 
     fn points(&self, f: &mut dyn FnMut(&PointBatch)) -> Result<(), ModelError> {

@@ -8,6 +8,7 @@ use super::{Header, PlyStream, read_ply};
 use crate::io::format::PointBatch;
 use crate::io::format::{Format, PointStream};
 use crate::io::model::{ElementSummary, Model, ModelError, Summary};
+use crate::io::up::UpAxis;
 
 /// Stanford PLY: ASCII and binary in either byte order.
 pub struct PlyFormat;
@@ -51,6 +52,7 @@ fn summary(h: &Header) -> Summary {
             .collect(),
         skipped_elements: skipped_elements(h),
         las: None,
+        up: UpAxis::from_comments(h.comments.iter().chain(&h.obj_info)),
     }
 }
 
@@ -84,6 +86,11 @@ impl PointStream for PlyStream {
 
     fn has_attributes(&self) -> bool {
         false
+    }
+
+    fn up(&self) -> Option<UpAxis> {
+        let h = self.header();
+        UpAxis::from_comments(h.comments.iter().chain(&h.obj_info))
     }
 
     fn points(&self, f: &mut dyn FnMut(&PointBatch)) -> Result<(), ModelError> {

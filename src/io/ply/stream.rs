@@ -195,6 +195,11 @@ impl PlyStream {
         self
     }
 
+    /// The file's header.
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
     pub fn vertex_count(&self) -> u64 {
         self.header.elements[self.plan.vertex_element].count
     }

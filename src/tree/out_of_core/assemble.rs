@@ -152,7 +152,9 @@ fn meta(model: &Model, parts: &[Part], top: &Top, oriented: bool) -> TreeMeta {
         normals_turned: normals_turned(parts, oriented),
         has_attributes: model.has_attributes,
         intensity_range: attributes::intensity_range(&samples),
+        up: None,
     }
+    .with_file_up(model.up)
 }
 
 /// How the jobs turned their estimated normals: alike, as all decide on the model's

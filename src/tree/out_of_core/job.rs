@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use glam::{DVec3, Vec3};
 
 use super::spill::{JobFiles, SpillPoint, read_records, read_spill};
+use crate::io::up::UpAxis;
 use crate::io::{Bounds, Geometry, PointAttributes};
 use crate::surfel::shape::SplatShape;
 use crate::surfel::{LeafSurfels, NormalsTurned, leaf_surfels_of};
@@ -37,6 +38,8 @@ pub struct Model {
     /// Whether the file gives normals.
     pub has_normals: bool,
     pub has_attributes: bool,
+    /// The up axis the file gives.
+    pub up: Option<UpAxis>,
     /// Nodes per subtree chunk ([`crate::tree::chunks::chunk_nodes_for`] of the whole
     /// model, so that chunks do not depend on how it was split into jobs).
     pub chunk_nodes: usize,

@@ -140,6 +140,7 @@ pub fn build_file(
         has_colors: scan.has_color,
         has_normals: stream.has_normals(),
         has_attributes: stream.has_attributes(),
+        up: stream.up(),
         // A tree has about 1.5 nodes per point.
         chunk_nodes: crate::tree::chunks::chunk_nodes_for((scan.count + scan.count / 2) as usize),
     };
