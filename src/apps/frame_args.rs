@@ -4,8 +4,8 @@
 use anyhow::bail;
 use glam::{DVec3, Vec3};
 
-use crate::render::{Camera, Culling, Mode, OrbitAxes, Settings};
 use crate::io::up::UpAxis;
+use crate::render::{Camera, Culling, Mode, OrbitAxes, Settings};
 use crate::tree::TreeMeta;
 use crate::tree::scene::Scene;
 

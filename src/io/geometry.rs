@@ -94,14 +94,18 @@ impl Geometry {
         assemble(&ColumnRows { columns }, &fields, None)
     }
 
-    /// The invariants every reader guarantees: finite origin and boxes, every position
+    /// The invariants every reader guarantees: finite origin and boxes (empty ones when
+    /// the file holds no vertex), every position
     /// finite and within [`rebase::MAX_OFFSET`] of the origin, given normals unit or
     /// zero, colours one per vertex, triangle indices in range.
     pub fn check(&self) -> Result<(), String> {
         let finite_box = |b: &Bounds| {
             (0..3).all(|k| b.min[k].is_finite() && b.max[k].is_finite() && b.min[k] <= b.max[k])
         };
-        if !self.origin.is_finite() || !finite_box(&self.bounds) || !finite_box(&self.core) {
+        // A file without vertices has empty boxes (∞, −∞).
+        let boxes =
+            self.positions.is_empty() || (finite_box(&self.bounds) && finite_box(&self.core));
+        if !self.origin.is_finite() || !boxes {
             return Err(format!(
                 "origin {} bounds {:?} core {:?} not finite",
                 self.origin, self.bounds, self.core

@@ -38,7 +38,8 @@ pub struct OrbitAxes {
 }
 
 impl OrbitAxes {
-    /// z up, azimuth 0 looking toward +y: every model's, but a sensor frame's.
+    /// z up, azimuth 0 looking toward +y: a z-up model's, and a tree's without an axis
+    /// that is no sensor frame (files written before the axis was stored).
     pub const Z_UP: OrbitAxes = OrbitAxes {
         north: DVec3::Y,
         up: DVec3::Z,
@@ -454,7 +455,10 @@ mod tests {
         let mesh = oriented(cloud([-1.0, -1.5, 0.8], [1.8, 0.4, 3.8])).with_file_up(None);
         assert_eq!(mesh.up, Some(UpAxis::Y));
         // The file's word wins.
-        assert_eq!(mesh.clone().with_file_up(Some(UpAxis::Z)).up, Some(UpAxis::Z));
+        assert_eq!(
+            mesh.clone().with_file_up(Some(UpAxis::Z)).up,
+            Some(UpAxis::Z)
+        );
         // y up: seen from +z, x to the right.
         let c = Camera::orbit(&mesh, 0.0, 0.0, 2.0, 1.0);
         assert!(c.eye.z > c.target.z && c.up == DVec3::Y, "{c:?}");

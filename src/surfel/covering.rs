@@ -22,6 +22,12 @@
 //!   angularly consecutive surrounding neighbours has a circumradius ≤ r_s (an angle
 //!   ≤ 120° between sides ≤ r_s), so the ellipse covers every gap of the sampling (on a
 //!   square grid of spacing h: a circle of radius h√2, through the diagonal neighbours).
+//! * **scatter**: a neighbourhood that scatters in three dimensions samples no surface
+//!   (sparse vegetation, a bush's twigs: its least principal variance more than
+//!   [`SCATTER`] times the mean of the other two): the ring's axes are noise there, and
+//!   the surrounding distance, stretched by their ratio, ran to several times the
+//!   neighbourhood's size. Its point gets the circle a grid of its spacing would,
+//!   √2 spacings (counted as capped).
 //! * **cap**: a point that no neighbourhood surrounds (a boundary), whose nearest
 //!   neighbour lies more than [`MAX_SPACINGS`] times the neighbourhood's spacing away (a
 //!   stray sample), or that only an ellipse wider than [`MAX_GAP_SPACINGS`] spacings
@@ -67,6 +73,9 @@ pub const MAX_SPACINGS: f32 = 4.0;
 /// in neighbourhood spacings: a point that only a larger one surrounds sits in a gap
 /// far wider than its sampling (a cluster of returns amid a scan gap, water): capped.
 pub const MAX_GAP_SPACINGS: f32 = 8.0;
+/// Least-axis variance over the mean of the other two beyond which a neighbourhood
+/// samples no surface ([`samples_no_surface`]).
+pub const SCATTER: f64 = 0.2;
 /// Angular sectors of the ring.
 pub const SECTORS: usize = 6;
 const _: () = assert!(SECTORS == 6, "sector() splits by the lines at ±60°");
@@ -168,6 +177,9 @@ pub fn covering(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> Cover
     }
     let ranked = rank(BOUNDARY_RANK);
     let spacing = median_spacing(near);
+    if samples_no_surface(&offsets) {
+        return round(SURROUND_GROWTH * spacing, true, spacing);
+    }
     let cap = MAX_SPACINGS * spacing;
     let metric = axes(&offsets, circle);
     let closes_a_gap =
@@ -187,6 +199,26 @@ pub fn covering(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> Cover
         },
         _ => round(ranked.min(cap), ranked > cap, spacing),
     }
+}
+
+/// Whether the neighbourhood `offsets` scatters in three dimensions rather than lying
+/// on a surface: the variance along its least principal axis is more than
+/// [`SCATTER`] times the mean of the other two.
+fn samples_no_surface(offsets: &[Vec3]) -> bool {
+    if offsets.len() < 3 {
+        return false;
+    }
+    let n = offsets.len() as f64;
+    let mean = offsets.iter().map(|o| o.as_dvec3()).sum::<glam::DVec3>() / n;
+    let mut cov = glam::DMat3::ZERO;
+    for o in offsets {
+        let d = o.as_dvec3() - mean;
+        cov += glam::DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+    }
+    let (values, _) = super::pca::symmetric_eigen(cov);
+    let mut v = values.to_array();
+    v.sort_by(f64::total_cmp);
+    v[0] > SCATTER * 0.5 * (v[1] + v[2])
 }
 
 /// The ellipse's axes from [`AXIS_ROUNDS`] rings, starting from `circle`; a ring found

@@ -348,7 +348,9 @@ fn meta_of(b: &[u8], version: u32) -> Result<TreeMeta, String> {
     let up_code = (flags >> UP_SHIFT) & 7;
     let up = UpAxis::from_code(up_code);
     if up_code != 0 && up.is_none() {
-        return Err(format!("flags {flags:#x}: up axis code {up_code} names no axis"));
+        return Err(format!(
+            "flags {flags:#x}: up axis code {up_code} names no axis"
+        ));
     }
     let v3 = |at: usize| [f64_at(b, at), f64_at(b, at + 8), f64_at(b, at + 16)];
     let f3 = |at: usize| [f32_at(b, at), f32_at(b, at + 4), f32_at(b, at + 8)];

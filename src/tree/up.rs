@@ -16,7 +16,11 @@ use crate::surfel::cloud::Orientation;
 /// it, [`crate::render::camera::OrbitAxes::of`]); z for a terrain (normals turned up,
 /// or a box less than a quarter as high in z as it is wide); y otherwise, as scanned
 /// meshes and the PLY files of most tools are.
-pub fn up_of_shape(normals_turned: NormalsTurned, leaf_box: &Bounds, origin: DVec3) -> Option<UpAxis> {
+pub fn up_of_shape(
+    normals_turned: NormalsTurned,
+    leaf_box: &Bounds,
+    origin: DVec3,
+) -> Option<UpAxis> {
     match normals_turned {
         NormalsTurned::TowardOrigin => None,
         NormalsTurned::Up => Some(UpAxis::Z),

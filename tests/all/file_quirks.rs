@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use crate::common;
-use crate::common::las_files::sample;
+use crate::common::las_files::{point_wise, sample};
 use spt::io::formats::read_model;
 
 const HEADER: &str = "ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\n\
@@ -118,23 +118,6 @@ fn vertices_without_z_lie_in_the_plane_z_0() {
         stdout.contains("no z in the file: read as z = 0"),
         "{stdout}"
     );
-}
-
-/// A point-wise LAZ file (LASzip 1) made from the chunked one `laz` (one chunk):
-/// without the chunk table's offset before the points and the table after them, its
-/// VLR naming compressor 1 (point-wise) with chunk size 0, as LASzip 1 wrote it.
-fn point_wise(laz: &[u8]) -> Vec<u8> {
-    let data = u32::from_le_bytes(laz[96..100].try_into().unwrap()) as usize;
-    let table = i64::from_le_bytes(laz[data..data + 8].try_into().unwrap()) as usize;
-    let mut out = [&laz[..data], &laz[data + 8..table]].concat();
-    let user_id = out
-        .windows(14)
-        .position(|w| w == b"laszip encoded")
-        .unwrap();
-    let vlr_data = user_id - 2 + 54;
-    out[vlr_data..vlr_data + 2].copy_from_slice(&1u16.to_le_bytes());
-    out[vlr_data + 12..vlr_data + 16].copy_from_slice(&0u32.to_le_bytes());
-    out
 }
 
 #[test]

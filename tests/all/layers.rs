@@ -231,7 +231,10 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("io", &["io"]),
     ("surfel", &["surfel", "io"]),
     ("tree", &["tree", "surfel", "io"]),
-    ("render", &["render", "tree", "surfel", "io::geometry", "io::up"]),
+    (
+        "render",
+        &["render", "tree", "surfel", "io::geometry", "io::up"],
+    ),
     ("eval", &["eval", "render", "tree", "surfel", "io"]),
 ];
 

@@ -27,5 +27,6 @@ mod surfel_hard_cases;
 mod surfel_properties;
 mod tree_hard_cases;
 mod tree_properties;
+mod up_axis;
 mod viewer_interaction;
 mod viewer_window;

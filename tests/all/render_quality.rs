@@ -190,11 +190,7 @@ fn a_model_translated_by_1e7_renders_the_same_image() {
         up: a.meta().up,
         ..b.meta().clone()
     };
-    let ib = frame(
-        &b,
-        &Camera::orbit(&b_meta, 40.0, 30.0, 2.5, fov),
-        &settings,
-    );
+    let ib = frame(&b, &Camera::orbit(&b_meta, 40.0, 30.0, 2.5, fov), &settings);
     let c = compare(&ib, &ia);
     eprintln!(
         "translated by 1e7: PSNR {:.2} dB, holes {:.4} %, spill {:.4} %",

@@ -308,7 +308,10 @@ fn the_up_key_stands_the_model_on_the_next_axis_and_frames_it() {
     let (drawn1, _, image1) = frame(&mut v);
     let changed = difference(&image0, &image1);
     eprintln!("up z → y: mean pixel change {changed:.2}, {drawn0} → {drawn1} drawn");
-    assert!(drawn1 > 0 && changed > 2.0, "the model must turn ({changed})");
+    assert!(
+        drawn1 > 0 && changed > 2.0,
+        "the model must turn ({changed})"
+    );
     // Reset returns to the view framed on the new axis; the panel's choice sets one.
     send(&mut v, Input::Command(Command::Reset));
     assert_eq!(v.model.as_ref().unwrap().up(), Some(UpAxis::Y));

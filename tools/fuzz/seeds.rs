@@ -107,6 +107,21 @@ fn with_normals(mut m: PolyMesh) -> PolyMesh {
     m
 }
 
+/// `m` with every colour zero (a writer's empty fields).
+fn black(mut m: PolyMesh) -> PolyMesh {
+    let n = m.positions.len();
+    m.colors = Some(vec![[0; 3]; n]);
+    m
+}
+
+/// An ASCII cloud whose vertices have x and y only.
+fn no_z() -> Vec<u8> {
+    b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+      property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n\
+      0 0 1 2 3\n1 0 4 5 6\n0 1 7 8 9\n1 1 1 1 1\n"
+        .to_vec()
+}
+
 fn ply_bytes(dir: &Path, m: &PolyMesh, layout: &PlyLayout) -> Vec<u8> {
     let path = dir.join("seed.ply");
     write_ply(&path, m, layout).expect("write a seed");
@@ -142,11 +157,12 @@ fn ascii_points(header_extra: &str, rows: &[&str]) -> Vec<u8> {
 #[allow(dead_code)]
 mod las_files;
 
-/// LAS and LAZ tiles of 1, 70 and 500 points (a grid of rows of 64) in point format 3,
-/// and of 70 points in formats 1, 6 and 8 (LAS 1.4's extended records).
+/// LAS and LAZ tiles of 0, 1, 70 and 500 points (a grid of rows of 64) in point format
+/// 3, and of 70 points in formats 1, 6 and 8 (LAS 1.4's extended records); a tile whose
+/// colours are zero everywhere; a LAZ of LASzip 1's point-wise compressor.
 fn las_seeds() -> Vec<Seed> {
     let mut seeds = Vec::new();
-    let tiles = [(1, 3), (70, 3), (500, 3), (70, 1), (70, 6), (70, 8)];
+    let tiles = [(0, 3), (1, 3), (70, 3), (500, 3), (70, 1), (70, 6), (70, 8)];
     for (n, format) in tiles {
         for (kind, compressed) in [(Kind::Las, false), (Kind::Laz, true)] {
             seeds.push(Seed {
@@ -156,6 +172,22 @@ fn las_seeds() -> Vec<Seed> {
             });
         }
     }
+    // Point format 3: RGB in the record's last 6 of 34 bytes.
+    let mut black = las_files::sample(70, false);
+    let data = u32::from_le_bytes([black[96], black[97], black[98], black[99]]) as usize;
+    black[data..]
+        .chunks_exact_mut(34)
+        .for_each(|r| r[28..].fill(0));
+    seeds.push(Seed {
+        name: "tile70_black_las".into(),
+        kind: Kind::Las,
+        bytes: black,
+    });
+    seeds.push(Seed {
+        name: "tile70_point_wise_laz".into(),
+        kind: Kind::Laz,
+        bytes: las_files::point_wise(&las_files::sample(70, true)),
+    });
     seeds
 }
 
@@ -248,6 +280,25 @@ pub fn all(dir: &Path) -> Vec<Seed> {
         (
             "obj_info",
             ascii_points("obj_info scanner 1\n", &["0 0 0", "0 0 1", "0 1 0"]),
+        ),
+        // Rows of the wrong length (refused, naming the row and line).
+        (
+            "ascii_extra_value",
+            ascii_points("", &["0 0 0 9", "1 0 0", "0 1 0"]),
+        ),
+        (
+            "ascii_short_row",
+            ascii_points("", &["0 0 0", "1 0", "0 1 0"]),
+        ),
+        ("no_points", ascii_points("", &[])),
+        (
+            "black_cloud",
+            standard(dir, &black(cloud(40)), Encoding::Ascii),
+        ),
+        ("no_z", no_z()),
+        (
+            "up_comment",
+            ascii_points("comment up_axis -y\n", &["0 0 0", "0 0 1", "0 1 0"]),
         ),
     ];
     let mut seeds: Vec<Seed> = ply

@@ -81,6 +81,10 @@ fn select(list: &SequentialList) -> Result<(), Outcome> {
 /// Geometry read from the input at `path`, through surfels, tree, search and `.spt`.
 fn build(geometry: &Geometry, path: &Path) -> Result<Outcome, Outcome> {
     geometry.check().map_err(violation("geometry"))?;
+    if geometry.positions.is_empty() {
+        // Nothing to draw: what the commands that draw refuse (`ModelError::Empty`).
+        return Ok(Outcome::Refused);
+    }
     let leaves = leaf_surfels(geometry);
     leaves.check().map_err(violation("surfels"))?;
     let walls = leaves.stats.added_splats();

@@ -5,7 +5,6 @@
 //! of the height, so d = R / (f tan(fov/2)). A fly-through crosses from the far distance
 //! to inside the bounding box, looking along its way.
 
-
 use crate::render::camera::bounding_sphere;
 use crate::render::{Camera, OrbitAxes};
 use crate::tree::TreeMeta;

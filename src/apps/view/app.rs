@@ -215,7 +215,8 @@ impl App {
                         count(scene.nodes().len() as u64),
                     );
                     let axes = camera_args.axes(&scene);
-                    w.viewer.install(path.clone(), scene, gpu_scene, (&camera, axes));
+                    w.viewer
+                        .install(path.clone(), scene, gpu_scene, (&camera, axes));
                     w.window.set_title(&format!(
                         "spt: {}",
                         path.file_name()

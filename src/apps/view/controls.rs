@@ -1,5 +1,5 @@
 //! The viewer's camera, free of any window system: an orbit camera (a target, a
-//! distance, azimuth and elevation about the model's axes, [`OrbitAxes`]: z up, or a
+//! distance, azimuth and elevation about the model's axes, [`OrbitAxes`]: its up axis, or a
 //! sensor frame's own) that mouse drags, the wheel and held
 //! keys move. Speeds scale with the distance to the target, so they suit a model of any
 //! size and stay usable close up.

@@ -180,7 +180,10 @@ fn up_row(ui: &mut egui::Ui, viewer: &Viewer, commands: &mut Vec<Command>) {
         .selected_text(current.map_or("as the sensor saw it", UpAxis::name))
         .show_ui(ui, |ui| {
             for axis in UpAxis::ALL {
-                if ui.selectable_label(current == Some(axis), axis.name()).clicked() {
+                if ui
+                    .selectable_label(current == Some(axis), axis.name())
+                    .clicked()
+                {
                     commands.push(Command::SetUp(axis));
                 }
             }

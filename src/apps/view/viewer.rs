@@ -159,7 +159,8 @@ impl Viewer {
         let axes = OrbitAxes::about(up);
         let meta = m.scene.meta();
         let aspect = viewport.0 as f64 / viewport.1.max(1) as f64;
-        let framed = Camera::framed_about(axes, meta, m.scene.index.chunks(), m.camera.fov_y, aspect);
+        let framed =
+            Camera::framed_about(axes, meta, m.scene.index.chunks(), m.camera.fov_y, aspect);
         m.camera = OrbitCamera::from_camera(&framed, axes, bounding_sphere(meta).1);
         m.home = m.camera;
     }

@@ -8,8 +8,9 @@
 //!   mean of its neighbours' that span steps (`smoothed`); oriented afterwards where a
 //!   direction is known ([`Orientation`]);
 //! * radius and ellipse: the covering of [`super::covering`], from the same
-//!   neighbourhood; a capped one is counted ([`SurfelStats::capped_radii`]); on a
-//!   terrain held within [`TILE_SPACINGS`] of the tile's spacing;
+//!   neighbourhood; a capped one is counted ([`SurfelStats::capped_radii`]); held
+//!   within [`TILE_SPACINGS`] of a terrain's median spacing, [`CLOUD_SPACINGS`] of any
+//!   other cloud's;
 //! * clip: a splat on a boundary of the sampling ends there ([`boundary_clip`]), a
 //!   terrain's edge sample at its wall (counted: [`SurfelStats::clipped_boundaries`]);
 //! * walls: a terrain's steep edges stand on wall surfels of their own ([`walls`]).
@@ -92,7 +93,9 @@ pub fn neighbour_disks(
         stats,
     );
     if orientation == Orientation::Up {
-        stats.tile_capped += cap_to_tile_spacing(&mut disks);
+        stats.tile_capped += cap_to_spacing(&mut disks, TILE_SPACINGS);
+    } else {
+        stats.capped_radii += cap_to_spacing(&mut disks, CLOUD_SPACINGS);
     }
     if let Orientation::Toward(sensor) = orientation {
         within_pixels(
@@ -197,10 +200,18 @@ fn disks(
 /// samples' neighbourhood spacings, [`Covering::spacing`]). The covering gives a sample
 /// of a square grid of spacing s a circle of √2 s; 1.5 s leaves 6 % over that.
 pub const TILE_SPACINGS: f32 = 1.5;
+/// Longest semi-axis of any other cloud's splat, in the cloud's median spacing: the
+/// covering's own cap ([`super::covering::MAX_GAP_SPACINGS`]) counts in each point's
+/// neighbourhood, which in a sparse scatter (vegetation) is as wide as the gaps it
+/// should not close. laspy's `vegetation_1_3.las` (a plant 4 × 6 × 5 m, median spacing
+/// 4 cm) had discs up to 1.5 m in radius; held here, 0.33 m (docs/point-clouds.md). A
+/// scan whose density falls with range keeps its far samples' coverings while they lie
+/// within 8 of its median spacings.
+pub const CLOUD_SPACINGS: f32 = 8.0;
 
-/// Holds every semi-axis of a terrain's `disks` within [`TILE_SPACINGS`] of the tile's
-/// spacing; returns how many it shortened. A minor semi-axis already within the cap is
-/// kept.
+/// Holds every semi-axis of `disks` within `spacings` of their median spacing (a
+/// terrain's [`TILE_SPACINGS`], any other cloud's [`CLOUD_SPACINGS`]); returns how many
+/// it shortened. A minor semi-axis already within the cap is kept.
 ///
 /// An airborne scanner samples the ground evenly, and its triangulation (docs/point-clouds.md's
 /// reference) joins no samples further apart than 4 median edges. The covering, counted
@@ -212,11 +223,11 @@ pub const TILE_SPACINGS: f32 = 1.5;
 /// blur what the samples resolve. Held to 1.5 s, both tiles' FLIP fell (docs/point-clouds.md)
 /// while their holes stayed under 0.4 %: neighbouring splats and pass 3's gap fill close
 /// what the shortened axes open.
-fn cap_to_tile_spacing(disks: &mut [(Vec3, Covering)]) -> u64 {
+fn cap_to_spacing(disks: &mut [(Vec3, Covering)], spacings: f32) -> u64 {
     let Some(spacing) = median_of_positive(disks.iter().map(|(_, c)| c.spacing)) else {
         return 0;
     };
-    let cap = TILE_SPACINGS * spacing;
+    let cap = spacings * spacing;
     let mut shortened = 0;
     for (_, c) in disks.iter_mut().filter(|(_, c)| c.radius > cap) {
         let minor = c.ratio * c.radius;

@@ -56,6 +56,23 @@ pub fn sample_of_format(n: usize, format: u8, compressed: bool) -> Vec<u8> {
     writer.into_inner().unwrap().into_inner()
 }
 
+/// A point-wise LAZ file (LASzip 1) made from the chunked one `laz` (one chunk):
+/// without the chunk table's offset before the points and the table after them, its
+/// VLR naming compressor 1 (point-wise) with chunk size 0, as LASzip 1 wrote it.
+pub fn point_wise(laz: &[u8]) -> Vec<u8> {
+    let data = u32::from_le_bytes(laz[96..100].try_into().unwrap()) as usize;
+    let table = i64::from_le_bytes(laz[data..data + 8].try_into().unwrap()) as usize;
+    let mut out = [&laz[..data], &laz[data + 8..table]].concat();
+    let user_id = out
+        .windows(14)
+        .position(|w| w == b"laszip encoded")
+        .unwrap();
+    let vlr_data = user_id - 2 + 54;
+    out[vlr_data..vlr_data + 2].copy_from_slice(&1u16.to_le_bytes());
+    out[vlr_data + 12..vlr_data + 16].copy_from_slice(&0u32.to_le_bytes());
+    out
+}
+
 /// Offsets in a LAS 1.2 header (ASPRS LAS 1.2, table 4).
 pub const POINT_COUNT_AT: usize = 107;
 pub const VLR_COUNT_AT: usize = 100;
