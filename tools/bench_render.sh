@@ -17,7 +17,7 @@ mkdir -p data/large
 [ -f data/large/lucy_knot.spt ] || ./target/release/spt convert data/large/lucy_knot.ply data/large/lucy_knot.spt > /dev/null
 out=$(mktemp)
 adapter=""
-echo "| model | ε | splats drawn | prefix | culling | GPU ms (median, p95) | M splats/s |"
+echo "| model | ε | splats drawn | nodes the GPU tested | culling | GPU ms (median, p95) | M splats/s |"
 echo "| --- | --- | --- | --- | --- | --- | --- |"
 for model in "$data/bunny.ply" data/large/lucy_knot.spt; do
   for lod in leaves 1; do
@@ -29,10 +29,10 @@ for model in "$data/bunny.ply" data/large/lucy_knot.spt; do
       ./target/release/spt render "$model" -o "$out.png" --size 1024x768 --frames "$n" --culling $culling "${flags[@]}" > "$out" 2>/dev/null
       adapter=$(sed -n 's/^adapter *//p' "$out")
       drawn=$(sed -n 's/^splats *\([0-9,]*\) drawn.*/\1/p' "$out")
-      prefix=$(sed -n 's/.*prefix \([0-9,]*\)$/\1/p' "$out")
+      tested=$(sed -n 's/.*the GPU tested \([0-9,]*\) nodes.*/\1/p' "$out")
       gpu=$(sed -n 's/^gpu time *\([0-9.]*\) ms (median of [0-9]*), p95 \([0-9.]*\) ms/\1, \2/p' "$out")
       rate=$(sed -n 's/^rate *\([0-9.]*\) M.*/\1/p' "$out")
-      echo "| $(basename "$model") | $lod | $drawn | $prefix | $culling | ${gpu:-n/a} | ${rate:-n/a} |"
+      echo "| $(basename "$model") | $lod | $drawn | $tested | $culling | ${gpu:-n/a} | ${rate:-n/a} |"
     done
   done
 done

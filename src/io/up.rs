@@ -8,14 +8,20 @@
 use glam::DVec3;
 use serde::Serialize;
 
-/// A signed coordinate axis taken as up.
+/// A signed coordinate axis taken as up (serialized by its [`UpAxis::name`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 pub enum UpAxis {
+    #[serde(rename = "x")]
     X,
+    #[serde(rename = "y")]
     Y,
+    #[serde(rename = "z")]
     Z,
+    #[serde(rename = "-x")]
     NegX,
+    #[serde(rename = "-y")]
     NegY,
+    #[serde(rename = "-z")]
     NegZ,
 }
 

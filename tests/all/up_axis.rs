@@ -59,6 +59,8 @@ fn each_file_stands_on_its_default_axis_and_spt_files_keep_it() {
     std::fs::write(&las, common::las_files::sample(3000, false)).unwrap();
     assert_eq!(read_model(&las).unwrap().summary.up, Some(UpAxis::Z));
     assert_eq!(read_model(&plain).unwrap().summary.up, None);
+    let (_, json, _) = common::run_spt(&["info".as_ref(), "--json".as_ref(), plain.as_os_str()]);
+    assert!(json.contains("\"up\": \"y\""), "{json}");
     for (path, up) in [
         (&plain, UpAxis::Y),
         (&said, UpAxis::Z),
