@@ -1,0 +1,311 @@
+//! A scan's splats against the scene's true surfaces (`gen_airborne`'s `truth.ply`),
+//! view by view: the scan leaves only, the truth mesh rendered at 4×4 the size and
+//! averaged in linear light, both from the same orbit cameras about the truth's centre.
+//! Prints FLIP and SSIM, and the *invented surface*: among the open-space pixels (the
+//! truth shows the ground there, through the space under a crown, the bridge's deck or
+//! the carport's roof, which `truth_regions.ply` fills from the same camera), those
+//! where the splats stand more than half a metre above what the truth shows there (a
+//! crown's curtain, a sheet under the deck, a block under the roof), by open space.
+//! Heights come from both drawn in `--mode elevation`, decoded from the ramp's colour
+//! by chromaticity, which shading does not change ([`heights_of`]).
+//!
+//! ```text
+//! cargo run --release --example airborne_quality -- data/airborne/scan.las \
+//!     data/airborne/truth.ply [--views 4] [--images DIR]
+//! ```
+
+mod classes;
+
+use std::path::{Path, PathBuf};
+
+use clap::Parser;
+use glam::DVec3;
+use spt::apps::stats::quantile;
+use spt::eval::perceptual::{downsample, flip_mean, ssim_mean};
+use spt::render::camera::heights;
+use spt::render::{Camera, Gpu, GpuScene, Image, Mode, Renderer, Settings};
+use spt::tree::scene::Scene;
+
+use classes::{Kind, UNDER};
+
+#[derive(Parser)]
+struct Args {
+    /// The scan (LAS, LAZ, PLY or .spt).
+    scan: PathBuf,
+    /// The truth mesh (`truth_regions.ply` beside it marks the overhung ground).
+    truth: PathBuf,
+    /// Orbit views, azimuth every 360°/views.
+    #[arg(long, default_value_t = 4)]
+    views: u32,
+    /// Elevation of the views, degrees.
+    #[arg(long, default_value_t = 35.0)]
+    elevation: f64,
+    /// Distance in the truth's bounding-sphere radii.
+    #[arg(long, default_value_t = 1.2)]
+    distance: f64,
+    #[arg(long, default_value_t = 512)]
+    size: u32,
+    /// Write each view's splats and truth into DIR.
+    #[arg(long)]
+    images: Option<PathBuf>,
+}
+
+const SUPERSAMPLE: u32 = 4;
+
+/// The colour of `rgba` nearest by hue in linear light among `colors` (its index);
+/// `None` for the white background or a grey. Shading scales a colour and light adds
+/// white to it: neither turns its hue.
+fn nearest(rgba: &[u8], colors: &[[u8; 3]]) -> Option<usize> {
+    let h = hue(rgba)?;
+    let apart =
+        |c: &[u8; 3]| hue(c).map_or(f64::INFINITY, |k| (h - k).abs().min(360.0 - (h - k).abs()));
+    (0..colors.len()).min_by(|&a, &b| apart(&colors[a]).total_cmp(&apart(&colors[b])))
+}
+
+/// The hue (degrees) of the sRGB colour `c` in linear light; `None` when it is nearly
+/// grey (its channels within 5 % of its largest).
+fn hue(c: &[u8]) -> Option<f64> {
+    let [r, g, b] = [0, 1, 2].map(|i| linear(c[i]));
+    let (max, min) = (r.max(g).max(b), r.min(g).min(b));
+    if max <= 0.0 || (max - min) / max < 0.05 {
+        return None;
+    }
+    let d = max - min;
+    let h = if max == r {
+        60.0 * ((g - b) / d)
+    } else if max == g {
+        60.0 * ((b - r) / d) + 120.0
+    } else {
+        60.0 * ((r - g) / d) + 240.0
+    };
+    Some(h.rem_euclid(360.0))
+}
+
+/// An sRGB channel in linear light.
+fn linear(c: u8) -> f64 {
+    let v = f64::from(c) / 255.0;
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// A colour's chromaticity: its channels over their sum, which a diffuse shade does not
+/// change (in linear light).
+fn chroma(c: impl Iterator<Item = f64>) -> [f64; 3] {
+    let c: Vec<f64> = c.collect();
+    let sum = (c[0] + c[1] + c[2]).max(1e-9);
+    [c[0] / sum, c[1] / sum, c[2] / sum]
+}
+
+/// The chromaticity of the sRGB colour `c` in linear light.
+fn linear_chroma(c: &[u8]) -> [f64; 3] {
+    chroma(c[..3].iter().map(|&v| linear(v)))
+}
+
+fn chroma_distance(p: [f64; 3], q: [f64; 3]) -> f64 {
+    (0..3).map(|i| (p[i] - q[i]).powi(2)).sum::<f64>().sqrt()
+}
+
+/// The elevation ramp of `shaders/common.wgsl` (linear RGB stops), at 400 steps, as
+/// chromaticities: a pixel of `--mode elevation` is the step whose chromaticity is
+/// nearest its own (in linear light), whatever its shade.
+fn ramp() -> Vec<[f64; 3]> {
+    const STOPS: [[f64; 3]; 5] = [
+        [0.02, 0.08, 0.6],
+        [0.0, 0.55, 0.65],
+        [0.1, 0.55, 0.05],
+        [0.9, 0.75, 0.02],
+        [0.7, 0.02, 0.01],
+    ];
+    (0..=RAMP_STEPS)
+        .map(|i| {
+            let t = 4.0 * i as f64 / RAMP_STEPS as f64;
+            let k = (t as usize).min(3);
+            let f = t - k as f64;
+            chroma((0..3).map(|c| STOPS[k][c] + (STOPS[k + 1][c] - STOPS[k][c]) * f))
+        })
+        .collect()
+}
+
+const RAMP_STEPS: usize = 400;
+
+/// The height (the file's z) each pixel of an elevation image of the tree `meta` shows;
+/// NaN on the background.
+fn heights_of(image: &Image, meta: &spt::tree::TreeMeta, ramp: &[[f64; 3]]) -> Vec<f64> {
+    let [lo, hi] = heights(meta, DVec3::Z).map(f64::from);
+    image
+        .rgba
+        .chunks_exact(4)
+        .map(|p| {
+            if p[..3].iter().all(|&c| c >= 245) {
+                return f64::NAN;
+            }
+            let c = linear_chroma(p);
+            let step = (0..ramp.len())
+                .min_by(|&a, &b| {
+                    chroma_distance(c, ramp[a]).total_cmp(&chroma_distance(c, ramp[b]))
+                })
+                .unwrap_or(0);
+            meta.origin[2] + lo + (hi - lo) * step as f64 / RAMP_STEPS as f64
+        })
+        .collect()
+}
+
+/// How far above what the truth shows a splat may stand before it counts as invented
+/// surface, metres.
+const ABOVE: f64 = 0.5;
+
+/// Per open space of [`UNDER`]: its pixels where the truth shows the ground through it
+/// (`regions` fills it; `truth` shows ground there), and how many of those the splats
+/// cover with something standing more than [`ABOVE`] over the truth's height there;
+/// last, the same of the ground elsewhere (a check of the measure: near 0).
+fn invented(
+    (scan_heights, truth_heights): (&[f64], &[f64]),
+    truth: &Image,
+    regions: &Image,
+) -> [(u64, u64); 4] {
+    let classes = Kind::ALL.map(Kind::color);
+    // The classes first, then the open spaces.
+    let mut marks: Vec<[u8; 3]> = classes.to_vec();
+    marks.extend(UNDER.iter().map(|(_, c)| *c));
+    let mut counts = [(0u64, 0u64); 4];
+    let pixels = truth.rgba.chunks_exact(4).zip(regions.rgba.chunks_exact(4));
+    for (i, (t, r)) in pixels.enumerate() {
+        let Some(mark) = nearest(r, &marks).filter(|&m| m == 0 || m >= classes.len()) else {
+            continue;
+        };
+        if nearest(t, &classes) != Some(0) {
+            continue;
+        }
+        // Ground elsewhere last.
+        let count = &mut counts[if mark == 0 { 3 } else { mark - classes.len() }];
+        count.0 += 1;
+        if scan_heights[i] > truth_heights[i] + ABOVE {
+            count.1 += 1;
+        }
+    }
+    counts
+}
+
+fn save(image: &Image, path: &Path) -> anyhow::Result<()> {
+    image::save_buffer(
+        path,
+        &image.rgba,
+        image.width,
+        image.height,
+        image::ExtendedColorType::Rgba8,
+    )?;
+    Ok(())
+}
+
+fn main() -> anyhow::Result<()> {
+    let args = Args::parse();
+    let renderer = Renderer::new(Gpu::new(None)?);
+    eprintln!("adapter: {}", renderer.gpu.describe());
+    let open = |path: &Path| -> anyhow::Result<(Scene, GpuScene)> {
+        let scene = Scene::open(path)?;
+        let gpu = renderer.upload(&scene);
+        Ok((scene, gpu))
+    };
+    let (scan, truth) = (open(&args.scan)?, open(&args.truth)?);
+    let regions = open(&args.truth.with_file_name("truth_regions.ply"))?;
+    let size = args.size;
+    let ramp = ramp();
+    let (mut flips, mut ssims, mut shares) = (Vec::new(), Vec::new(), Vec::new());
+    for k in 0..args.views {
+        let azimuth = 30.0 + 360.0 * k as f64 / args.views as f64;
+        let orbit = [azimuth, args.elevation, args.distance];
+        let camera = Camera::orbit(
+            truth.0.meta(),
+            orbit[0],
+            orbit[1],
+            orbit[2],
+            45f64.to_radians(),
+        );
+        let big = renderer
+            .render(
+                &truth.0,
+                &truth.1,
+                &camera,
+                &Settings::mesh(),
+                size * SUPERSAMPLE,
+                size * SUPERSAMPLE,
+            )?
+            .0;
+        let reference = downsample(&big, SUPERSAMPLE);
+        let splats = renderer
+            .render(&scan.0, &scan.1, &camera, &Settings::leaves(), size, size)?
+            .0;
+        let (f, s) = (
+            flip_mean(&splats, &reference),
+            ssim_mean(&splats, &reference),
+        );
+        let marked = renderer
+            .render(
+                &regions.0,
+                &regions.1,
+                &camera,
+                &Settings::mesh(),
+                size,
+                size,
+            )?
+            .0;
+        let elevation = Settings {
+            mode: Mode::Elevation,
+            ..Settings::leaves()
+        };
+        let scan_elevation = renderer
+            .render(&scan.0, &scan.1, &camera, &elevation, size, size)?
+            .0;
+        let truth_elevation = renderer
+            .render(&truth.0, &truth.1, &camera, &elevation, size, size)?
+            .0;
+        let scan_heights = heights_of(&scan_elevation, scan.0.meta(), &ramp);
+        let truth_heights = heights_of(&truth_elevation, truth.0.meta(), &ramp);
+        let counts = invented((&scan_heights, &truth_heights), &reference, &marked);
+        let (open, filled) = counts[..3]
+            .iter()
+            .fold((0, 0), |(a, b), c| (a + c.0, b + c.1));
+        let share = |(open, filled): (u64, u64)| 100.0 * filled as f64 / open.max(1) as f64;
+        let mut parts: Vec<String> = UNDER
+            .iter()
+            .zip(counts)
+            .map(|((name, _), c)| format!("under {name} {:.1} % of {}", share(c), c.0))
+            .collect();
+        parts.push(format!("the ground elsewhere {:.1} %", share(counts[3])));
+        let all = share((open, filled));
+        println!(
+            "view {azimuth:5.1}°: FLIP {f:.4}  SSIM {s:.3}  invented {all:.1} % of {open} open-space pixels ({})",
+            parts.join(", ")
+        );
+        flips.push(f);
+        ssims.push(s);
+        shares.push(all);
+        if let Some(dir) = &args.images {
+            std::fs::create_dir_all(dir)?;
+            save(&splats, &dir.join(format!("view{k}_splats.png")))?;
+            save(&reference, &dir.join(format!("view{k}_truth.png")))?;
+            save(&marked, &dir.join(format!("view{k}_regions.png")))?;
+            let mut shown = reference.clone();
+            for (i, px) in shown.rgba.chunks_exact_mut(4).enumerate() {
+                let ground =
+                    nearest(&reference.rgba[4 * i..], &Kind::ALL.map(Kind::color)) == Some(0);
+                if ground && scan_heights[i] > truth_heights[i] + ABOVE {
+                    px[..3].copy_from_slice(&[255, 0, 255]);
+                }
+            }
+            save(&shown, &dir.join(format!("view{k}_invented.png")))?;
+        }
+    }
+    let median = |v: &mut Vec<f64>| quantile(v, 0.5).unwrap_or(f64::NAN);
+    println!(
+        "median over {} views: FLIP {:.4}, SSIM {:.3}, invented surface {:.1} % of the open space's pixels",
+        args.views,
+        median(&mut flips),
+        median(&mut ssims),
+        median(&mut shares)
+    );
+    Ok(())
+}
