@@ -24,6 +24,7 @@ pub(crate) mod ring;
 pub mod shape;
 pub mod terrain;
 pub(crate) mod triangle;
+pub(crate) mod vegetation;
 pub(crate) mod walls;
 
 use bytemuck::{Pod, Zeroable};
@@ -109,6 +110,9 @@ pub struct SurfelStats {
     /// A terrain's splats whose axes were held within a few of its tile's spacings
     /// ([`cloud::TILE_SPACINGS`]).
     pub tile_capped: u64,
+    /// A terrain's samples classified as vegetation, drawn apart from its TIN
+    /// ([`vegetation`]).
+    pub vegetation: u64,
     /// The pixel grid a sensor frame's samples lie on in their file's order
     /// ([`grid`]): its surfels are then those of the grid's triangulation, as a mesh's,
     /// and the rules for frames without one (depth steps, footprint) do not run.
@@ -323,8 +327,38 @@ fn terrain_path(
     if given.is_some_and(|n| n.iter().all(|v| *v != Vec3::ZERO)) {
         return None;
     }
-    let look = (given, (g.colors.as_deref(), g.attributes.as_deref()));
-    terrain::terrain_disks((&g.positions, scale), own, look, surfels, stats)
+    let Some(split) = g
+        .attributes
+        .as_deref()
+        .and_then(|a| vegetation::Split::of(a, own))
+    else {
+        let look = (given, (g.colors.as_deref(), g.attributes.as_deref()));
+        return terrain::terrain_disks((&g.positions, scale), own, look, surfels, stats);
+    };
+    // The TIN of the samples but the vegetation, then the vegetation's own surfels.
+    let (rest, rest_own) = (&split.rest.0, split.rest.1);
+    let rest_given = given.map(|n| vegetation::pick(n, rest));
+    let colors = g.colors.as_deref().map(|c| vegetation::pick(c, rest));
+    let attributes = g.attributes.as_deref().map(|a| vegetation::pick(a, rest));
+    let look = (
+        rest_given.as_deref(),
+        (colors.as_deref(), attributes.as_deref()),
+    );
+    let mut rest_surfels = vegetation::pick(surfels, rest);
+    let positions = vegetation::pick(&g.positions, rest);
+    let splats = terrain::terrain_disks(
+        (&positions, scale),
+        rest_own,
+        look,
+        &mut rest_surfels,
+        stats,
+    )?;
+    for (k, &i) in rest.iter().enumerate() {
+        surfels[i as usize] = rest_surfels[k];
+    }
+    let plants = (split.plants.0.as_slice(), split.plants.1);
+    vegetation::plant_disks((&g.positions, scale), plants, given, surfels, stats);
+    Some(splats)
 }
 
 /// The leaf surfels, and a mesh piece's terms of the orientation vote.

@@ -432,3 +432,78 @@ fn a_sparse_bush_gets_no_splat_near_its_own_size() {
     assert!(largest < 0.4, "largest radius {largest} m");
     assert!(leaves.stats.capped_radii > 0);
 }
+
+/// A tile 50 m square as an airborne scanner returns it: ground on a 0.5 m grid (class
+/// 2) and, 7 m over it, the top of a crown 3 m in radius (class 5, or 1 when
+/// `classified` is false), no ground returns under the crown.
+fn tile_with_a_tree(classified: bool) -> Geometry {
+    let mut points = Vec::new();
+    let mut classes = Vec::new();
+    for i in 0..100 {
+        for j in 0..100 {
+            let (x, y) = (i as f64 * 0.5, j as f64 * 0.5);
+            let (dx, dy) = (x - 25.0, y - 25.0);
+            let r2 = dx * dx + dy * dy;
+            if r2 < 9.0 {
+                points.push([x, y, 7.0 + (9.0 - r2).sqrt()]);
+                classes.push(if classified { 5 } else { 1 });
+            } else {
+                points.push([x, y, 0.0]);
+                classes.push(2);
+            }
+        }
+    }
+    let (mut g, _) = Geometry::from_points(&points).unwrap();
+    g.attributes = Some(
+        classes
+            .iter()
+            .map(|&c| spt::io::PointAttributes::new(0, c, 1, 1))
+            .collect(),
+    );
+    g
+}
+
+#[test]
+fn a_classified_crown_hangs_no_curtain_to_the_ground() {
+    let (draped, apart) = (
+        leaf_surfels(&tile_with_a_tree(false)),
+        leaf_surfels(&tile_with_a_tree(true)),
+    );
+    let crown = tile_with_a_tree(true)
+        .attributes
+        .unwrap()
+        .iter()
+        .filter(|a| a.class == 5)
+        .count() as u64;
+    // A splat that reaches down from the crown (7 m up) to within 3 m of the ground.
+    let hanging = |leaves: &LeafSurfels| {
+        let ground = leaves
+            .surfels
+            .iter()
+            .map(|s| s.position.z)
+            .fold(f32::MAX, f32::min);
+        leaves
+            .surfels
+            .iter()
+            .filter(|s| {
+                let reach = s.radius * (1.0 - s.normal.z * s.normal.z).max(0.0).sqrt();
+                s.position.z + reach > ground + 6.5 && s.position.z - reach < ground + 3.0
+            })
+            .count()
+    };
+    eprintln!(
+        "crown of {crown} returns: splats hanging to the ground {} unclassified, {} classified",
+        hanging(&draped),
+        hanging(&apart)
+    );
+    assert!(
+        hanging(&draped) > 10,
+        "the TIN drapes an unclassified crown"
+    );
+    assert_eq!(hanging(&apart), 0);
+    assert_eq!(apart.stats.vegetation, crown);
+    assert_eq!(
+        apart.surfels.len() as u64,
+        10_000 + apart.stats.added_splats()
+    );
+}
