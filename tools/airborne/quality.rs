@@ -22,6 +22,7 @@ use clap::Parser;
 use glam::DVec3;
 use spt::apps::stats::quantile;
 use spt::eval::perceptual::{downsample, flip_mean, ssim_mean};
+use spt::io::png::write_png;
 use spt::render::camera::heights;
 use spt::render::{Camera, Gpu, GpuScene, Image, Mode, Renderer, Settings};
 use spt::tree::scene::Scene;
@@ -190,14 +191,93 @@ fn invented(
 }
 
 fn save(image: &Image, path: &Path) -> anyhow::Result<()> {
-    image::save_buffer(
-        path,
-        &image.rgba,
-        image.width,
-        image.height,
-        image::ExtendedColorType::Rgba8,
-    )?;
-    Ok(())
+    write_png(path, image.width, image.height, &image.rgba)
+}
+
+/// One view's figures: FLIP, SSIM, and per open space (and the ground elsewhere) its
+/// pixels and the invented ones among them.
+struct View {
+    flip: f64,
+    ssim: f64,
+    counts: [(u64, u64); 4],
+}
+
+/// The models of a measurement, on the GPU: the scan, the truth, the truth's regions.
+struct Models<'a> {
+    renderer: &'a Renderer,
+    scan: (Scene, GpuScene),
+    truth: (Scene, GpuScene),
+    regions: (Scene, GpuScene),
+    ramp: Vec<[f64; 3]>,
+}
+
+impl Models<'_> {
+    fn draw(
+        &self,
+        model: &(Scene, GpuScene),
+        camera: &Camera,
+        settings: &Settings,
+        size: u32,
+    ) -> anyhow::Result<Image> {
+        Ok(self
+            .renderer
+            .render(&model.0, &model.1, camera, settings, size, size)?
+            .0)
+    }
+
+    /// The figures of the view from `camera` at `size`; its images into `images`
+    /// (file names prefixed `prefix`) when given.
+    fn view(
+        &self,
+        camera: &Camera,
+        size: u32,
+        images: Option<(&Path, String)>,
+    ) -> anyhow::Result<View> {
+        let big = self.draw(&self.truth, camera, &Settings::mesh(), size * SUPERSAMPLE)?;
+        let reference = downsample(&big, SUPERSAMPLE);
+        let splats = self.draw(&self.scan, camera, &Settings::leaves(), size)?;
+        let marked = self.draw(&self.regions, camera, &Settings::mesh(), size)?;
+        let elevation = Settings {
+            mode: Mode::Elevation,
+            ..Settings::leaves()
+        };
+        let scan_heights = heights_of(
+            &self.draw(&self.scan, camera, &elevation, size)?,
+            self.scan.0.meta(),
+            &self.ramp,
+        );
+        let truth_heights = heights_of(
+            &self.draw(&self.truth, camera, &elevation, size)?,
+            self.truth.0.meta(),
+            &self.ramp,
+        );
+        let counts = invented((&scan_heights, &truth_heights), &reference, &marked);
+        if let Some((dir, prefix)) = images {
+            std::fs::create_dir_all(dir)?;
+            save(&splats, &dir.join(format!("{prefix}_splats.png")))?;
+            save(&reference, &dir.join(format!("{prefix}_truth.png")))?;
+            save(&marked, &dir.join(format!("{prefix}_regions.png")))?;
+            let mut shown = reference.clone();
+            let classes = Kind::ALL.map(Kind::color);
+            for (i, px) in shown.rgba.chunks_exact_mut(4).enumerate() {
+                let ground = nearest(&reference.rgba[4 * i..], &classes) == Some(0);
+                if ground && scan_heights[i] > truth_heights[i] + ABOVE {
+                    px[..3].copy_from_slice(&[255, 0, 255]);
+                }
+            }
+            save(&shown, &dir.join(format!("{prefix}_invented.png")))?;
+        }
+        Ok(View {
+            flip: flip_mean(&splats, &reference),
+            ssim: ssim_mean(&splats, &reference),
+            counts,
+        })
+    }
+}
+
+/// The share of invented pixels among (pixels, invented), percent.
+fn share((pixels, invented): (u64, u64)) -> f64 {
+    100.0 * invented as f64 / pixels.max(1) as f64
 }
 
 fn main() -> anyhow::Result<()> {
@@ -209,95 +289,46 @@ fn main() -> anyhow::Result<()> {
         let gpu = renderer.upload(&scene);
         Ok((scene, gpu))
     };
-    let (scan, truth) = (open(&args.scan)?, open(&args.truth)?);
-    let regions = open(&args.truth.with_file_name("truth_regions.ply"))?;
-    let size = args.size;
-    let ramp = ramp();
+    let models = Models {
+        renderer: &renderer,
+        scan: open(&args.scan)?,
+        truth: open(&args.truth)?,
+        regions: open(&args.truth.with_file_name("truth_regions.ply"))?,
+        ramp: ramp(),
+    };
     let (mut flips, mut ssims, mut shares) = (Vec::new(), Vec::new(), Vec::new());
     for k in 0..args.views {
         let azimuth = 30.0 + 360.0 * k as f64 / args.views as f64;
-        let orbit = [azimuth, args.elevation, args.distance];
+        let meta = models.truth.0.meta();
         let camera = Camera::orbit(
-            truth.0.meta(),
-            orbit[0],
-            orbit[1],
-            orbit[2],
+            meta,
+            azimuth,
+            args.elevation,
+            args.distance,
             45f64.to_radians(),
         );
-        let big = renderer
-            .render(
-                &truth.0,
-                &truth.1,
-                &camera,
-                &Settings::mesh(),
-                size * SUPERSAMPLE,
-                size * SUPERSAMPLE,
-            )?
-            .0;
-        let reference = downsample(&big, SUPERSAMPLE);
-        let splats = renderer
-            .render(&scan.0, &scan.1, &camera, &Settings::leaves(), size, size)?
-            .0;
-        let (f, s) = (
-            flip_mean(&splats, &reference),
-            ssim_mean(&splats, &reference),
-        );
-        let marked = renderer
-            .render(
-                &regions.0,
-                &regions.1,
-                &camera,
-                &Settings::mesh(),
-                size,
-                size,
-            )?
-            .0;
-        let elevation = Settings {
-            mode: Mode::Elevation,
-            ..Settings::leaves()
-        };
-        let scan_elevation = renderer
-            .render(&scan.0, &scan.1, &camera, &elevation, size, size)?
-            .0;
-        let truth_elevation = renderer
-            .render(&truth.0, &truth.1, &camera, &elevation, size, size)?
-            .0;
-        let scan_heights = heights_of(&scan_elevation, scan.0.meta(), &ramp);
-        let truth_heights = heights_of(&truth_elevation, truth.0.meta(), &ramp);
-        let counts = invented((&scan_heights, &truth_heights), &reference, &marked);
-        let (open, filled) = counts[..3]
+        let images = args.images.as_deref().map(|d| (d, format!("view{k}")));
+        let v = models.view(&camera, args.size, images)?;
+        let open = v.counts[..3]
             .iter()
             .fold((0, 0), |(a, b), c| (a + c.0, b + c.1));
-        let share = |(open, filled): (u64, u64)| 100.0 * filled as f64 / open.max(1) as f64;
         let mut parts: Vec<String> = UNDER
             .iter()
-            .zip(counts)
+            .zip(v.counts)
             .map(|((name, _), c)| format!("under {name} {:.1} % of {}", share(c), c.0))
             .collect();
-        parts.push(format!("the ground elsewhere {:.1} %", share(counts[3])));
-        let all = share((open, filled));
+        parts.push(format!("the ground elsewhere {:.1} %", share(v.counts[3])));
         println!(
-            "view {azimuth:5.1}°: FLIP {f:.4}  SSIM {s:.3}  invented {all:.1} % of {open} open-space pixels ({})",
+            "view {azimuth:5.1}°: FLIP {:.4}  SSIM {:.3}  invented {:.1} % of {} open-space pixels ({})",
+            v.flip,
+            v.ssim,
+            share(open),
+            open.0,
             parts.join(", ")
         );
-        flips.push(f);
-        ssims.push(s);
-        shares.push(all);
-        if let Some(dir) = &args.images {
-            std::fs::create_dir_all(dir)?;
-            save(&splats, &dir.join(format!("view{k}_splats.png")))?;
-            save(&reference, &dir.join(format!("view{k}_truth.png")))?;
-            save(&marked, &dir.join(format!("view{k}_regions.png")))?;
-            let mut shown = reference.clone();
-            for (i, px) in shown.rgba.chunks_exact_mut(4).enumerate() {
-                let ground =
-                    nearest(&reference.rgba[4 * i..], &Kind::ALL.map(Kind::color)) == Some(0);
-                if ground && scan_heights[i] > truth_heights[i] + ABOVE {
-                    px[..3].copy_from_slice(&[255, 0, 255]);
-                }
-            }
-            save(&shown, &dir.join(format!("view{k}_invented.png")))?;
-        }
+        flips.push(v.flip);
+        ssims.push(v.ssim);
+        shares.push(share(open));
     }
     let median = |v: &mut Vec<f64>| quantile(v, 0.5).unwrap_or(f64::NAN);
     println!(
