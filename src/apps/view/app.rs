@@ -251,9 +251,11 @@ impl App {
                 }
                 Err(e) => {
                     let text = format!("{e:#}");
-                    eprintln!("error: {text}");
                     if self.args.screenshot.is_some() {
+                        // The run ends with it, and says it then.
                         self.failure = Some(e);
+                    } else {
+                        eprintln!("error: {text}");
                     }
                     self.message = Some((text, true));
                 }
