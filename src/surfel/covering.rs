@@ -208,13 +208,9 @@ fn samples_no_surface(offsets: &[Vec3]) -> bool {
     if offsets.len() < 3 {
         return false;
     }
-    let n = offsets.len() as f64;
-    let mean = offsets.iter().map(|o| o.as_dvec3()).sum::<glam::DVec3>() / n;
-    let mut cov = glam::DMat3::ZERO;
-    for o in offsets {
-        let d = o.as_dvec3() - mean;
-        cov += glam::DMat3::from_cols(d * d.x, d * d.y, d * d.z);
-    }
+    let Some(cov) = super::pca::scatter_matrix(offsets.iter().copied()) else {
+        return false;
+    };
     let (values, _) = super::pca::symmetric_eigen(cov);
     let mut v = values.to_array();
     v.sort_by(f64::total_cmp);

@@ -44,15 +44,14 @@ pub fn symmetric_eigen(m: DMat3) -> (DVec3, DMat3) {
     (DVec3::new(a[0][0], a[1][1], a[2][2]), vecs)
 }
 
-/// Unit normal of the best-fit plane of `points`: the eigenvector of the smallest
-/// eigenvalue of their covariance. Any unit vector when the points do not span a plane
-/// direction uniquely (e.g. all identical); never NaN.
-pub fn plane_normal(points: impl Iterator<Item = Vec3> + Clone) -> Vec3 {
+/// The scatter matrix of `points` about their mean, Σ (p − p̄)(p − p̄)ᵀ, in f64 (their
+/// covariance times their count); `None` for no point.
+pub fn scatter_matrix(points: impl Iterator<Item = Vec3> + Clone) -> Option<DMat3> {
     let (sum, n) = points
         .clone()
         .fold((DVec3::ZERO, 0usize), |(s, n), p| (s + p.as_dvec3(), n + 1));
     if n == 0 {
-        return Vec3::Z;
+        return None;
     }
     let mean = sum / n as f64;
     let mut cov = DMat3::ZERO;
@@ -60,6 +59,16 @@ pub fn plane_normal(points: impl Iterator<Item = Vec3> + Clone) -> Vec3 {
         let d = p.as_dvec3() - mean;
         cov += DMat3::from_cols(d * d.x, d * d.y, d * d.z);
     }
+    Some(cov)
+}
+
+/// Unit normal of the best-fit plane of `points`: the eigenvector of the smallest
+/// eigenvalue of their covariance. Any unit vector when the points do not span a plane
+/// direction uniquely (e.g. all identical); never NaN.
+pub fn plane_normal(points: impl Iterator<Item = Vec3> + Clone) -> Vec3 {
+    let Some(cov) = scatter_matrix(points) else {
+        return Vec3::Z;
+    };
     if let Some(n) = least_axis(cov) {
         return n.as_vec3();
     }
