@@ -204,7 +204,7 @@ pub fn covering(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> Cover
 /// Whether the neighbourhood `offsets` scatters in three dimensions rather than lying
 /// on a surface: the variance along its least principal axis is more than
 /// [`SCATTER`] times the mean of the other two.
-fn samples_no_surface(offsets: &[Vec3]) -> bool {
+pub fn samples_no_surface(offsets: &[Vec3]) -> bool {
     if offsets.len() < 3 {
         return false;
     }

@@ -15,6 +15,7 @@ pub(crate) mod field;
 pub(crate) mod footprint;
 pub mod grid;
 pub(crate) mod isolated;
+pub(crate) mod layers;
 pub(crate) mod levels;
 pub mod long_triangles;
 pub(crate) mod mesh;
@@ -33,6 +34,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::io::{Geometry, PointAttributes};
+use layers::Layer;
 use shape::SplatShape;
 
 /// A splat: centre, unit normal, radius (the major semi-axis), colour, its ellipse and
@@ -310,9 +312,10 @@ fn initial_surfels(g: &Geometry) -> Vec<Surfel> {
         .collect()
 }
 
-/// A terrain's splats from its TIN ([`terrain::terrain_disks`]); None for any other
-/// model, for a terrain whose samples make no triangle, and for one whose file gives
-/// every normal (kept as given, by the cloud's rules).
+/// A terrain's splats from its TIN ([`terrain::terrain_disks`]), its layers apart
+/// ([`layers`]); None for any other model, for a terrain whose ground makes no
+/// triangle, and for one whose file gives every normal (kept as given, by the cloud's
+/// rules).
 fn terrain_path(
     g: &Geometry,
     (own, scale): (usize, f32),
@@ -327,37 +330,37 @@ fn terrain_path(
     if given.is_some_and(|n| n.iter().all(|v| *v != Vec3::ZERO)) {
         return None;
     }
-    let Some(split) = g
-        .attributes
-        .as_deref()
-        .and_then(|a| vegetation::Split::of(a, own))
-    else {
+    let layers = layers::Layers::of(&layers::labels(g, own, scale), own);
+    if layers.all_ground() {
         let look = (given, (g.colors.as_deref(), g.attributes.as_deref()));
-        return terrain::terrain_disks((&g.positions, scale), own, look, surfels, stats);
-    };
-    // The TIN of the samples but the vegetation, then the vegetation's own surfels.
-    let (rest, rest_own) = (&split.rest.0, split.rest.1);
-    let rest_given = given.map(|n| vegetation::pick(n, rest));
-    let colors = g.colors.as_deref().map(|c| vegetation::pick(c, rest));
-    let attributes = g.attributes.as_deref().map(|a| vegetation::pick(a, rest));
-    let look = (
-        rest_given.as_deref(),
-        (colors.as_deref(), attributes.as_deref()),
-    );
-    let mut rest_surfels = vegetation::pick(surfels, rest);
-    let positions = vegetation::pick(&g.positions, rest);
-    let splats = terrain::terrain_disks(
-        (&positions, scale),
-        rest_own,
-        look,
-        &mut rest_surfels,
-        stats,
-    )?;
-    for (k, &i) in rest.iter().enumerate() {
-        surfels[i as usize] = rest_surfels[k];
+        let all = (own, &terrain::Cover::none());
+        return terrain::terrain_disks((&g.positions, scale), all, look, surfels, stats)
+            .map(|tin| tin.splats);
     }
-    let plants = (split.plants.0.as_slice(), split.plants.1);
-    vegetation::plant_disks((&g.positions, scale), plants, given, surfels, stats);
+    let (decks, decks_own) = layers.get(Layer::Deck);
+    let mut plants = layers.get(Layer::Plants).0.to_vec();
+    let mut splats = Vec::new();
+    let mut cover = terrain::Cover::none();
+    if decks_own > 0 {
+        let none = terrain::Cover::none();
+        match layers::tin_among((g, scale), (decks, decks_own), &none, surfels, stats) {
+            Some(deck) => {
+                let cell = layers::COVER_SPACINGS * deck.spacing;
+                cover = terrain::Cover::of(decks.iter().map(|&i| g.positions[i as usize]), cell);
+                splats = deck.splats;
+            }
+            // Too few to make a triangle: drawn as plants are, among themselves.
+            None => plants = [&decks[..decks_own], &plants[..]].concat(),
+        }
+    }
+    let ground_layer = layers.get(Layer::Ground);
+    let ground = layers::tin_among((g, scale), ground_layer, &cover, surfels, stats)?;
+    splats.extend(ground.splats);
+    let plants_own = plants.iter().filter(|&&i| (i as usize) < own).count();
+    plants.sort_unstable_by_key(|&i| ((i as usize) >= own, i));
+    let scales = (&g.positions[..], scale, ground.spacing);
+    vegetation::plant_disks(scales, (&plants, plants_own), given, surfels, stats);
+    stats.triangle_splats = splats.len() as u64;
     Some(splats)
 }
 

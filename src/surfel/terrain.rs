@@ -37,7 +37,7 @@ use rayon::prelude::*;
 
 use super::long_triangles::{self, Looks, Reach};
 use super::{Surfel, SurfelStats};
-use crate::io::triangulate::height_field;
+use crate::io::triangulate::height_field_keeping;
 
 /// Longest edge, in the tile's spacings, beyond which a TIN triangle gets a splat of
 /// its own. With [`TIN_REACH`], terrain_utm / autzen_trim FLIP: 0.1191 / 0.1097 at
@@ -70,12 +70,12 @@ pub const TIN_REACH: Reach = Reach {
 /// differs from the whole's).
 pub fn terrain_disks(
     (points, scale): (&[Vec3], f32),
-    own: usize,
+    (own, cover): (usize, &Cover),
     (given, looks): (Option<&[Vec3]>, Looks),
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
-) -> Option<Vec<Surfel>> {
-    let mut triangles = height_field(points);
+) -> Option<TinSplats> {
+    let mut triangles = height_field_keeping(points, |c| cover.covers(c));
     let spacing = median_horizontal_edge(points, &triangles).filter(|s| s.is_normal())?;
     triangles.par_iter_mut().for_each(|t| {
         let [a, b, c] = t.map(|v| points[v as usize]);
@@ -108,7 +108,54 @@ pub fn terrain_disks(
     let reach = (looks, TIN_REACH);
     let splats = long_triangles::splats(points, scale, &owned, &split.normals, reach);
     stats.triangle_splats = splats.len() as u64;
-    Some(splats)
+    Some(TinSplats { splats, spacing })
+}
+
+/// The x–y cells (a square grid) that an upper layer's samples (a bridge deck's)
+/// fall in: under them the ground's TIN keeps the triangles that span the gap the
+/// layer leaves in it.
+pub struct Cover {
+    cell: f32,
+    cells: std::collections::HashSet<(i32, i32)>,
+}
+
+impl Cover {
+    /// No cover: the TIN keeps no long triangle.
+    pub fn none() -> Cover {
+        Cover {
+            cell: 1.0,
+            cells: Default::default(),
+        }
+    }
+
+    /// The cells of side `cell` that `points` fall in.
+    pub fn of(points: impl Iterator<Item = Vec3>, cell: f32) -> Cover {
+        let mut cover = Cover::none();
+        cover.cell = cell;
+        cover.cells = points.map(|p| cover.key(p)).collect();
+        cover
+    }
+
+    fn key(&self, p: Vec3) -> (i32, i32) {
+        let k = |v: f32| {
+            (v / self.cell)
+                .floor()
+                .clamp(i32::MIN as f32, i32::MAX as f32) as i32
+        };
+        (k(p.x), k(p.y))
+    }
+
+    pub fn covers(&self, p: Vec3) -> bool {
+        !self.cells.is_empty() && self.cells.contains(&self.key(p))
+    }
+}
+
+/// What [`terrain_disks`] adds to the samples' own surfels.
+pub struct TinSplats {
+    /// The long triangles' splats that the piece owns.
+    pub splats: Vec<Surfel>,
+    /// The tile's spacing: the median horizontal length of its TIN's edges.
+    pub spacing: f32,
 }
 
 /// The median horizontal length of `triangles`' edges; None when there are none.
@@ -184,7 +231,7 @@ mod tests {
         let all = points.len();
         terrain_disks(
             (points, scale),
-            all,
+            (all, &Cover::none()),
             (None, (None, None)),
             &mut surfels,
             &mut stats,

@@ -196,6 +196,41 @@ fn disks(
     }
 }
 
+/// Whether each of `points` (unit-scaled by `scale` for the search) has a
+/// neighbourhood of [`K`] that scatters in three dimensions rather than lying on a
+/// surface ([`super::covering::samples_no_surface`]).
+pub fn scattered(points: &[Vec3], scale: f32) -> Vec<bool> {
+    let search = Search::new(points, scale);
+    if search.tree.is_none() {
+        return vec![false; points.len()];
+    }
+    let distinct: Vec<u32> = (0..search.coords.len() as u32).collect();
+    let neighbourhoods: Vec<ArrayVec<u32, K>> = search
+        .neighbourhoods(&distinct, &|&i| search.point(i))
+        .map(|(_, found)| found)
+        .collect();
+    let seeds: Vec<bool> = (neighbourhoods.par_iter().enumerate())
+        .map(|(i, found)| {
+            let p = search.point(i as u32);
+            let offsets: ArrayVec<Vec3, K> = found.iter().map(|&f| search.point(f) - p).collect();
+            super::covering::samples_no_surface(&offsets)
+        })
+        .collect();
+    let dilated: Vec<bool> = (neighbourhoods.par_iter().zip(&seeds))
+        .map(|(found, &seed)| {
+            seed || 2 * found.iter().filter(|&&f| seeds[f as usize]).count() > found.len()
+        })
+        .collect();
+    points
+        .par_iter()
+        .map(|p| {
+            search
+                .index_of(*p * scale)
+                .is_some_and(|i| dilated[i as usize])
+        })
+        .collect()
+}
+
 /// Longest semi-axis of a terrain's splat, in the tile's spacing s (the median of its
 /// samples' neighbourhood spacings, [`Covering::spacing`]). The covering gives a sample
 /// of a square grid of spacing s a circle of √2 s; 1.5 s leaves 6 % over that.

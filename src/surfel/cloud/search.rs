@@ -42,6 +42,13 @@ impl Search {
         Search { coords, tree, k }
     }
 
+    /// The index among the distinct positions of the scaled position `p`.
+    pub fn index_of(&self, p: Vec3) -> Option<u32> {
+        let key = position_key(&p.to_array());
+        let found = self.coords.binary_search_by_key(&key, position_key);
+        found.ok().map(|i| i as u32)
+    }
+
     pub fn point(&self, i: u32) -> Vec3 {
         Vec3::from(self.coords[i as usize])
     }

@@ -1,0 +1,114 @@
+//! A terrain's samples in layers that its TIN must not join. A 2.5D TIN holds one
+//! height per x–y: between a tree's crown and the ground beside its trunk, or a bridge
+//! deck's edge and the gully floor under it, it stands a wall that no sample saw
+//! (docs/point-clouds.md, "Airborne scans against a known scene"). So:
+//!
+//! - **vegetation** (ASPRS classes 3–5 where the file has them; else the samples whose
+//!   3D neighbourhood samples no surface, [`super::cloud::scattered`]) gets a cloud's
+//!   surfels among itself ([`super::vegetation`]);
+//! - **bridge decks** (class 17) get a TIN of their own, and the ground's TIN runs on
+//!   under them;
+//! - the rest (ground, roofs, walls, whatever else) keeps the TIN ([`super::terrain`]).
+
+use glam::Vec3;
+
+use super::cloud;
+use super::terrain::{self, Cover, TinSplats};
+use super::vegetation::{is_vegetation, pick};
+use super::{Surfel, SurfelStats};
+use crate::io::{Geometry, PointAttributes};
+
+/// The layer a sample is drawn in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Layer {
+    Ground = 0,
+    Deck = 1,
+    Plants = 2,
+}
+
+/// ASPRS class of a bridge deck.
+pub const BRIDGE_DECK: u8 = 17;
+
+/// The layer of each sample of `g` whose first `own` are its own: by class where the
+/// file classifies vegetation among its own samples, by geometry otherwise; decks by
+/// class.
+pub fn labels(g: &Geometry, own: usize, scale: f32) -> Vec<Layer> {
+    let attributes = g.attributes.as_deref();
+    let classified = attributes.is_some_and(|a| a[..own].iter().any(is_vegetation));
+    let plants = if classified {
+        Vec::new()
+    } else {
+        cloud::scattered(&g.positions, scale)
+    };
+    (0..g.positions.len())
+        .map(|i| {
+            let a = attributes.map(|a| a[i]);
+            let class = a.map_or(0, |a: PointAttributes| a.class);
+            if a.is_some_and(|a| is_vegetation(&a)) || plants.get(i) == Some(&true) {
+                Layer::Plants
+            } else if class == BRIDGE_DECK {
+                Layer::Deck
+            } else {
+                Layer::Ground
+            }
+        })
+        .collect()
+}
+
+/// Each layer's samples, its own (the first `own` of the model) first, then its
+/// halo's, in the model's order, with how many are its own.
+pub struct Layers {
+    sets: [(Vec<u32>, usize); 3],
+}
+
+impl Layers {
+    pub fn of(labels: &[Layer], own: usize) -> Layers {
+        let mut sets: [(Vec<u32>, usize); 3] = Default::default();
+        for (i, &l) in labels.iter().enumerate() {
+            let set = &mut sets[l as usize];
+            set.0.push(i as u32);
+            set.1 += (i < own) as usize;
+        }
+        Layers { sets }
+    }
+
+    /// The samples of `layer` and how many of them are the model's own.
+    pub fn get(&self, layer: Layer) -> (&[u32], usize) {
+        let (set, own) = &self.sets[layer as usize];
+        (set, *own)
+    }
+
+    /// Whether the ground holds every own sample.
+    pub fn all_ground(&self) -> bool {
+        self.sets[1..].iter().all(|s| s.1 == 0)
+    }
+}
+
+/// The TIN's surfels of the samples `which` (of which the first `own` are the model's
+/// own) among themselves, into `surfels` (one per sample of `g`), keeping the long
+/// triangles under `cover`; their long triangles' splats and spacing. None where they
+/// make no triangle.
+pub fn tin_among(
+    (g, scale): (&Geometry, f32),
+    (which, own): (&[u32], usize),
+    cover: &Cover,
+    surfels: &mut [Surfel],
+    stats: &mut SurfelStats,
+) -> Option<TinSplats> {
+    let given = g.normals.as_deref().map(|n| pick(n, which));
+    let colors = g.colors.as_deref().map(|c| pick(c, which));
+    let attributes = g.attributes.as_deref().map(|a| pick(a, which));
+    let look = (given.as_deref(), (colors.as_deref(), attributes.as_deref()));
+    let mut picked = pick(surfels, which);
+    let positions: Vec<Vec3> = pick(&g.positions, which);
+    let tin = terrain::terrain_disks((&positions, scale), (own, cover), look, &mut picked, stats)?;
+    for (k, &i) in which.iter().enumerate() {
+        surfels[i as usize] = picked[k];
+    }
+    Some(tin)
+}
+
+/// Cells of the cover of a deck, in its TIN's spacings: the gap it leaves in the
+/// ground's samples is its own width and the width its edge hides from an oblique
+/// pulse; cells of 2 spacings hold every sample of a deck without holes.
+pub const COVER_SPACINGS: f32 = 2.0;
