@@ -1,6 +1,6 @@
 //! A terrain's splats from its triangulated irregular network (TIN): the 2.5D
 //! Delaunay triangulation of its samples in x–y, long triangles dropped
-//! ([`height_field`], the surface docs/point-clouds.md measures a tile's splats against and the one
+//! ([`crate::io::triangulate::height_field`], the surface docs/point-clouds.md measures a tile's splats against and the one
 //! terrain tools hill-shade), drawn as a sensor frame's grid is
 //! ([`long_triangles::disks`]).
 //!

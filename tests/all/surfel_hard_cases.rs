@@ -507,3 +507,131 @@ fn a_classified_crown_hangs_no_curtain_to_the_ground() {
         10_000 + apart.stats.added_splats()
     );
 }
+
+/// A hash of `k` in [0, 1): the same tile on every run, without a generator.
+fn unit_hash(k: u64) -> f64 {
+    let h = k.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (k >> 7);
+    (h.wrapping_mul(0xbf58_476d_1ce4_e5b9) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// A tile 40 m square of unclassified returns (class 1): ground on a 0.5 m grid, and
+/// where a crown 3 m in radius stands 4 m over it, first returns inside the crown at a
+/// random depth below its top (foliage), a return in four passing through to the ground.
+fn tile_with_a_porous_crown() -> Geometry {
+    let mut points = Vec::new();
+    for i in 0..80 {
+        for j in 0..80 {
+            let (x, y) = (i as f64 * 0.5, j as f64 * 0.5);
+            let (dx, dy) = (x - 20.0, y - 20.0);
+            let r2 = dx * dx + dy * dy;
+            let k = (i * 80 + j) as u64;
+            if r2 < 9.0 && unit_hash(k) > 0.25 {
+                let top = 7.0 + (9.0 - r2).sqrt();
+                let depth = 2.0 * (9.0 - r2).sqrt() * unit_hash(k + 7919);
+                points.push([x, y, top - depth]);
+            } else {
+                points.push([x, y, 0.0]);
+            }
+        }
+    }
+    let (mut g, _) = Geometry::from_points(&points).unwrap();
+    g.attributes = Some(vec![
+        spt::io::PointAttributes::new(0, 1, 1, 1);
+        points.len()
+    ]);
+    g
+}
+
+/// The splats that reach from over `top` down to under `bottom` (height z).
+fn spanning(leaves: &LeafSurfels, top: f64, bottom: f64) -> usize {
+    leaves
+        .surfels
+        .iter()
+        .filter(|s| {
+            let reach = (s.radius * (1.0 - s.normal.z * s.normal.z).max(0.0).sqrt()) as f64;
+            let z = at(leaves, s).z;
+            z + reach > top && z - reach < bottom
+        })
+        .count()
+}
+
+/// Where splat `s` of `leaves` stands in the file's coordinates.
+fn at(leaves: &LeafSurfels, s: &spt::surfel::Surfel) -> glam::DVec3 {
+    s.position.as_dvec3() + leaves.origin
+}
+
+#[test]
+fn an_unclassified_porous_crown_is_found_by_its_geometry_and_hangs_no_curtain() {
+    let g = tile_with_a_porous_crown();
+    let crown = (g.positions.iter())
+        .filter(|p| p.z as f64 + g.origin.z > 0.5)
+        .count() as u64;
+    let leaves = leaf_surfels(&g);
+    let found = leaves.stats.vegetation;
+    // A splat from the crown's lower half (7 m up at most) down to within 2 m of the ground.
+    let hanging = spanning(&leaves, 6.0, 2.0);
+    eprintln!("crown of {crown} returns: {found} found as vegetation, {hanging} splats hanging");
+    assert!(
+        found >= crown * 9 / 10 && found <= crown + 20,
+        "{found} of {crown}"
+    );
+    assert_eq!(hanging, 0);
+}
+
+/// A gully 6 m deep across a tile 40 m square (ground, class 2, on a 0.5 m grid) under a
+/// bridge deck 8 m wide at 3 m (class 17, when `deck_class`; else 6, a building's), seen
+/// from straight above: no return under the deck.
+fn tile_with_a_bridge(deck_class: u8) -> Geometry {
+    let (mut points, mut classes) = (Vec::new(), Vec::new());
+    for i in 0..80 {
+        for j in 0..80 {
+            let (x, y) = (i as f64 * 0.5, j as f64 * 0.5);
+            let across = (x - 20.0) / 12.0;
+            let floor = -6.0 * (1.0 - across * across).max(0.0);
+            let on_deck = (16.0..24.0).contains(&y) && (4.0..36.0).contains(&x);
+            points.push([x, y, if on_deck { 3.0 } else { floor }]);
+            classes.push(if on_deck { deck_class } else { 2 });
+        }
+    }
+    let (mut g, _) = Geometry::from_points(&points).unwrap();
+    let attributes = classes
+        .iter()
+        .map(|&c| spt::io::PointAttributes::new(0, c, 1, 1));
+    g.attributes = Some(attributes.collect());
+    g
+}
+
+#[test]
+fn a_bridge_deck_stands_on_no_wall_and_the_ground_runs_on_under_it() {
+    let (deck, roof) = (
+        leaf_surfels(&tile_with_a_bridge(17)),
+        leaf_surfels(&tile_with_a_bridge(6)),
+    );
+    // Splats centred between the deck (3 m) and the floor where the gully is deep
+    // (x 14–26, floor under −4 m): a wall's, from the deck's edge to the floor.
+    let walls = |leaves: &LeafSurfels| {
+        (leaves.surfels.iter())
+            .map(|s| at(leaves, s))
+            .filter(|p| (14.0..26.0).contains(&p.x) && (-3.0..2.0).contains(&p.z))
+            .count()
+    };
+    // The gully floor's splats under the deck's middle.
+    let under = |leaves: &LeafSurfels| {
+        (leaves.surfels.iter())
+            .filter(|s| at(leaves, s).z < -3.0 && (18.0..22.0).contains(&at(leaves, s).y))
+            .count()
+    };
+    eprintln!(
+        "splats from the deck down to the floor: {} as a deck, {} as a roof; floor splats under it {} and {}",
+        walls(&deck),
+        walls(&roof),
+        under(&deck),
+        under(&roof)
+    );
+    assert!(
+        walls(&roof) > 10,
+        "a roof of the same shape stands on walls"
+    );
+    assert_eq!(walls(&deck), 0);
+    assert!(under(&deck) > 10 && under(&roof) == 0);
+}
