@@ -3,9 +3,10 @@
 //! deck's edge and the gully floor under it, it stands a wall that no sample saw
 //! (docs/point-clouds.md, "Airborne scans against a known scene"). So:
 //!
-//! - **vegetation** (ASPRS classes 3–5 where the file has them; else the samples whose
-//!   3D neighbourhood samples no surface, [`super::cloud::scattered`]) gets a cloud's
-//!   surfels among itself ([`super::vegetation`]);
+//! - **vegetation** (ASPRS classes 3–5; among the samples the file leaves
+//!   unclassified, those whose 3D neighbourhood samples no surface,
+//!   [`super::cloud::scattered`]) gets a cloud's surfels among itself
+//!   ([`super::vegetation`]);
 //! - **bridge decks** (class 17) get a TIN of their own, and the ground's TIN runs on
 //!   under them;
 //! - the rest (ground, roofs, walls, whatever else) keeps the TIN ([`super::terrain`]).
@@ -14,9 +15,9 @@ use glam::Vec3;
 
 use super::cloud;
 use super::terrain::{self, Cover, TinSplats};
-use super::vegetation::{is_vegetation, pick};
+use super::vegetation::pick;
 use super::{Surfel, SurfelStats};
-use crate::io::{Geometry, PointAttributes};
+use crate::io::Geometry;
 
 /// The layer a sample is drawn in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -29,28 +30,24 @@ pub enum Layer {
 /// ASPRS class of a bridge deck.
 pub const BRIDGE_DECK: u8 = 17;
 
-/// The layer of each sample of `g` whose first `own` are its own: by class where the
-/// file classifies vegetation among its own samples, by geometry otherwise; decks by
-/// class.
+/// The layer of each sample of `g` (the first `own` its own): vegetation by its class
+/// (3–5), or, for a sample its file leaves unclassified (class 0 or 1, or no classes
+/// at all), by its geometry; decks by class. A sample's layer does not depend on which
+/// piece of an out-of-core job holds it but through its neighbours.
 pub fn labels(g: &Geometry, own: usize, scale: f32) -> Vec<Layer> {
-    let attributes = g.attributes.as_deref();
-    let classified = attributes.is_some_and(|a| a[..own].iter().any(is_vegetation));
-    let plants = if classified {
-        Vec::new()
-    } else {
+    let class = |i: usize| g.attributes.as_deref().map_or(0, |a| a[i].class);
+    let unclassified = |i: usize| matches!(class(i), 0 | 1);
+    let plants = if (0..own).any(unclassified) {
         cloud::scattered(&g.positions, scale)
+    } else {
+        Vec::new()
     };
     (0..g.positions.len())
-        .map(|i| {
-            let a = attributes.map(|a| a[i]);
-            let class = a.map_or(0, |a: PointAttributes| a.class);
-            if a.is_some_and(|a| is_vegetation(&a)) || plants.get(i) == Some(&true) {
-                Layer::Plants
-            } else if class == BRIDGE_DECK {
-                Layer::Deck
-            } else {
-                Layer::Ground
-            }
+        .map(|i| match class(i) {
+            3..=5 => Layer::Plants,
+            BRIDGE_DECK => Layer::Deck,
+            _ if unclassified(i) && plants.get(i) == Some(&true) => Layer::Plants,
+            _ => Layer::Ground,
         })
         .collect()
 }

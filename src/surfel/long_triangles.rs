@@ -143,7 +143,15 @@ pub struct Reach {
     /// Its least minor / major semi-axis ([`super::shape::MIN_PACKED_RATIO`]: as thin
     /// as the triangle's circumellipse, up to what the format holds).
     pub min_ratio: f64,
+    /// Whether a wall (a triangle whose unit normal's z is under [`WALL_NORMAL_Z`])
+    /// takes the colour of its corners in the upper half of its height, without a
+    /// field: a terrain's ([`super::terrain`]), whose walls join a roof's edge to the
+    /// street and were shaded from the roof's colour to the street's.
+    pub wall_colour_from_above: bool,
 }
+
+/// A wall's largest |z| of its unit normal: steeper than 60°.
+pub const WALL_NORMAL_Z: f64 = 0.5;
 
 impl Reach {
     /// The circumellipse, no thinner than [`MIN_RATIO`]: a sensor frame's
@@ -154,6 +162,7 @@ impl Reach {
     pub const CORNERS: Reach = Reach {
         scale: 1.0,
         min_ratio: MIN_RATIO,
+        wall_colour_from_above: false,
     };
 }
 
@@ -186,7 +195,9 @@ fn triangle_splat(corners: [Corner; 3], colored: bool, reach: Reach) -> Option<S
     )
     .unwrap_or((face, shape));
     let mut color = corners.iter().map(|k| k.color).sum::<DVec3>() / 3.0;
-    if colored {
+    if reach.wall_colour_from_above && face.z.abs() < WALL_NORMAL_Z {
+        color = colour_from_above(&corners);
+    } else if colored {
         let at = |k: &Corner| (k.position, k.color);
         if let Some((c0, field)) = fit_color_field(
             (g, normal),
@@ -208,6 +219,15 @@ fn triangle_splat(corners: [Corner; 3], colored: bool, reach: Reach) -> Option<S
         shape: shape.pack(),
         attributes: PointAttributes::default(),
     })
+}
+
+/// The mean colour of the `corners` in the upper half of their heights (z).
+fn colour_from_above(corners: &[Corner; 3]) -> DVec3 {
+    let z = corners.map(|k| k.position.z);
+    let middle = 0.5 * (z[0].max(z[1]).max(z[2]) + z[0].min(z[1]).min(z[2]));
+    let upper = corners.iter().filter(|k| k.position.z >= middle);
+    let (sum, n) = upper.fold((DVec3::ZERO, 0.0), |(s, n), k| (s + k.color, n + 1.0));
+    sum / n
 }
 
 /// The Steiner circumellipse of triangle `[a, b, c]` in its plane (normal `face`): its
@@ -353,5 +373,31 @@ mod tests {
         assert!(s.shape.unpack(DVec3::Z).ratio < 0.05);
         let fat = triangle_splat([a, b, c].map(flat_corner), false, Reach::CORNERS).unwrap();
         assert!(fat.covers(beside), "MIN_RATIO's sail");
+    }
+
+    #[test]
+    fn a_terrain_s_wall_takes_its_upper_corners_colour() {
+        // A wall 0.5 wide and 6 high: two corners on a red roof's edge, one on the
+        // grey street below.
+        let corner = |position: DVec3, color: DVec3| Corner {
+            position,
+            normal: DVec3::Y,
+            color,
+        };
+        let (red, grey) = (DVec3::new(0.8, 0.2, 0.2), DVec3::splat(0.6));
+        let wall = [
+            corner(DVec3::new(0.0, 0.0, 6.0), red),
+            corner(DVec3::new(0.5, 0.0, 6.0), red),
+            corner(DVec3::new(0.2, 0.1, 0.0), grey),
+        ];
+        let from_above = Reach {
+            wall_colour_from_above: true,
+            ..Reach::CORNERS
+        };
+        let s = triangle_splat(wall, true, from_above).unwrap();
+        assert_eq!(s.color, [204, 51, 51, 255]);
+        assert_eq!(s.shape.unpack(s.normal.as_dvec3()).color, [DVec3::ZERO; 2]);
+        let blended = triangle_splat(wall, true, Reach::CORNERS).unwrap();
+        assert!(blended.color[1] > 80, "{:?}", blended.color);
     }
 }

@@ -55,6 +55,7 @@ pub const LONG_SPACINGS: f32 = 1.5;
 pub const TIN_REACH: Reach = Reach {
     scale: 0.85,
     min_ratio: super::shape::MIN_PACKED_RATIO,
+    wall_colour_from_above: true,
 };
 
 /// The splats of the first `own` of a terrain's `points` (the rest: the halo of a

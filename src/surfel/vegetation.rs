@@ -1,8 +1,7 @@
-//! A terrain's vegetation (its file's classes 3, 4 and 5: low, medium and high
-//! vegetation; else found by its geometry, [`super::layers`]), drawn apart from its
-//! TIN. A TIN joins a crown's samples to the
-//! ground around the trunk, and its splats hang a curtain from every crown to the
-//! ground (docs/point-clouds.md, "Airborne scans against a known scene"). Left out of
+//! A terrain's vegetation (classes 3, 4 and 5: low, medium and high vegetation; or
+//! found by its geometry, [`super::layers`]), drawn apart from its TIN. A TIN joins a
+//! crown's samples to the ground around the trunk, and its splats hang a curtain from
+//! every crown to the ground (docs/point-clouds.md, "Airborne scans against a known scene"). Left out of
 //! the TIN, the ground and roofs under and around a tree keep their own surface, and
 //! the vegetation's samples get a cloud's surfels among themselves
 //! ([`super::cloud::neighbour_disks`]): sized by the vegetation's own sampling, their
@@ -13,7 +12,6 @@ use glam::Vec3;
 use super::cloud::{self, Orientation};
 use super::covering::RadiusRule;
 use super::{Surfel, SurfelStats};
-use crate::io::PointAttributes;
 
 /// Largest radius of a vegetation splat, in the tile's spacings s (the median edge of
 /// the ground's TIN). A lone return (a trunk's, one under a crown) has neighbours metres
@@ -22,11 +20,6 @@ use crate::io::PointAttributes;
 /// (`airborne_quality`, 4 views): FLIP 0.101 / 0.100 / 0.091 and surface invented
 /// under the crowns 24–32 % / 3–5 % / 4–6 % unheld / at s / at √2 s.
 pub const FOOTPRINT_SPACINGS: f32 = std::f32::consts::SQRT_2;
-
-/// Whether a sample is vegetation by its class.
-pub fn is_vegetation(a: &PointAttributes) -> bool {
-    matches!(a.class, 3..=5)
-}
 
 /// `values` at `indices`.
 pub fn pick<T: Copy>(values: &[T], indices: &[u32]) -> Vec<T> {
