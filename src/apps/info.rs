@@ -315,7 +315,7 @@ impl ModelInfo {
         line(
             "",
             format!(
-                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, splats of long triangles (a frame's grid, a terrain's TIN) {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}, a terrain's splats held to its tile's spacing {}, a terrain's vegetation drawn apart from its TIN {}",
+                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, splats of long triangles (a frame's grid, a terrain's TIN) {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}, a terrain's splats held to its tile's spacing {}, a terrain's vegetation drawn apart from its TIN {}, bridge decks' samples in a TIN of their own {}",
                 count(st.degenerate_triangles),
                 count(st.isolated_vertices),
                 count(st.redundant_vertices),
@@ -329,7 +329,8 @@ impl ModelInfo {
                 count(st.step_treads),
                 count(st.footprint_capped),
                 count(st.tile_capped),
-                count(st.vegetation)
+                count(st.vegetation),
+                count(st.bridge_decks)
             ),
         );
         let t = &self.timing;

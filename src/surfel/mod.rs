@@ -112,9 +112,12 @@ pub struct SurfelStats {
     /// A terrain's splats whose axes were held within a few of its tile's spacings
     /// ([`cloud::TILE_SPACINGS`]).
     pub tile_capped: u64,
-    /// A terrain's samples classified as vegetation, drawn apart from its TIN
+    /// A terrain's vegetation (by class or geometry), drawn apart from its TIN
     /// ([`vegetation`]).
     pub vegetation: u64,
+    /// A terrain's samples classified as bridge decks, drawn as a TIN of their own
+    /// ([`layers`]).
+    pub bridge_decks: u64,
     /// The pixel grid a sensor frame's samples lie on in their file's order
     /// ([`grid`]): its surfels are then those of the grid's triangulation, as a mesh's,
     /// and the rules for frames without one (depth steps, footprint) do not run.
@@ -345,6 +348,7 @@ fn terrain_path(
         let none = terrain::Cover::none();
         match layers::tin_among((g, scale), (decks, decks_own), &none, surfels, stats) {
             Some(deck) => {
+                stats.bridge_decks = decks_own as u64;
                 let cell = layers::COVER_SPACINGS * deck.spacing;
                 cover = terrain::Cover::of(decks.iter().map(|&i| g.positions[i as usize]), cell);
                 splats = deck.splats;

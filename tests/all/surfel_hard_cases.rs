@@ -634,4 +634,9 @@ fn a_bridge_deck_stands_on_no_wall_and_the_ground_runs_on_under_it() {
     );
     assert_eq!(walls(&deck), 0);
     assert!(under(&deck) > 10 && under(&roof) == 0);
+    // 16 rows of 64 samples.
+    assert_eq!(
+        (deck.stats.bridge_decks, roof.stats.bridge_decks),
+        (1024, 0)
+    );
 }
