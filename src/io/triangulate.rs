@@ -100,12 +100,16 @@ pub fn terrain(geometry: &Geometry) -> Vec<[u32; 3]> {
 
 /// [`terrain`] of bare `positions`.
 pub fn height_field(positions: &[Vec3]) -> Vec<[u32; 3]> {
-    height_field_keeping(positions, |_| false)
+    height_field_keeping(positions, |_, _| false)
 }
 
-/// [`height_field`], but a long triangle whose x–y centroid `keep_long` holds is
-/// kept (the ground under a bridge deck left out of the triangulation).
-pub fn height_field_keeping(positions: &[Vec3], keep_long: impl Fn(Vec3) -> bool) -> Vec<[u32; 3]> {
+/// [`height_field`], but a long triangle is kept where `keep_long` holds for its
+/// centroid and the median edge (the ground under a bridge deck or a crown, left out
+/// of the triangulation).
+pub fn height_field_keeping(
+    positions: &[Vec3],
+    keep_long: impl Fn(Vec3, f64) -> bool,
+) -> Vec<[u32; 3]> {
     let xy = |p: &Vec3| delaunator::Point {
         x: p.x as f64,
         y: p.y as f64,
@@ -133,7 +137,7 @@ pub fn height_field_keeping(positions: &[Vec3], keep_long: impl Fn(Vec3) -> bool
         .chunks_exact(3)
         .filter(|t| {
             let short = (0..3).all(|k| length(t[k], t[(k + 1) % 3]) <= TERRAIN_MAX_EDGE * median);
-            short || keep_long(t.iter().map(|&v| positions[v]).sum::<Vec3>() / 3.0)
+            short || keep_long(t.iter().map(|&v| positions[v]).sum::<Vec3>() / 3.0, median)
         })
         .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
         .collect()

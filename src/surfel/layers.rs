@@ -104,8 +104,3 @@ pub fn tin_among(
     }
     Some(tin)
 }
-
-/// Cells of the cover of a deck, in its TIN's spacings: the gap it leaves in the
-/// ground's samples is its own width and the width its edge hides from an oblique
-/// pulse; cells of 2 spacings hold every sample of a deck without holes.
-pub const COVER_SPACINGS: f32 = 2.0;

@@ -343,20 +343,19 @@ fn terrain_path(
     let (decks, decks_own) = layers.get(Layer::Deck);
     let mut plants = layers.get(Layer::Plants).0.to_vec();
     let mut splats = Vec::new();
-    let mut cover = terrain::Cover::none();
     if decks_own > 0 {
         let none = terrain::Cover::none();
         match layers::tin_among((g, scale), (decks, decks_own), &none, surfels, stats) {
             Some(deck) => {
                 stats.bridge_decks = decks_own as u64;
-                let cell = layers::COVER_SPACINGS * deck.spacing;
-                cover = terrain::Cover::of(decks.iter().map(|&i| g.positions[i as usize]), cell);
                 splats = deck.splats;
             }
             // Too few to make a triangle: drawn as plants are, among themselves.
             None => plants = [&decks[..decks_own], &plants[..]].concat(),
         }
     }
+    let over = decks.iter().chain(&plants);
+    let cover = terrain::Cover::of(over.map(|&i| g.positions[i as usize]));
     let ground_layer = layers.get(Layer::Ground);
     let ground = layers::tin_among((g, scale), ground_layer, &cover, surfels, stats)?;
     splats.extend(ground.splats);

@@ -33,6 +33,7 @@
 //! 1.14× and 1.50× the leaves' FLIP to 1.00× and 1.08×).
 
 use glam::Vec3;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use super::long_triangles::{self, Looks, Reach};
@@ -76,7 +77,7 @@ pub fn terrain_disks(
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
 ) -> Option<TinSplats> {
-    let mut triangles = height_field_keeping(points, |c| cover.covers(c));
+    let mut triangles = height_field_keeping(points, |c, median| cover.covers(c, median));
     let spacing = median_horizontal_edge(points, &triangles).filter(|s| s.is_normal())?;
     triangles.par_iter_mut().for_each(|t| {
         let [a, b, c] = t.map(|v| points[v as usize]);
@@ -112,42 +113,42 @@ pub fn terrain_disks(
     Some(TinSplats { splats, spacing })
 }
 
-/// The x–y cells (a square grid) that an upper layer's samples (a bridge deck's)
-/// fall in: under them the ground's TIN keeps the triangles that span the gap the
-/// layer leaves in it.
+/// The samples of the layers over a terrain's ground (a bridge deck, vegetation): the
+/// gap they leave in the ground's samples is their own extent, widened by what they
+/// hide from an oblique pulse. Where one of them lies within [`COVER_EDGES`] median
+/// edges (in x–y) of a long triangle's centroid, the ground's TIN keeps that triangle:
+/// the ground runs on under them.
 pub struct Cover {
-    cell: f32,
-    cells: std::collections::HashSet<(i32, i32)>,
+    tree: Option<ImmutableKdTree<f32, 2>>,
 }
+
+/// How near (in x–y, in the TIN's median edges) a covering sample must lie to a long
+/// triangle's centroid for the ground's TIN to keep it.
+pub const COVER_EDGES: f64 = 2.0;
 
 impl Cover {
     /// No cover: the TIN keeps no long triangle.
     pub fn none() -> Cover {
+        Cover { tree: None }
+    }
+
+    /// The cover of `points` (none when there are none).
+    pub fn of(points: impl Iterator<Item = Vec3>) -> Cover {
+        let xy: Vec<[f32; 2]> = points.map(|p| [p.x, p.y]).collect();
         Cover {
-            cell: 1.0,
-            cells: Default::default(),
+            tree: ImmutableKdTree::<f32, 2>::new_from_slice(&xy).ok(),
         }
     }
 
-    /// The cells of side `cell` that `points` fall in.
-    pub fn of(points: impl Iterator<Item = Vec3>, cell: f32) -> Cover {
-        let mut cover = Cover::none();
-        cover.cell = cell;
-        cover.cells = points.map(|p| cover.key(p)).collect();
-        cover
-    }
-
-    fn key(&self, p: Vec3) -> (i32, i32) {
-        let k = |v: f32| {
-            (v / self.cell)
-                .floor()
-                .clamp(i32::MIN as f32, i32::MAX as f32) as i32
-        };
-        (k(p.x), k(p.y))
-    }
-
-    pub fn covers(&self, p: Vec3) -> bool {
-        !self.cells.is_empty() && self.cells.contains(&self.key(p))
+    /// Whether a covering sample lies within [`COVER_EDGES`] `median` edges of `p`.
+    pub fn covers(&self, p: Vec3, median: f64) -> bool {
+        self.tree.as_ref().is_some_and(|tree| {
+            let nearest = tree
+                .query(&[p.x, p.y])
+                .nearest_one::<SquaredEuclidean<f32>>()
+                .execute();
+            (nearest.distance as f64).sqrt() <= COVER_EDGES * median
+        })
     }
 }
 

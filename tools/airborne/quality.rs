@@ -172,7 +172,7 @@ fn invented(
     (scan_heights, truth_heights): (&[f64], &[f64]),
     truth: &Image,
     regions: &Image,
-) -> [Count; 4] {
+) -> ([Count; 4], Vec<Invented>) {
     let classes = Kind::ALL.map(Kind::color);
     // The classes first, then the open spaces.
     let mut marks: Vec<[u8; 3]> = classes.to_vec();
@@ -191,6 +191,7 @@ fn invented(
         })
     };
     let mut counts = [Count::default(); 4];
+    let mut shown = vec![Invented::No; object.len()];
     let pixels = truth.rgba.chunks_exact(4).zip(regions.rgba.chunks_exact(4));
     for (i, (t, r)) in pixels.enumerate() {
         let Some(mark) = nearest(r, &marks).filter(|&m| m == 0 || m >= classes.len()) else {
@@ -203,11 +204,25 @@ fn invented(
         let count = &mut counts[if mark == 0 { 3 } else { mark - classes.len() }];
         count.pixels += 1;
         if scan_heights[i] > truth_heights[i] + ABOVE {
+            let beyond = !near_object(i);
             count.invented += 1;
-            count.beyond_rim += u64::from(!near_object(i));
+            count.beyond_rim += u64::from(beyond);
+            shown[i] = if beyond {
+                Invented::BeyondTheRim
+            } else {
+                Invented::OnTheRim
+            };
         }
     }
-    counts
+    (counts, shown)
+}
+
+/// Whether an open-space pixel is invented surface, and where.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Invented {
+    No,
+    OnTheRim,
+    BeyondTheRim,
 }
 
 /// Pixels around the truth's objects that [`invented`] also counts apart (one pixel
@@ -301,18 +316,18 @@ impl Models<'_> {
             self.truth.0.meta(),
             &self.ramp,
         );
-        let counts = invented((&scan_heights, &truth_heights), &reference, &marked);
+        let (counts, pixels) = invented((&scan_heights, &truth_heights), &reference, &marked);
         if let Some((dir, prefix)) = images {
             std::fs::create_dir_all(dir)?;
             save(&splats, &dir.join(format!("{prefix}_splats.png")))?;
             save(&reference, &dir.join(format!("{prefix}_truth.png")))?;
             save(&marked, &dir.join(format!("{prefix}_regions.png")))?;
             let mut shown = reference.clone();
-            let classes = Kind::ALL.map(Kind::color);
-            for (i, px) in shown.rgba.chunks_exact_mut(4).enumerate() {
-                let ground = nearest(&reference.rgba[4 * i..], &classes) == Some(0);
-                if ground && scan_heights[i] > truth_heights[i] + ABOVE {
-                    px[..3].copy_from_slice(&[255, 0, 255]);
+            for (px, p) in shown.rgba.chunks_exact_mut(4).zip(&pixels) {
+                match p {
+                    Invented::OnTheRim => px[..3].copy_from_slice(&[255, 160, 0]),
+                    Invented::BeyondTheRim => px[..3].copy_from_slice(&[255, 0, 255]),
+                    Invented::No => {}
                 }
             }
             save(&shown, &dir.join(format!("{prefix}_invented.png")))?;
