@@ -576,6 +576,25 @@ fn an_unclassified_porous_crown_is_found_by_its_geometry_and_hangs_no_curtain() 
         "{found} of {crown}"
     );
     assert_eq!(hanging, 0);
+    // The ground runs on under the crown: each point of a 0.25 m grid within 2.5 m of
+    // the trunk lies within the radius of a ground splat (one under 0.5 m).
+    let ground: Vec<glam::DVec3> = (leaves.surfels.iter())
+        .filter(|s| at(&leaves, s).z < 0.5)
+        .map(|s| at(&leaves, s).with_z(s.radius as f64))
+        .collect();
+    let open = (0..400)
+        .map(|k| glam::DVec2::new(17.5 + 0.25 * (k % 20) as f64, 17.5 + 0.25 * (k / 20) as f64))
+        .filter(|p| p.distance(glam::DVec2::splat(20.0)) < 2.5)
+        .filter(|p| !ground.iter().any(|g| g.truncate().distance(*p) < g.z))
+        .count();
+    eprintln!("ground under the crown: {open} points of the grid uncovered");
+    assert_eq!(open, 0);
+    // A class that says what a sample is (here a building's) is trusted.
+    let mut classified = g;
+    for a in classified.attributes.as_mut().unwrap() {
+        a.class = 6;
+    }
+    assert_eq!(leaf_surfels(&classified).stats.vegetation, 0);
 }
 
 /// A gully 6 m deep across a tile 40 m square (ground, class 2, on a 0.5 m grid) under a
