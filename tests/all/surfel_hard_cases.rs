@@ -476,21 +476,7 @@ fn a_classified_crown_hangs_no_curtain_to_the_ground() {
         .filter(|a| a.class == 5)
         .count() as u64;
     // A splat that reaches down from the crown (7 m up) to within 3 m of the ground.
-    let hanging = |leaves: &LeafSurfels| {
-        let ground = leaves
-            .surfels
-            .iter()
-            .map(|s| s.position.z)
-            .fold(f32::MAX, f32::min);
-        leaves
-            .surfels
-            .iter()
-            .filter(|s| {
-                let reach = s.radius * (1.0 - s.normal.z * s.normal.z).max(0.0).sqrt();
-                s.position.z + reach > ground + 6.5 && s.position.z - reach < ground + 3.0
-            })
-            .count()
-    };
+    let hanging = |leaves: &LeafSurfels| spanning(leaves, 6.5, 3.0);
     eprintln!(
         "crown of {crown} returns: splats hanging to the ground {} unclassified, {} classified",
         hanging(&draped),
