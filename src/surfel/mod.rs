@@ -340,25 +340,25 @@ fn terrain_path(
         return terrain::terrain_disks((&g.positions, scale), all, look, surfels, stats)
             .map(|tin| tin.splats);
     }
+    // The ground first, under the cover of the decks and the vegetation.
     let (decks, decks_own) = layers.get(Layer::Deck);
     let mut plants = layers.get(Layer::Plants).0.to_vec();
-    let mut splats = Vec::new();
+    let over = decks.iter().chain(&plants);
+    let cover = terrain::Cover::of(over.map(|&i| g.positions[i as usize]));
+    let ground_layer = layers.get(Layer::Ground);
+    let ground = layers::tin_among((g, scale), ground_layer, &cover, surfels, stats)?;
+    let mut splats = ground.splats;
     if decks_own > 0 {
         let none = terrain::Cover::none();
         match layers::tin_among((g, scale), (decks, decks_own), &none, surfels, stats) {
             Some(deck) => {
                 stats.bridge_decks = decks_own as u64;
-                splats = deck.splats;
+                splats.extend(deck.splats);
             }
             // Too few to make a triangle: drawn as plants are, among themselves.
             None => plants = [&decks[..decks_own], &plants[..]].concat(),
         }
     }
-    let over = decks.iter().chain(&plants);
-    let cover = terrain::Cover::of(over.map(|&i| g.positions[i as usize]));
-    let ground_layer = layers.get(Layer::Ground);
-    let ground = layers::tin_among((g, scale), ground_layer, &cover, surfels, stats)?;
-    splats.extend(ground.splats);
     let plants_own = plants.iter().filter(|&&i| (i as usize) < own).count();
     plants.sort_unstable_by_key(|&i| ((i as usize) >= own, i));
     let scales = (&g.positions[..], scale, ground.spacing);
