@@ -15,7 +15,6 @@ use glam::Vec3;
 
 use super::cloud;
 use super::terrain::{self, Cover, TinSplats};
-use super::vegetation::pick;
 use super::{Surfel, SurfelStats};
 use crate::io::Geometry;
 
@@ -103,4 +102,9 @@ pub fn tin_among(
         surfels[i as usize] = picked[k];
     }
     Some(tin)
+}
+
+/// `values` at `indices`.
+pub fn pick<T: Copy>(values: &[T], indices: &[u32]) -> Vec<T> {
+    indices.iter().map(|&i| values[i as usize]).collect()
 }

@@ -355,12 +355,15 @@ fn terrain_path(
                 stats.bridge_decks = decks_own as u64;
                 splats.extend(deck.splats);
             }
-            // Too few to make a triangle: drawn as plants are, among themselves.
-            None => plants = [&decks[..decks_own], &plants[..]].concat(),
+            // Too few to make a triangle: drawn as plants are, among themselves (own
+            // samples first, as every layer lists them).
+            None => {
+                plants.extend(&decks[..decks_own]);
+                plants.sort_unstable_by_key(|&i| ((i as usize) >= own, i));
+            }
         }
     }
     let plants_own = plants.iter().filter(|&&i| (i as usize) < own).count();
-    plants.sort_unstable_by_key(|&i| ((i as usize) >= own, i));
     let scales = (&g.positions[..], scale, ground.spacing);
     vegetation::plant_disks(scales, (&plants, plants_own), given, surfels, stats);
     stats.triangle_splats = splats.len() as u64;

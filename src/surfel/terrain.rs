@@ -1,8 +1,8 @@
 //! A terrain's splats from its triangulated irregular network (TIN): the 2.5D
 //! Delaunay triangulation of its samples in x–y, long triangles dropped
-//! ([`crate::io::triangulate::height_field`], the surface docs/point-clouds.md measures a tile's splats against and the one
-//! terrain tools hill-shade), drawn as a sensor frame's grid is
-//! ([`long_triangles::disks`]).
+//! ([`crate::io::triangulate::height_field`], the surface docs/point-clouds.md measures
+//! a tile's splats against and the one terrain tools hill-shade; kept under a
+//! [`Cover`]), drawn as a sensor frame's grid is ([`long_triangles::disks`]).
 //!
 //! An airborne tile's TIN has two kinds of triangles. Most join samples about the
 //! tile's spacing s apart (the median horizontal edge) on a roof, a street or a

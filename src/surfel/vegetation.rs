@@ -11,6 +11,7 @@ use glam::Vec3;
 
 use super::cloud::{self, Orientation};
 use super::covering::RadiusRule;
+use super::layers::pick;
 use super::{Surfel, SurfelStats};
 
 /// Largest radius of a vegetation splat, in the tile's spacings s (the median edge of
@@ -21,14 +22,10 @@ use super::{Surfel, SurfelStats};
 /// under the crowns 24–32 % / 3–5 % / 4–6 % unheld / at s / at √2 s.
 pub const FOOTPRINT_SPACINGS: f32 = std::f32::consts::SQRT_2;
 
-/// `values` at `indices`.
-pub fn pick<T: Copy>(values: &[T], indices: &[u32]) -> Vec<T> {
-    indices.iter().map(|&i| values[i as usize]).collect()
-}
-
-/// The surfels of the vegetation's own samples (`split.plants`, of all `points`), into
-/// `surfels` (one per point of the model): a cloud's among the vegetation alone, their
-/// estimated normals turned up.
+/// The surfels of the vegetation's samples `plants` (indices into all `points`, the
+/// first `own` of them the model's own), into `surfels` (one per point of the model): a
+/// cloud's among the vegetation alone, their estimated normals turned up, their radii
+/// held to [`FOOTPRINT_SPACINGS`] tile `spacing`s.
 pub fn plant_disks(
     (points, scale, spacing): (&[Vec3], f32, f32),
     (plants, own): (&[u32], usize),
