@@ -21,6 +21,7 @@ pub const WORKGROUP_SIZE: u32 = 256;
 const FILES: &[(&str, &str)] = &[
     ("common", include_str!("../../shaders/common.wgsl")),
     ("cull", include_str!("../../shaders/cull.wgsl")),
+    ("ewa", include_str!("../../shaders/ewa.wgsl")),
     ("fullscreen", include_str!("../../shaders/fullscreen.wgsl")),
     ("mesh", include_str!("../../shaders/mesh.wgsl")),
     ("present", include_str!("../../shaders/present.wgsl")),
