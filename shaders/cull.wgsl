@@ -21,9 +21,11 @@ struct Compaction {
     // The draws of the survivors on an outline, then of the others.
     outline: DrawArgs,
     inner: DrawArgs,
-    // Nodes of this slice to test, in how many ranges.
+    // Nodes of this slice to test, in how many ranges; the slice's first node (list
+    // index: the compute rasterizer's order of points at one depth, raster.wgsl).
     count: u32,
     range_count: u32,
+    first: u32,
 }
 
 // A range of the slice to test: its first node, and the running total of the nodes of

@@ -5,7 +5,7 @@ use anyhow::bail;
 use glam::{DVec3, Vec3};
 
 use crate::io::up::UpAxis;
-use crate::render::{Camera, Culling, Mode, OrbitAxes, Settings};
+use crate::render::{Camera, Culling, Mode, OrbitAxes, Raster, Settings};
 use crate::tree::TreeMeta;
 use crate::tree::scene::Scene;
 
@@ -66,6 +66,10 @@ pub struct RenderArgs {
     /// indirect draw (faster on every model measured), or in the vertex stage.
     #[arg(long, value_enum, default_value = "compute")]
     pub culling: Culling,
+    /// How the splat passes draw: through the GPU's raster pipeline, or as compute
+    /// rasterization (docs/gpu.md).
+    #[arg(long, value_enum, default_value = "hardware")]
+    pub raster: Raster,
     /// Render this many frames of the same view and report median and p95 times (the
     /// image of the last one is written).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=10_000))]
@@ -137,6 +141,7 @@ impl RenderArgs {
             light: DVec3::from(self.light).as_vec3().normalize_or(Vec3::Z),
             background: self.background.map(|c| c.clamp(0.0, 1.0) as f32),
             culling: self.culling,
+            raster: self.raster,
             edl_strength: self.edl_strength.clamp(0.0, 100.0),
             edl_radius_px: self.edl_radius.clamp(0.5, 16.0),
             ..Settings::default()
@@ -197,6 +202,17 @@ impl clap::ValueEnum for UpAxis {
 impl clap::ValueEnum for Mode {
     fn value_variants<'a>() -> &'a [Self] {
         &Mode::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()).help(self.description()))
+    }
+}
+
+/// `--raster`'s values: the ways of drawing the splat passes, by their names.
+impl clap::ValueEnum for Raster {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Raster::ALL
     }
 
     fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {

@@ -56,6 +56,65 @@ pub mod splat {
     ];
 }
 
+/// Group 2 of the compute rasterizer and its resolve (`shaders/accumulate.wgsl`): the
+/// frame's per-pixel buffers.
+pub mod accumulate {
+    use super::{Slot, slot};
+    pub const VISIBLE: Slot = slot(2, 0, "visible");
+    pub const SUMS: Slot = slot(2, 1, "sums");
+    pub const CARRIES: Slot = slot(2, 2, "carries");
+    pub const COVERED: Slot = slot(2, 3, "covered");
+    pub const NEAREST_POINT: Slot = slot(2, 4, "nearest_point");
+    pub const ALL: [Slot; 5] = [VISIBLE, SUMS, CARRIES, COVERED, NEAREST_POINT];
+}
+
+/// Group 1 of the compute rasterizer (`shaders/raster.wgsl`): one slice's survivors.
+pub mod raster {
+    use super::{Slot, slot};
+    pub const NODES: Slot = slot(1, 0, "nodes");
+    pub const SURVIVORS: Slot = slot(1, 1, "survivors");
+    pub const SHAPES: Slot = slot(1, 2, "shapes");
+    pub const ATTRIBUTES: Slot = slot(1, 3, "attributes");
+    pub const COMPACTION: Slot = slot(1, 4, "compaction");
+    #[cfg(test)]
+    pub const ALL: &[Slot] = &[
+        super::FRAME,
+        NODES,
+        SURVIVORS,
+        SHAPES,
+        ATTRIBUTES,
+        COMPACTION,
+        super::accumulate::VISIBLE,
+        super::accumulate::SUMS,
+        super::accumulate::CARRIES,
+        super::accumulate::COVERED,
+        super::accumulate::NEAREST_POINT,
+    ];
+}
+
+/// Group 1 of the compute rasterizer's resolve (`shaders/resolve.wgsl`): the G-buffer
+/// it writes.
+pub mod resolve {
+    use super::{Slot, slot};
+    pub const COLOR_OUT: Slot = slot(1, 0, "color_out");
+    pub const NORMAL_OUT: Slot = slot(1, 1, "normal_out");
+    pub const COVERAGE_OUT: Slot = slot(1, 2, "coverage_out");
+    pub const DEPTH_OUT: Slot = slot(1, 3, "depth_out");
+    #[cfg(test)]
+    pub const ALL: &[Slot] = &[
+        super::FRAME,
+        COLOR_OUT,
+        NORMAL_OUT,
+        COVERAGE_OUT,
+        DEPTH_OUT,
+        super::accumulate::VISIBLE,
+        super::accumulate::SUMS,
+        super::accumulate::CARRIES,
+        super::accumulate::COVERED,
+        super::accumulate::NEAREST_POINT,
+    ];
+}
+
 /// Group 1 of pass 3 (`shaders/shade.wgsl`): the G-buffer.
 pub mod shade {
     use super::{Slot, slot};
@@ -80,6 +139,8 @@ pub mod present {
 pub const MODULES: &[(&str, &[Slot])] = &[
     ("cull", cull::ALL),
     ("splat", splat::ALL),
+    ("raster", raster::ALL),
+    ("resolve", resolve::ALL),
     ("shade", shade::ALL),
     ("mesh", &[FRAME]),
     ("present", present::ALL),

@@ -11,11 +11,12 @@ use bytemuck::{Pod, Zeroable};
 use super::bindings::{Slot, cull as slots};
 use super::gpu_scene::Share;
 use super::shaders::{WORKGROUP_SIZE, module};
+use super::targets::{FrameTargets, stamp};
 
 /// A slice's compaction record (`struct Compaction` in cull.wgsl): the arguments of the
 /// two indirect draws, of the survivors on an outline and of the others, whose
-/// instance counts the pass counts up; then the nodes of the slice to test and in how
-/// many ranges.
+/// instance counts the pass counts up; then the nodes of the slice to test, in how
+/// many ranges, and the slice's first node (its list index).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub(super) struct Compaction {
@@ -23,6 +24,7 @@ pub(super) struct Compaction {
     pub inner: DrawIndirectArgs,
     pub count: u32,
     pub range_count: u32,
+    pub first: u32,
 }
 
 /// `wgpu::util::DrawIndirectArgs`, as a Pod field (`struct DrawArgs` in cull.wgsl).
@@ -69,8 +71,8 @@ const _: () = assert!(
 
 impl Compaction {
     /// Before culling: 4 vertices per splat, no survivor yet, `count` nodes to test in
-    /// `range_count` ranges.
-    pub fn reset(count: u32, range_count: u32) -> Compaction {
+    /// `range_count` ranges of the slice whose first node is `first`.
+    pub fn reset(count: u32, range_count: u32, first: u32) -> Compaction {
         let draw = DrawIndirectArgs {
             vertex_count: 4,
             instance_count: 0,
@@ -82,6 +84,7 @@ impl Compaction {
             inner: draw,
             count,
             range_count,
+            first,
         }
     }
 
@@ -151,17 +154,18 @@ impl CullPass {
 
     /// Writes every slice's compaction record and ranges for its share (through the
     /// queue: they take effect at the next submit), then records the culling of each
-    /// slice with nodes to test.
+    /// slice with nodes to test: the frame's first pass (its start timestamp).
     pub fn encode(
         &self,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-        frame_bind: &wgpu::BindGroup,
+        targets: &FrameTargets,
         shares: &[Share],
     ) {
         for share in shares {
             let slice = share.slice;
-            let record = Compaction::reset(share.count, share.ranges.len() as u32);
+            let first = slice.first as u32;
+            let record = Compaction::reset(share.count, share.ranges.len() as u32, first);
             queue.write_buffer(&slice.compaction, 0, bytemuck::bytes_of(&record));
             if !share.ranges.is_empty() {
                 let ranges = TestRange::of(&share.ranges);
@@ -170,10 +174,10 @@ impl CullPass {
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("cull"),
-            timestamp_writes: None,
+            timestamp_writes: targets.compute_timestamps(Some(stamp::START), None),
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, frame_bind, &[]);
+        pass.set_bind_group(0, &targets.frame_bind, &[]);
         for share in shares.iter().filter(|s| s.count > 0) {
             pass.set_bind_group(1, &share.slice.cull, &[]);
             pass.dispatch_workgroups(share.count.div_ceil(WORKGROUP_SIZE), 1, 1);

@@ -58,10 +58,15 @@ pub(super) struct GBuffer {
 }
 
 impl GBuffer {
-    pub fn new(device: &wgpu::Device, size: (u32, u32)) -> GBuffer {
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+    /// The G-buffer of a `size` frame; with `storage`, its sums and coverage can also
+    /// be written by compute shaders (the compute rasterizer's resolve).
+    pub fn new(device: &wgpu::Device, size: (u32, u32), storage: bool) -> GBuffer {
+        let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC;
+        if storage {
+            usage |= wgpu::TextureUsages::STORAGE_BINDING;
+        }
         let color_sum = target(device, size, GBUFFER, "colour sum", usage);
         let normal_sum = target(device, size, GBUFFER, "normal sum", usage);
         let coverage = target(device, size, COVERAGE, "coverage", usage);

@@ -4,6 +4,7 @@
 
 use anyhow::{Context, bail};
 
+use super::gbuffer::{COVERAGE, GBUFFER};
 use super::targets::{OUTPUT, OUTPUT_GAMMA};
 
 /// Where the backend choice comes from when none is given.
@@ -25,6 +26,9 @@ pub struct Gpu {
     /// A depth attachment that a pass only tests can also be read as a texture in that
     /// pass (not on GL): pass 2 then reads pass 1's depth (`SplatPasses::depth_bind`).
     pub read_only_depth: bool,
+    /// Compute shaders can write the G-buffer's formats as storage textures: the splat
+    /// passes can be drawn in compute ([`super::Raster::Compute`]).
+    pub compute_raster: bool,
 }
 
 /// Parses a backend name: vulkan, gl, metal, dx12, or `all` (any).
@@ -103,6 +107,13 @@ impl Gpu {
         let downlevel = adapter.get_downlevel_capabilities().flags;
         let view_formats = downlevel.contains(wgpu::DownlevelFlags::VIEW_FORMATS);
         let read_only_depth = downlevel.contains(wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL);
+        let compute_raster = downlevel.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+            && [GBUFFER, COVERAGE, wgpu::TextureFormat::R32Float]
+                .into_iter()
+                .all(|f| {
+                    let usages = adapter.get_texture_format_features(f).allowed_usages;
+                    usages.contains(wgpu::TextureUsages::STORAGE_BINDING)
+                });
         Ok(Gpu {
             instance,
             adapter,
@@ -112,6 +123,7 @@ impl Gpu {
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
             view_formats,
             read_only_depth,
+            compute_raster,
         })
     }
 

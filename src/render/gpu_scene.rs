@@ -18,6 +18,8 @@ pub(super) struct Slice {
     pub cull: wgpu::BindGroup,
     /// Nodes and survivors, for the compacted draw.
     pub compacted: wgpu::BindGroup,
+    /// Nodes, survivors and the compaction record, for the compute rasterizer.
+    pub rasterized: wgpu::BindGroup,
     /// The slice's [`super::cull::Compaction`]: indirect draw arguments, then the
     /// slice's share of the nodes to test.
     pub compaction: wgpu::Buffer,

@@ -10,6 +10,10 @@
 //!        (or: the mesh reference, or plain points, instead of passes 1–2)
 //! pass 3 shading:     full-screen, normalize and Blinn-Phong, sRGB out
 //! ```
+//!
+//! Passes 1–2 (and the points) run through the raster pipeline ([`SplatPasses`]) or as
+//! compute rasterization ([`ComputeRaster`], which needs the cull pass's lists and
+//! resolves its buffers into the same G-buffer): [`Settings::raster`].
 
 use rayon::prelude::*;
 
@@ -22,8 +26,9 @@ use super::gpu::Gpu;
 use super::gpu_scene::{GpuScene, MeshUpload, SliceUpload};
 use super::mesh::MeshPass;
 use super::plan::{EncodedFrame, plan};
+use super::raster::{Accumulation, ComputeRaster};
 use super::readback;
-use super::settings::{Culling, Mode, Settings};
+use super::settings::{Culling, Mode, Raster, Settings};
 use super::shading::ShadingPass;
 use super::splat_path::SplatPath;
 use super::splats::SplatPasses;
@@ -82,6 +87,7 @@ pub struct Renderer {
     frame_layout: wgpu::BindGroupLayout,
     cull: CullPass,
     splats: SplatPasses,
+    raster: ComputeRaster,
     mesh: MeshPass,
     shading: ShadingPass,
 }
@@ -93,6 +99,7 @@ impl Renderer {
         Renderer {
             cull: CullPass::new(device, &frame_layout),
             splats: SplatPasses::new(&gpu, &frame_layout),
+            raster: ComputeRaster::new(&gpu, &frame_layout),
             mesh: MeshPass::new(device, &frame_layout),
             shading: ShadingPass::new(device, &frame_layout),
             frame_layout,
@@ -104,9 +111,9 @@ impl Renderer {
     pub fn targets(&self, size: (u32, u32)) -> anyhow::Result<FrameTargets> {
         let device = &self.gpu.device;
         check_size(&device.limits(), size)?;
-        let gbuffer = GBuffer::new(device, size);
+        let gbuffer = GBuffer::new(device, size, self.gpu.compute_raster);
         let binds = [
-            self.shading.bind(device, &gbuffer),
+            self.shading.bind(device, &gbuffer, &gbuffer.depth_view),
             self.splats
                 .depth_bind(device, &gbuffer, self.gpu.read_only_depth),
         ];
@@ -133,21 +140,83 @@ impl Renderer {
         if settings.mode == Mode::Mesh && gpu_scene.mesh.is_none() {
             anyhow::bail!("mesh mode needs a model with faces, read from its PLY file");
         }
-        let compute = settings.culling == Culling::Compute && settings.mode != Mode::Mesh;
+        let rasterized = self.rasterized(settings)?;
+        if rasterized {
+            self.raster.check_size(targets.size)?;
+        }
+        let compute =
+            (settings.culling == Culling::Compute || rasterized) && settings.mode != Mode::Mesh;
         let frame = plan(scene, camera, settings, targets.size, gpu_scene, compute);
         let uniform = FrameUniform::new(scene.meta(), camera, settings, targets.size, frame.eps);
         let queue = &self.gpu.queue;
         queue.write_buffer(&targets.frame_buffer, 0, bytemuck::bytes_of(&uniform));
         let shares = gpu_scene.shares(&frame.ranges);
         if compute {
-            self.cull
-                .encode(queue, encoder, &targets.frame_bind, &shares);
+            self.cull.encode(queue, encoder, targets, &shares);
         }
+        if rasterized {
+            let (accumulation, gbuffer) = self.accumulation(targets);
+            self.raster
+                .encode(encoder, targets, accumulation, &shares, settings.mode);
+            self.shading.encode(encoder, targets, gbuffer);
+        } else {
+            self.encode_hardware(encoder, targets, &shares, settings, gpu_scene);
+        }
+        if let Some((set, resolve)) = &targets.queries {
+            encoder.resolve_query_set(set, 0..stamp::COUNT, resolve, 0);
+        }
+        Ok(frame)
+    }
+
+    /// Whether `settings` draw the splat passes in compute; an error where they ask
+    /// for it on an adapter without it.
+    fn rasterized(&self, settings: &Settings) -> anyhow::Result<bool> {
+        let asked = settings.raster == Raster::Compute && settings.mode != Mode::Mesh;
+        if asked && !self.gpu.compute_raster {
+            anyhow::bail!(
+                "this adapter ({}) cannot draw the splats in compute (no storage textures \
+                 of the G-buffer's formats): use --raster hardware",
+                self.gpu.info.name
+            );
+        }
+        Ok(asked)
+    }
+
+    /// `targets`' compute rasterizer buffers and pass 3's bind group of what they
+    /// resolve into, made at the first call.
+    fn accumulation<'t>(
+        &self,
+        targets: &'t FrameTargets,
+    ) -> (&'t Accumulation, &'t wgpu::BindGroup) {
+        let (accumulation, bind) = targets.accumulation.get_or_init(|| {
+            let g = &targets.gbuffer;
+            let accumulation = Accumulation::new(&self.raster, g, targets.size);
+            let bind = self
+                .shading
+                .bind(&self.gpu.device, g, &accumulation.depth_view);
+            (accumulation, bind)
+        });
+        (accumulation, bind)
+    }
+
+    /// The splat passes (or the mesh) through the raster pipeline, between the
+    /// G-buffer's clear and pass 3.
+    fn encode_hardware(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &FrameTargets,
+        shares: &[super::gpu_scene::Share],
+        settings: &Settings,
+        gpu_scene: &GpuScene,
+    ) {
+        let compute = settings.culling == Culling::Compute && settings.mode != Mode::Mesh;
         let g = &targets.gbuffer;
         // Each timestamp is written once: the modes without pass 1 end it with the clear.
+        // The frame starts with the cull pass where there is one (it writes START).
         let one_pass = matches!(settings.mode, Mode::Mesh | Mode::Points);
         let clear_end = one_pass.then_some(stamp::VISIBILITY_END);
-        let clear_stamps = targets.timestamps(Some(stamp::START), clear_end);
+        let clear_start = (!compute).then_some(stamp::START);
+        let clear_stamps = targets.timestamps(clear_start, clear_end);
         g.pass(encoder, "clear", Writes::All, true, clear_stamps);
         match (settings.mode, &gpu_scene.mesh) {
             (Mode::Mesh, Some(mesh)) => {
@@ -157,13 +226,9 @@ impl Renderer {
             }
             _ => self
                 .splats
-                .encode(encoder, targets, &shares, settings.mode, compute),
+                .encode(encoder, targets, shares, settings.mode, compute),
         }
-        self.shading.encode(encoder, targets);
-        if let Some((set, resolve)) = &targets.queries {
-            encoder.resolve_query_set(set, 0..stamp::COUNT, resolve, 0);
-        }
-        Ok(frame)
+        self.shading.encode(encoder, targets, &targets.gbuffer_bind);
     }
 
     /// Records a frame with nothing in it: the output cleared to `background` (sRGB).
@@ -234,7 +299,7 @@ impl Renderer {
         );
         upload::upload_slice(
             &self.gpu.device,
-            (&self.splats, &self.cull),
+            (&self.splats, &self.cull, &self.raster),
             (k, range.start),
             slice,
             max_ranges,

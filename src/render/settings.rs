@@ -130,6 +130,39 @@ impl Culling {
     }
 }
 
+/// How the splat passes draw (docs/gpu.md); each way: [`Raster::description`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Raster {
+    Hardware,
+    Compute,
+}
+
+impl Raster {
+    pub const ALL: [Raster; 2] = [Raster::Hardware, Raster::Compute];
+
+    /// The way's name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Raster::Hardware => "hardware",
+            Raster::Compute => "compute",
+        }
+    }
+
+    /// What the way does, in one line.
+    pub fn description(self) -> &'static str {
+        match self {
+            Raster::Hardware => {
+                "The GPU's raster pipeline: one instanced quad per splat, depth test and \
+                 blending"
+            }
+            Raster::Compute => {
+                "Compute shaders: each splat's pixels written with atomics into per-pixel \
+                 buffers (fixed-point sums: the same image every run); culls in compute"
+            }
+        }
+    }
+}
+
 /// How a frame is drawn.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
@@ -144,6 +177,9 @@ pub struct Settings {
     /// Background colour, sRGB 0–1.
     pub background: [f32; 3],
     pub culling: Culling,
+    /// How the splat passes draw; [`Raster::Compute`] culls in compute whatever
+    /// `culling` says (it draws the survivor lists).
+    pub raster: Raster,
     /// The eye the level of detail is chosen for (file coordinates) when it is frozen
     /// while the camera moves; None: the camera's own eye.
     pub lod_eye: Option<DVec3>,
@@ -164,6 +200,7 @@ impl Default for Settings {
             light: Vec3::new(0.4, 0.6, 1.0),
             background: [1.0, 1.0, 1.0],
             culling: Culling::Compute,
+            raster: Raster::Hardware,
             lod_eye: None,
             edl_strength: 1.0,
             edl_radius_px: 1.5,

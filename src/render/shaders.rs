@@ -11,6 +11,7 @@
 //! upgrades. The test below parses and validates every composed module with naga, so a
 //! broken shader fails `cargo test` without a GPU.
 
+use super::raster::{RASTER_WORKGROUP, RESOLVE_TILE, RasterPass, SUM_CHANNELS};
 use super::settings::Mode;
 use crate::surfel::clip::{NO_CLIP, WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
 
@@ -19,12 +20,15 @@ pub const WORKGROUP_SIZE: u32 = 256;
 
 /// Every WGSL file of `shaders/`, by the name `#import` uses.
 const FILES: &[(&str, &str)] = &[
+    ("accumulate", include_str!("../../shaders/accumulate.wgsl")),
     ("common", include_str!("../../shaders/common.wgsl")),
     ("cull", include_str!("../../shaders/cull.wgsl")),
     ("ewa", include_str!("../../shaders/ewa.wgsl")),
     ("fullscreen", include_str!("../../shaders/fullscreen.wgsl")),
     ("mesh", include_str!("../../shaders/mesh.wgsl")),
     ("present", include_str!("../../shaders/present.wgsl")),
+    ("raster", include_str!("../../shaders/raster.wgsl")),
+    ("resolve", include_str!("../../shaders/resolve.wgsl")),
     ("shade", include_str!("../../shaders/shade.wgsl")),
     ("shape", include_str!("../../shaders/shape.wgsl")),
     ("splat", include_str!("../../shaders/splat.wgsl")),
@@ -87,6 +91,9 @@ pub fn constants_wgsl() -> String {
     let mut out = format!(
         "// Generated from Rust (src/render/shaders.rs): constants shared with the CPU.\n\
          const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\n\
+         const RASTER_WORKGROUP: u32 = {RASTER_WORKGROUP}u;\n\
+         const RESOLVE_TILE: u32 = {RESOLVE_TILE}u;\n\
+         const SUM_CHANNELS: u32 = {SUM_CHANNELS}u;\n\
          const WEDGE_MARGIN: f32 = {WEDGE_MARGIN:?};\n\
          const WEDGE_ANGLE_BITS: u32 = {WEDGE_ANGLE_BITS}u;\n\
          const WEDGE_TAG: u32 = {WEDGE_TAG}u;\n\
@@ -104,6 +111,11 @@ pub fn constants_wgsl() -> String {
         ("COLOR_RADIUS", ColorSource::Radius as u32),
         ("COLOR_ELEVATION", ColorSource::Elevation as u32),
         ("COLOR_ATTRIBUTES", ColorSource::Attributes as u32),
+        ("RASTER_VISIBILITY", RasterPass::Visibility as u32),
+        ("RASTER_ATTRIBUTES", RasterPass::Attributes as u32),
+        ("RASTER_POINT_DEPTH", RasterPass::PointDepth as u32),
+        ("RASTER_POINT_WINNER", RasterPass::PointWinner as u32),
+        ("RASTER_POINT_WRITE", RasterPass::PointWrite as u32),
     ];
     for (name, value) in values {
         out.push_str(&format!("const {name}: u32 = {value}u;\n"));
@@ -199,7 +211,9 @@ mod tests {
     use super::*;
 
     /// The modules that pipelines are made of (the others are only imported).
-    const ENTRY_MODULES: &[&str] = &["cull", "mesh", "present", "shade", "splat"];
+    const ENTRY_MODULES: &[&str] = &[
+        "cull", "mesh", "present", "raster", "resolve", "shade", "splat",
+    ];
 
     /// Parses and validates `source` as naga does inside wgpu on a device with the
     /// optional `features` given and full downlevel support (wgpu-naga-bridge's

@@ -38,8 +38,14 @@ impl ShadingPass {
         ShadingPass { layout, pipeline }
     }
 
-    /// The bind group of `gbuffer`'s sums for this pass.
-    pub fn bind(&self, device: &wgpu::Device, gbuffer: &GBuffer) -> wgpu::BindGroup {
+    /// The bind group of `gbuffer`'s sums for this pass, with pass 1's depth as
+    /// `depth` (the G-buffer's own, or the compute rasterizer's float copy).
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        gbuffer: &GBuffer,
+        depth: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
         let view = |slot: Slot, view| wgpu::BindGroupEntry {
             binding: slot.binding,
             resource: wgpu::BindingResource::TextureView(view),
@@ -51,14 +57,19 @@ impl ShadingPass {
                 view(shade::COLOR_SUM, &gbuffer.color_view),
                 view(shade::NORMAL_SUM, &gbuffer.normal_view),
                 view(shade::COVERAGE, &gbuffer.coverage_view),
-                view(shade::DEPTH, &gbuffer.depth_view),
+                view(shade::DEPTH, depth),
             ],
         })
     }
 
-    /// Shades `targets`' G-buffer into its output and its covered mask; writes the
-    /// frame's end timestamp.
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, targets: &FrameTargets) {
+    /// Shades `targets`' G-buffer (bound as `gbuffer`, see [`ShadingPass::bind`]) into
+    /// its output and its covered mask; writes the frame's end timestamp.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &FrameTargets,
+        gbuffer: &wgpu::BindGroup,
+    ) {
         let attach = |view| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
@@ -77,7 +88,7 @@ impl ShadingPass {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &targets.frame_bind, &[]);
-        pass.set_bind_group(1, &targets.gbuffer_bind, &[]);
+        pass.set_bind_group(1, gbuffer, &[]);
         pass.draw(0..3, 0..1);
     }
 }

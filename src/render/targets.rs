@@ -2,9 +2,12 @@
 //! keeps one per window size): the G-buffer, the shaded output, the frame uniform and
 //! the bind groups that point at them, and the timestamp queries.
 
+use std::sync::OnceLock;
+
 use super::Gpu;
 use super::frame::FrameUniform;
 use super::gbuffer::{GBuffer, target};
+use super::raster::Accumulation;
 
 /// The shaded output: written linear, stored sRGB-encoded.
 pub const OUTPUT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -15,9 +18,10 @@ pub const OUTPUT_GAMMA: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 /// The frame's timestamps, indices into its query set, each written once per frame.
 pub(super) mod stamp {
-    /// The start of the G-buffer's clear.
+    /// The start of the frame's first pass: the cull pass, else the G-buffer's clear.
     pub const START: u32 = 0;
-    /// The end of pass 1 (in the points and mesh modes, which have none, of the clear).
+    /// The end of pass 1 (in the points and mesh modes of the raster pipeline, which
+    /// have none, of the clear).
     pub const VISIBILITY_END: u32 = 1;
     /// The end of pass 2 (or of the points or mesh pass).
     pub const ATTRIBUTES_END: u32 = 2;
@@ -49,6 +53,9 @@ pub struct FrameTargets {
     pub(super) depth_bind: wgpu::BindGroup,
     /// The frame's timestamps ([`stamp`]) and their resolve buffer.
     pub(super) queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+    /// The compute rasterizer's buffers and pass 3's bind group of what its resolve
+    /// writes, made for the first frame drawn in compute.
+    pub(super) accumulation: OnceLock<(Accumulation, wgpu::BindGroup)>,
 }
 
 impl FrameTargets {
@@ -124,18 +131,39 @@ impl FrameTargets {
             gbuffer_bind,
             depth_bind,
             queries,
+            accumulation: OnceLock::new(),
         }
     }
 
-    /// A pass's timestamp writes: [`stamp`] indices at its beginning and its end.
+    /// A pass's timestamp writes: [`stamp`] indices at its beginning and its end (none
+    /// where neither is given).
     pub(super) fn timestamps(
         &self,
         begin: Option<u32>,
         end: Option<u32>,
     ) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+        let any = begin.is_some() || end.is_some();
         self.queries
             .as_ref()
+            .filter(|_| any)
             .map(|(q, _)| wgpu::RenderPassTimestampWrites {
+                query_set: q,
+                beginning_of_pass_write_index: begin,
+                end_of_pass_write_index: end,
+            })
+    }
+
+    /// A compute pass's timestamp writes, as [`FrameTargets::timestamps`].
+    pub(super) fn compute_timestamps(
+        &self,
+        begin: Option<u32>,
+        end: Option<u32>,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        let any = begin.is_some() || end.is_some();
+        self.queries
+            .as_ref()
+            .filter(|_| any)
+            .map(|(q, _)| wgpu::ComputePassTimestampWrites {
                 query_set: q,
                 beginning_of_pass_write_index: begin,
                 end_of_pass_write_index: end,

@@ -10,6 +10,7 @@ use super::bindings::{self as slots, Slot, splat};
 use super::cull::{Compaction, CullPass, TestRange};
 use super::gpu::Gpu;
 use super::gpu_scene::{GpuScene, Slice, SliceUpload};
+use super::raster::ComputeRaster;
 use super::shaders::WORKGROUP_SIZE;
 use super::splats::SplatPasses;
 use crate::io::geometry::PointAttributes;
@@ -106,7 +107,7 @@ fn bind(
 /// ranges.
 pub(super) fn upload_slice(
     device: &wgpu::Device,
-    (splats, cull): (&SplatPasses, &CullPass),
+    (splats, cull, raster): (&SplatPasses, &CullPass, &ComputeRaster),
     (index, first): (usize, usize),
     (chunk, chunk_shapes, chunk_attributes): (&[NodeRecord], &[SplatShape], &[PointAttributes]),
     max_ranges: usize,
@@ -187,6 +188,13 @@ pub(super) fn upload_slice(
                 (splat::ATTRIBUTES, &attributes),
             ],
         ),
+        rasterized: raster.bind_slice([
+            (slots::raster::NODES, &nodes),
+            (slots::raster::SURVIVORS, &survivors),
+            (slots::raster::SHAPES, &shapes),
+            (slots::raster::ATTRIBUTES, &attributes),
+            (slots::raster::COMPACTION, &compaction),
+        ]),
         compaction,
         ranges,
     })
