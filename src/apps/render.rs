@@ -39,7 +39,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
             uploaded
         }
     };
-    let (mut gpu_ms, mut wall_ms) = (Vec::new(), Vec::new());
+    let (mut gpu_ms, mut wall_ms, mut plan_ms) = (Vec::new(), Vec::new(), Vec::new());
     let mut passes_ms: [Vec<f64>; 3] = Default::default();
     let mut last = None;
     for _ in 0..args.frames {
@@ -55,6 +55,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
             )
             .with_context(|| format!("rendering {}", model.display()))?;
         wall_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        plan_ms.push(frame.1.plan_ms);
         gpu_ms.extend(frame.1.gpu_ms);
         for (all, ms) in passes_ms
             .iter_mut()
@@ -92,7 +93,10 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
             count(stats.gpu_outline.unwrap_or(0)),
         );
     }
+    println!("raster    {}", settings.raster.name());
     print_times(&mut gpu_ms, passes_ms, &mut wall_ms, stats.selected);
+    let plan = Summary::of(&mut plan_ms).map_or(0.0, |s| s.median);
+    println!("cpu plan  {plan:.3} ms per frame (median): chunks in view, their prefixes");
     println!("wrote     {}", output.display());
     Ok(())
 }

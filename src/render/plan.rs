@@ -36,6 +36,8 @@ pub struct EncodedFrame {
     pub wanted_slices: Vec<usize>,
     /// The eye the level of detail was chosen for, relative to the model's origin.
     pub lod_eye: DVec3,
+    /// What planning the frame took the CPU, ms.
+    pub plan_ms: f64,
 }
 
 /// How close the fitting ε is to the least that fits: within this factor.
@@ -136,6 +138,7 @@ pub(super) fn plan(
     gpu: &GpuScene,
     compute: bool,
 ) -> EncodedFrame {
+    let started = std::time::Instant::now();
     let eps = error_per_distance(settings.error_px, camera.fov_y, height);
     let wanted_eps = if settings.lod { eps } else { 0.0 };
     let meta = scene.meta();
@@ -154,5 +157,6 @@ pub(super) fn plan(
         slices: gpu.resident().count(),
         wanted_slices,
         lod_eye,
+        plan_ms: started.elapsed().as_secs_f64() * 1e3,
     }
 }

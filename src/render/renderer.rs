@@ -79,6 +79,8 @@ pub struct FrameStats {
     /// above the asked one because the GPU did not hold the asked ranges.
     pub eps: f64,
     pub coarsened: bool,
+    /// What planning the frame (chunks, prefixes) took the CPU, ms.
+    pub plan_ms: f64,
 }
 
 pub struct Renderer {
@@ -384,6 +386,7 @@ impl Renderer {
                 gpu_outline: counters.outline,
                 eps: frame.eps,
                 coarsened: frame.coarsened,
+                plan_ms: frame.plan_ms,
             },
         ))
     }

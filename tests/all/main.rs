@@ -16,6 +16,7 @@ mod out_of_core;
 mod ply_roundtrip;
 mod ply_tristrips;
 mod render_chunks;
+mod render_compute;
 mod render_flip;
 mod render_lidar;
 mod render_lod_ewa;

@@ -5,7 +5,7 @@
 use crate::common;
 
 use spt::eval::metrics::{Comparison, compare};
-use spt::render::{Camera, Mode, Settings};
+use spt::render::{Camera, Mode, Raster, Settings};
 use spt::tree::scene::Scene;
 
 /// Splats (ε = 0) against the mesh for 8 views around the model.
@@ -97,24 +97,30 @@ fn contours_show_no_specks_of_the_hidden_side() {
     let (width, height) = (800, 600);
     let aspect = width as f64 / height as f64;
     let camera = Camera::framed(scene.meta(), scene.index.chunks(), fov, aspect);
-    let settings = Settings {
-        error_px: 0.0,
-        mode: Mode::Normals,
-        ..Settings::default()
-    };
-    let (image, _) = r
-        .render(&scene, &uploaded, &camera, &settings, width, height)
-        .unwrap();
-    let (specks, agreeing) = flipped_normals(&image);
-    eprintln!("{specks} pixels of {agreeing} with agreeing neighbours face against them");
-    assert!(
-        agreeing > 100_000,
-        "{agreeing} pixels with agreeing neighbours"
-    );
-    assert!(
-        specks <= 40,
-        "{specks} pixels face against their neighbours"
-    );
+    for raster in Raster::ALL {
+        let settings = Settings {
+            error_px: 0.0,
+            mode: Mode::Normals,
+            raster,
+            ..Settings::default()
+        };
+        let (image, _) = r
+            .render(&scene, &uploaded, &camera, &settings, width, height)
+            .unwrap();
+        let (specks, agreeing) = flipped_normals(&image);
+        let raster = raster.name();
+        eprintln!(
+            "{raster}: {specks} pixels of {agreeing} with agreeing neighbours face against them"
+        );
+        assert!(
+            agreeing > 100_000,
+            "{raster}: {agreeing} pixels with agreeing neighbours"
+        );
+        assert!(
+            specks <= 40,
+            "{raster}: {specks} pixels face against their neighbours"
+        );
+    }
 }
 
 /// Of the covered pixels of a normals-mode image whose four neighbours are covered and
@@ -179,18 +185,25 @@ fn a_model_translated_by_1e7_renders_the_same_image() {
         Scene::open(&path).unwrap(),
     );
     let fov = 45f64.to_radians();
-    let settings = Settings::default();
-    let ia = frame(
-        &a,
-        &Camera::orbit(a.meta(), 40.0, 30.0, 2.5, fov),
-        &settings,
-    );
+    for raster in Raster::ALL {
+        let settings = Settings {
+            raster,
+            ..Settings::default()
+        };
+        translated_renders_the_same(&a, &b, &settings, fov);
+    }
+}
+
+/// [`a_model_translated_by_1e7_renders_the_same_image`] with `settings`: `a` and `b`
+/// (`a` moved) from the same orbit view.
+fn translated_renders_the_same(a: &Scene, b: &Scene, settings: &Settings, fov: f64) {
+    let ia = frame(a, &Camera::orbit(a.meta(), 40.0, 30.0, 2.5, fov), settings);
     // The copy's header lacks the knot's `up_axis z`: seen about the same axis.
     let b_meta = spt::tree::TreeMeta {
         up: a.meta().up,
         ..b.meta().clone()
     };
-    let ib = frame(&b, &Camera::orbit(&b_meta, 40.0, 30.0, 2.5, fov), &settings);
+    let ib = frame(b, &Camera::orbit(&b_meta, 40.0, 30.0, 2.5, fov), settings);
     let c = compare(&ib, &ia);
     eprintln!(
         "translated by 1e7: PSNR {:.2} dB, holes {:.4} %, spill {:.4} %",
@@ -263,7 +276,12 @@ fn hard_views_render_without_garbage() {
             },
         ),
     ];
-    for (what, camera, settings) in cases {
+    for ((what, camera, settings), raster) in cases
+        .into_iter()
+        .flat_map(|case| Raster::ALL.map(|raster| (case.clone(), raster)))
+    {
+        let settings = Settings { raster, ..settings };
+        let what = format!("{what}, {} raster", raster.name());
         let img = frame(&scene, &camera, &settings);
         let covered = img.covered.iter().filter(|c| **c).count();
         eprintln!("{what}: {covered} pixels covered");
@@ -398,7 +416,10 @@ fn splats_crossing_the_near_plane_are_skipped_not_garbled() {
     );
     let along = n.any_orthonormal_vector();
     let eye = p + n * (leaf.radius() as f64 * 0.01);
-    for error_px in [0.0, 1.0] {
+    for (error_px, raster) in [0.0, 1.0]
+        .into_iter()
+        .flat_map(|e| Raster::ALL.map(|r| (e, r)))
+    {
         let camera = Camera {
             eye,
             target: eye + along,
@@ -410,6 +431,7 @@ fn splats_crossing_the_near_plane_are_skipped_not_garbled() {
             &camera,
             &Settings {
                 error_px,
+                raster,
                 ..Settings::default()
             },
         );

@@ -22,7 +22,9 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::eval::perceptual::downsample;
 
-use crate::render::{Camera, Culling, FrameTargets, Gpu, GpuScene, Mode, Renderer, Settings};
+use crate::render::{
+    Camera, Culling, FrameTargets, Gpu, GpuScene, Mode, Raster, Renderer, Settings,
+};
 use crate::tree::scene::Scene;
 use measure::{Frames, Measured, Reference, measure};
 use report::{Environment, Row, Strategy, culling_name};
@@ -73,6 +75,10 @@ pub struct BenchArgs {
     /// GPU backend: vulkan, gl, metal, dx12 or all (default: $SPT_BACKEND, else any).
     #[arg(long)]
     pub backend: Option<String>,
+    /// How the splat passes draw (docs/gpu.md). Compute rasterization culls in compute:
+    /// its sweep has no vertex-culling rows.
+    #[arg(long, value_enum, default_value = "hardware")]
+    pub raster: Raster,
 }
 
 /// How many times larger, in each direction, the antialiased reference is rendered.
@@ -85,9 +91,19 @@ struct Bench<'a> {
     /// Targets [`SUPERSAMPLE`] times the size, for the antialiased references.
     supersampled: FrameTargets,
     frames: Frames<'a>,
+    raster: Raster,
 }
 
 impl Bench<'_> {
+    /// The culling strategies of the sweep: both, or compute culling alone when the
+    /// splats are drawn in compute (which culls in compute).
+    fn cullings(&self) -> &'static [Culling] {
+        match self.raster {
+            Raster::Hardware => &[Culling::Compute, Culling::Vertex],
+            Raster::Compute => &[Culling::Compute],
+        }
+    }
+
     /// The references of each camera: the mesh (or the leaves), at 1× and supersampled.
     fn references(
         &self,
@@ -131,7 +147,7 @@ impl Bench<'_> {
         eps_px: f64,
         culling: Culling,
     ) -> anyhow::Result<Measured> {
-        let settings = sweep_settings(eps_px, culling);
+        let settings = sweep_settings(eps_px, culling, self.raster);
         measure(
             self.renderer,
             &self.targets,
@@ -144,12 +160,14 @@ impl Bench<'_> {
     }
 }
 
-/// The settings of one point of the sweep: ε in pixels (0: leaves only) and culling.
-fn sweep_settings(eps_px: f64, culling: Culling) -> Settings {
+/// The settings of one point of the sweep: ε in pixels (0: leaves only), culling and
+/// raster path.
+fn sweep_settings(eps_px: f64, culling: Culling, raster: Raster) -> Settings {
     Settings {
         error_px: eps_px,
         lod: eps_px > 0.0,
         culling,
+        raster,
         ..Settings::default()
     }
 }
@@ -206,6 +224,7 @@ fn environment(args: &BenchArgs, scene: &Scene, gpu: &Gpu) -> Environment {
         machine: report::machine(),
         date: today(),
         size: args.size,
+        raster: args.raster.name(),
     }
 }
 
@@ -228,15 +247,19 @@ fn camera_paths(scene: &Scene, args: &BenchArgs) -> Vec<(String, Vec<Camera>)> {
     paths
 }
 
-/// A progress bar over every frame the run will draw: references, SPT (two cullings),
+/// A progress bar over every frame the run will draw: references, SPT (each culling),
 /// random subsets (orbits, ε > 0) and the stability check.
 fn frame_progress(args: &BenchArgs, paths: &[(String, Vec<Camera>)]) -> ProgressBar {
     let per_camera = (args.warmup + args.frames) as u64;
     let cams: u64 = paths.iter().map(|p| p.1.len() as u64).sum();
     let orbit_cams = args.views as u64 * 3;
     let positive = args.eps.iter().filter(|e| **e > 0.0).count() as u64;
+    let cullings = match args.raster {
+        Raster::Hardware => 2,
+        Raster::Compute => 1,
+    };
     let total = cams
-        + cams * args.eps.len() as u64 * 2 * per_camera
+        + cams * args.eps.len() as u64 * cullings * per_camera
         + orbit_cams * positive * per_camera
         + 2 * args.views as u64
             * (args.warmup.max(STABILITY_WARMUP)
@@ -278,6 +301,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             timed: args.frames,
             progress: &progress,
         },
+        raster: args.raster,
     };
     let leaves = random_subset::leaves(&scene);
     let mut rows: Vec<Row> = Vec::new();
@@ -354,7 +378,7 @@ impl Sweep<'_> {
                 Strategy::Spt
             };
             let mut spt_drawn = 0.0;
-            for culling in [Culling::Compute, Culling::Vertex] {
+            for &culling in self.bench.cullings() {
                 let what = format!("{}: spt ε {eps_px} {}", self.path, culling_name(culling));
                 progress.set_message(what);
                 let mut m =
@@ -434,7 +458,7 @@ fn stability_runs(
         timed: args.frames.max(STABILITY_SAMPLES.div_ceil(args.views)),
         progress,
     };
-    let settings = sweep_settings(eps_check, Culling::Compute);
+    let settings = sweep_settings(eps_check, Culling::Compute, bench.raster);
     let mut again = measure::measure_runs(
         bench.renderer,
         &bench.targets,

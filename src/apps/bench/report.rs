@@ -61,14 +61,16 @@ pub struct Environment {
     pub machine: String,
     pub date: String,
     pub size: (u32, u32),
+    /// How the splat passes drew (`--raster`).
+    pub raster: &'static str,
 }
 
 impl Environment {
-    /// "adapter (backend, driver) on machine, date".
+    /// "adapter (backend, driver), raster path on machine, date".
     pub fn label(&self) -> String {
         format!(
-            "{} ({}, {}) on {}, {}",
-            self.adapter, self.backend, self.driver, self.machine, self.date
+            "{} ({}, {}), {} raster, on {}, {}",
+            self.adapter, self.backend, self.driver, self.raster, self.machine, self.date
         )
     }
 }
@@ -113,13 +115,13 @@ pub fn write_csv(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result
     let mut out = String::from(
         "model,path,strategy,culling,eps_px,cameras,splats,tested,gpu_ms_median,gpu_ms_p95,\
          wall_ms_median,psnr_db,hole_rate,spill_rate,flip,ssim,reference,width,height,adapter,backend,driver,\
-         machine,date\n",
+         machine,date,raster\n",
     );
     for r in rows {
         let m = &r.m;
         writeln!(
             out,
-            "{},{},{},{},{},{},{:.1},{:.1},{},{},{:.3},{},{:.6},{:.6},{:.5},{:.4},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{:.1},{:.1},{},{},{:.3},{},{:.6},{:.6},{:.5},{:.4},{},{},{},{},{},{},{},{},{}",
             field(&env.model),
             r.path,
             r.strategy.name(),
@@ -143,7 +145,8 @@ pub fn write_csv(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result
             field(&env.backend),
             field(&env.driver),
             field(&env.machine),
-            env.date
+            env.date,
+            env.raster
         )?;
     }
     write_text(path, &out)

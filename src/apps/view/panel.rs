@@ -9,7 +9,7 @@ use super::input::Command;
 use super::viewer::{ERROR_PX_RANGE, Viewer};
 use crate::apps::text::count;
 use crate::render::residency::mib;
-use crate::render::{Culling, Mode};
+use crate::render::{Culling, Mode, Raster};
 
 /// What the panel shows besides the viewer itself.
 pub struct PanelStatus<'a> {
@@ -194,6 +194,7 @@ fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
     let m = viewer.model.as_ref();
     let has_mesh = m.is_some_and(|m| m.gpu_scene.mesh_triangles() > 0);
     let has_attributes = m.is_some_and(|m| m.scene.meta().has_attributes);
+    let compute_raster = viewer.renderer.gpu.compute_raster;
     let s = &mut viewer.settings;
     let lidar = |mode| matches!(mode, Mode::Classification | Mode::Intensity | Mode::Returns);
     egui::ComboBox::from_label("Display (M)")
@@ -217,6 +218,15 @@ fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
         ui.radio_value(&mut s.culling, Culling::Compute, "compute");
         ui.radio_value(&mut s.culling, Culling::Vertex, "vertex");
     });
+    if compute_raster {
+        ui.horizontal(|ui| {
+            ui.label("Raster");
+            ui.radio_value(&mut s.raster, Raster::Hardware, "hardware")
+                .on_hover_text(Raster::Hardware.description());
+            ui.radio_value(&mut s.raster, Raster::Compute, "compute")
+                .on_hover_text(Raster::Compute.description());
+        });
+    }
     ui.horizontal(|ui| {
         ui.label("Background");
         ui.color_edit_button_rgb(&mut s.background);
@@ -273,6 +283,7 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
                         count(f.ranges.len() as u64)
                     ),
                 );
+                row("plan", format!("{:.2} ms CPU", f.plan_ms));
                 if f.coarsened {
                     row("", "coarser until uploaded".into());
                 }
