@@ -278,7 +278,7 @@ fn hard_views_render_without_garbage() {
     ];
     for ((what, camera, settings), raster) in cases
         .into_iter()
-        .flat_map(|case| Raster::ALL.map(|raster| (case.clone(), raster)))
+        .flat_map(|case| Raster::ALL.map(|raster| (case, raster)))
     {
         let settings = Settings { raster, ..settings };
         let what = format!("{what}, {} raster", raster.name());
