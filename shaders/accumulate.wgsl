@@ -1,25 +1,25 @@
 #import constants
 
-// The compute rasterizer's per-pixel buffers (raster.wgsl writes them, resolve.wgsl
-// turns them into the G-buffer and clears them), one entry per pixel of the frame,
-// row-major, top row first.
-
-// Pass 1: the nearest pushed-back depth, reversed Z, as its f32 bits (positive floats
-// order as their bits: atomicMax keeps the nearest); 0: none. The points' depth.
-@group(2) @binding(0) var<storage, read_write> visible: array<atomic<u32>>;
-// Pass 2's sums in fixed point (FIXED_ONE = 1), channel-major: channel c of pixel p at
-// c · pixels + p (channels: SUM_*). `sums` holds the low 32 bits, `carries` the high
-// ones: an add whose low word wraps carries one into its high word, so that a sum holds
-// 2⁶⁴ / FIXED_ONE = 2³⁴ full-weight fragments.
-@group(2) @binding(1) var<storage, read_write> sums: array<atomic<u32>>;
-@group(2) @binding(2) var<storage, read_write> carries: array<atomic<u32>>;
-// The four coverage samples, two bits each (sample k at bits 2k): 3 where a patch's
-// front covers it, 1 where only OFF_FRONT_COVERAGE does; OR-ed, so the larger wins.
-@group(2) @binding(3) var<storage, read_write> covered: array<atomic<u32>>;
-// The points: the bitwise complement of the winning fragment's list index (atomicMax:
-// among fragments at the same depth the first of the list wins, whatever the order
-// threads run in).
-@group(2) @binding(4) var<storage, read_write> nearest_point: array<atomic<u32>>;
+// The compute rasterizer's per-pixel buffers, one entry per pixel of the frame,
+// row-major, top row first: raster.wgsl writes them with atomics, resolve.wgsl turns
+// them into the G-buffer and clears them with plain loads and stores (it runs alone:
+// on a CPU adapter, which cannot vectorise atomics, that is several times faster). Both
+// declare them at group 2 (src/render/bindings.rs, `accumulate`):
+//
+// visible        pass 1: the nearest pushed-back depth, reversed Z, as its f32 bits
+//                (positive floats order as their bits: atomicMax keeps the nearest);
+//                0: none. The points' depth.
+// sums           pass 2's sums in fixed point (FIXED_ONE = 1), channel-major: channel c
+// carries        of pixel p at c · pixels + p (channels: SUM_*). `sums` holds the low
+//                32 bits, `carries` the high ones: an add whose low word wraps carries
+//                one into its high word, so that a sum holds 2⁶⁴ / FIXED_ONE = 2³⁴
+//                full-weight fragments.
+// covered        the four coverage samples, two bits each (sample k at bits 2k): 3
+//                where a patch's front covers it, 1 where only OFF_FRONT_COVERAGE
+//                does; OR-ed, so the larger wins.
+// nearest_point  the points: the bitwise complement of the winning fragment's list
+//                index (atomicMax: among fragments at the same depth the first of the
+//                list wins, whatever the order threads run in).
 
 // The channels of `sums`: colour·w (3), w, (normal + 1)·w (3, so that none is
 // negative), and (z / z₁)·w with z the fragment's view distance and z₁ that of pass 1's
@@ -40,8 +40,3 @@ fn pixel_count() -> u32 {
     return arrayLength(&visible);
 }
 
-// The sum of channel `c` at pixel `p`, as a float (FIXED_ONE = 1).
-fn sum_at(c: u32, p: u32) -> f32 {
-    let i = c * pixel_count() + p;
-    return (f32(atomicLoad(&carries[i])) * 4294967296.0 + f32(atomicLoad(&sums[i]))) / FIXED_ONE;
-}

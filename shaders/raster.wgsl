@@ -26,6 +26,11 @@
 @group(1) @binding(2) var<storage, read> shapes: array<SplatShape>;
 @group(1) @binding(3) var<storage, read> attributes: array<u32>;
 @group(1) @binding(4) var<storage, read> compaction: Survivors;
+@group(2) @binding(0) var<storage, read_write> visible: array<atomic<u32>>;
+@group(2) @binding(1) var<storage, read_write> sums: array<atomic<u32>>;
+@group(2) @binding(2) var<storage, read_write> carries: array<atomic<u32>>;
+@group(2) @binding(3) var<storage, read_write> covered: array<atomic<u32>>;
+@group(2) @binding(4) var<storage, read_write> nearest_point: array<atomic<u32>>;
 
 // cull.wgsl's `Compaction`, read: the survivors of each kind and the slice's first node.
 struct Survivors {
@@ -97,19 +102,17 @@ fn raster(
     }
     boxes[lane] = box;
     ends[lane] = u32(box.z) * u32(box.w);
+    // Running totals, by one thread: a parallel scan's barriers cost a CPU adapter
+    // (which runs a workgroup's threads as coroutines that switch at each barrier)
+    // more than the 64 adds.
     workgroupBarrier();
-    // Running totals (Hillis and Steele's scan: log₂ RASTER_WORKGROUP steps).
-    for (var d = 1u; d < RASTER_WORKGROUP; d <<= 1u) {
-        var sum = ends[lane];
-        if lane >= d {
-            sum += ends[lane - d];
+    if lane == 0u {
+        var sum = 0u;
+        for (var k = 0u; k < RASTER_WORKGROUP; k++) {
+            sum += ends[k];
+            ends[k] = sum;
         }
-        workgroupBarrier();
-        ends[lane] = sum;
-        workgroupBarrier();
-    }
-    if lane == RASTER_WORKGROUP - 1u {
-        total_pixels = ends[lane];
+        total_pixels = sum;
     }
     let total = workgroupUniformLoad(&total_pixels);
     for (var i = lane; i < total; i += RASTER_WORKGROUP) {

@@ -12,6 +12,17 @@
 @group(1) @binding(1) var normal_out: texture_storage_2d<rgba16float, write>;
 @group(1) @binding(2) var coverage_out: texture_storage_2d<rgba8unorm, write>;
 @group(1) @binding(3) var depth_out: texture_storage_2d<r32float, write>;
+@group(2) @binding(0) var<storage, read_write> visible: array<u32>;
+@group(2) @binding(1) var<storage, read_write> sums: array<u32>;
+@group(2) @binding(2) var<storage, read_write> carries: array<u32>;
+@group(2) @binding(3) var<storage, read_write> covered: array<u32>;
+@group(2) @binding(4) var<storage, read_write> nearest_point: array<u32>;
+
+// The sum of channel `c` at pixel `p`, as a float (FIXED_ONE = 1).
+fn sum_at(c: u32, p: u32) -> f32 {
+    let i = c * pixel_count() + p;
+    return (f32(carries[i]) * 4294967296.0 + f32(sums[i])) / FIXED_ONE;
+}
 
 @compute @workgroup_size(RESOLVE_TILE, RESOLVE_TILE)
 fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -21,7 +32,7 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let p = id.y * size.x + id.x;
     let texel = vec2<i32>(id.xy);
-    let held = bitcast<f32>(atomicLoad(&visible[p]));
+    let held = bitcast<f32>(visible[p]);
     let w = sum_at(SUM_WEIGHT, p);
     var color = vec4<f32>(0.0);
     var normal = vec4<f32>(0.0);
@@ -35,7 +46,7 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     textureStore(color_out, texel, color);
     textureStore(normal_out, texel, normal);
-    textureStore(coverage_out, texel, coverage_of(atomicLoad(&covered[p])));
+    textureStore(coverage_out, texel, coverage_of(covered[p]));
     textureStore(depth_out, texel, vec4<f32>(held, 0.0, 0.0, 0.0));
     clear(p);
 }
@@ -52,12 +63,12 @@ fn coverage_of(bits: u32) -> vec4<f32> {
 
 // Every buffer of pixel p back to its state before a frame.
 fn clear(p: u32) {
-    atomicStore(&visible[p], 0u);
-    atomicStore(&covered[p], 0u);
-    atomicStore(&nearest_point[p], 0u);
+    visible[p] = 0u;
+    covered[p] = 0u;
+    nearest_point[p] = 0u;
     let n = pixel_count();
     for (var c = 0u; c < SUM_CHANNELS; c++) {
-        atomicStore(&sums[c * n + p], 0u);
-        atomicStore(&carries[c * n + p], 0u);
+        sums[c * n + p] = 0u;
+        carries[c * n + p] = 0u;
     }
 }
