@@ -67,8 +67,8 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value = "compute")]
     pub culling: Culling,
     /// How the splat passes draw: through the GPU's raster pipeline, or as compute
-    /// rasterization (docs/gpu.md).
-    #[arg(long, value_enum, default_value = "hardware")]
+    /// rasterization (docs/gpu.md); auto: compute on a GPU, hardware on a CPU adapter.
+    #[arg(long, value_enum, default_value = "auto")]
     pub raster: Raster,
     /// Render this many frames of the same view and report median and p95 times (the
     /// image of the last one is written).
@@ -212,7 +212,7 @@ impl clap::ValueEnum for Mode {
 /// `--raster`'s values: the ways of drawing the splat passes, by their names.
 impl clap::ValueEnum for Raster {
     fn value_variants<'a>() -> &'a [Self] {
-        &Raster::ALL
+        &Raster::CHOICES
     }
 
     fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {

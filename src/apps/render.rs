@@ -93,7 +93,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
             count(stats.gpu_outline.unwrap_or(0)),
         );
     }
-    println!("raster    {}", settings.raster.name());
+    println!("raster    {}", renderer.raster(settings.raster).name());
     print_times(&mut gpu_ms, passes_ms, &mut wall_ms, stats.selected);
     let plan = Summary::of(&mut plan_ms).map_or(0.0, |s| s.median);
     println!("cpu plan  {plan:.3} ms per frame (median): chunks in view, their prefixes");

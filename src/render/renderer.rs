@@ -170,10 +170,25 @@ impl Renderer {
         Ok(frame)
     }
 
+    /// The way `asked` draws on this adapter: [`Raster::Auto`] is compute
+    /// rasterization on a GPU that has it (on an H100 the raster pipeline runs on 2 of
+    /// 66 TPCs), the raster pipeline on a CPU adapter (on lavapipe it drew the default
+    /// model's bench views 1.1–3× faster; docs/gpu.md).
+    pub fn raster(&self, asked: Raster) -> Raster {
+        let gpu = &self.gpu;
+        match asked {
+            Raster::Auto if gpu.compute_raster && gpu.info.device_type != wgpu::DeviceType::Cpu => {
+                Raster::Compute
+            }
+            Raster::Auto => Raster::Hardware,
+            chosen => chosen,
+        }
+    }
+
     /// Whether `settings` draw the splat passes in compute; an error where they ask
     /// for it on an adapter without it.
     fn rasterized(&self, settings: &Settings) -> anyhow::Result<bool> {
-        let asked = settings.raster == Raster::Compute && settings.mode != Mode::Mesh;
+        let asked = self.raster(settings.raster) == Raster::Compute && settings.mode != Mode::Mesh;
         if asked && !self.gpu.compute_raster {
             anyhow::bail!(
                 "this adapter ({}) cannot draw the splats in compute (no storage textures \

@@ -133,16 +133,23 @@ impl Culling {
 /// How the splat passes draw (docs/gpu.md); each way: [`Raster::description`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Raster {
+    /// [`Raster::Compute`] on a GPU that has it, [`Raster::Hardware`] on a CPU
+    /// adapter ([`crate::render::Renderer::raster`]).
+    Auto,
     Hardware,
     Compute,
 }
 
 impl Raster {
+    /// The two ways of drawing.
     pub const ALL: [Raster; 2] = [Raster::Hardware, Raster::Compute];
+    /// What `--raster` takes: either way, or the adapter's choice.
+    pub const CHOICES: [Raster; 3] = [Raster::Auto, Raster::Hardware, Raster::Compute];
 
     /// The way's name on the command line.
     pub fn name(self) -> &'static str {
         match self {
+            Raster::Auto => "auto",
             Raster::Hardware => "hardware",
             Raster::Compute => "compute",
         }
@@ -151,6 +158,10 @@ impl Raster {
     /// What the way does, in one line.
     pub fn description(self) -> &'static str {
         match self {
+            Raster::Auto => {
+                "Compute on a GPU, hardware on a CPU adapter (lavapipe, llvmpipe), where \
+                 the raster pipeline is faster on small models"
+            }
             Raster::Hardware => {
                 "The GPU's raster pipeline: one instanced quad per splat, depth test and \
                  blending"
@@ -200,7 +211,7 @@ impl Default for Settings {
             light: Vec3::new(0.4, 0.6, 1.0),
             background: [1.0, 1.0, 1.0],
             culling: Culling::Compute,
-            raster: Raster::Hardware,
+            raster: Raster::Auto,
             lod_eye: None,
             edl_strength: 1.0,
             edl_radius_px: 1.5,

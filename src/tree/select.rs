@@ -377,9 +377,9 @@ impl PrefixIndex {
     /// rounded up to its block, a superset of the exact ranges.
     pub fn ranges_bound(&self, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> Vec<Range<usize>> {
         let mut out = Vec::new();
-        self.for_each_prefix(eye, eps, cone, |_, start, _, bound| {
-            push_range(&mut out, start, bound)
-        });
+        for p in self.prefixes(eye, eps, cone) {
+            push_range(&mut out, p.start, p.bound);
+        }
         out
     }
 
@@ -394,41 +394,70 @@ impl PrefixIndex {
         cone: Option<&ViewCone>,
         refine: impl Fn(Range<usize>) -> bool,
     ) -> (Vec<Range<usize>>, Vec<Range<usize>>) {
+        let prefixes = self.prefixes(eye, eps, cone);
+        let exact: Vec<bool> = prefixes
+            .iter()
+            .map(|p| refine(p.start..p.start + p.bound))
+            .collect();
+        let lengths: Vec<usize> = prefixes
+            .par_iter()
+            .zip(&exact)
+            .with_min_len(PARALLEL_CHUNKS)
+            .map(|(p, &exact)| match exact {
+                true => self.prefix_within(p.chunk, nodes, p.d_min, eps, p.bound),
+                false => p.bound,
+            })
+            .collect();
         let (mut bounds, mut refined) = (Vec::new(), Vec::new());
-        self.for_each_prefix(eye, eps, cone, |c, start, d_min, bound| {
-            push_range(&mut bounds, start, bound);
-            let n = match refine(start..start + bound) {
-                true => self.prefix_within(c, nodes, d_min, eps, bound),
-                false => bound,
-            };
-            push_range(&mut refined, start, n);
-        });
+        for (p, n) in prefixes.iter().zip(lengths) {
+            push_range(&mut bounds, p.start, p.bound);
+            push_range(&mut refined, p.start, n);
+        }
         (bounds, refined)
     }
 
-    /// Calls `visit(c, start, d_min, bound)` for each chunk c the view may need, in list
-    /// order: its first node, its distance from the eye and its prefix bound (> 0).
-    fn for_each_prefix(
-        &self,
-        eye: DVec3,
-        eps: f64,
-        cone: Option<&ViewCone>,
-        mut visit: impl FnMut(usize, usize, f64, usize),
-    ) {
-        let pages = self.pages.iter().enumerate();
-        let seen = pages.filter(|(_, page)| !self.skipped(page, distances(page, eye), eps, cone));
-        for c in seen.flat_map(|(p, _)| p * PAGE..((p + 1) * PAGE).min(self.chunks.len())) {
-            let chunk = &self.chunks[c];
-            let d = distances(chunk, eye);
-            if self.skipped(chunk, d, eps, cone) {
-                continue;
-            }
-            let bound = self.prefix_bound(c, d.0, eps);
-            if bound > 0 {
-                visit(c, chunk.start as usize, d.0, bound);
-            }
-        }
+    /// The chunks the view may need, in list order, with their prefix bounds (> 0).
+    /// Pages of chunks are searched in parallel: a city tile's view meets tens of
+    /// thousands of chunks, about 0.1 µs each.
+    fn prefixes(&self, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> Vec<Prefix> {
+        let chunks_of = |p: usize| p * PAGE..((p + 1) * PAGE).min(self.chunks.len());
+        (0..self.pages.len())
+            .into_par_iter()
+            .filter(|&p| {
+                let page = &self.pages[p];
+                !self.skipped(page, distances(page, eye), eps, cone)
+            })
+            .flat_map_iter(|p| chunks_of(p).filter_map(move |c| self.prefix_of(c, eye, eps, cone)))
+            .collect()
     }
+
+    /// Chunk c's [`Prefix`], when the view may need any of it.
+    fn prefix_of(&self, c: usize, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> Option<Prefix> {
+        let chunk = &self.chunks[c];
+        let d = distances(chunk, eye);
+        if self.skipped(chunk, d, eps, cone) {
+            return None;
+        }
+        let bound = self.prefix_bound(c, d.0, eps);
+        (bound > 0).then_some(Prefix {
+            chunk: c,
+            start: chunk.start as usize,
+            d_min: d.0,
+            bound,
+        })
+    }
+}
+
+/// Chunks a thread of the prefix searches takes at least.
+const PARALLEL_CHUNKS: usize = 512;
+
+/// A chunk the view may need: its index, its first node (list index), its distance
+/// from the eye, and its prefix bound ([`PrefixIndex::prefix_bound`]).
+struct Prefix {
+    chunk: usize,
+    start: usize,
+    d_min: f64,
+    bound: usize,
 }
 
 /// Appends the range of `n` nodes from `start` to `out` (ascending), joined to the last

@@ -94,6 +94,9 @@ fn assert_same_picture([(h, hp), (c, cp)]: [(f64, usize); 2], what: &str) {
 
 #[test]
 fn the_compute_path_draws_the_meshes_as_the_raster_path_does() {
+    if !common::renderer().gpu.compute_raster {
+        return;
+    }
     let mut models = vec![(common::default_model(), "torus knot")];
     if let Some(dir) = common::shared_data() {
         models.push((dir.join("bunny.ply"), "bunny"));
@@ -115,6 +118,9 @@ fn the_compute_path_draws_the_meshes_as_the_raster_path_does() {
 /// hole rate, leaves only.
 fn cloud_figures(file: &str, triangulation: Triangulation) -> Option<[(f64, f64); 2]> {
     let dir = common::shared_data()?;
+    if !common::renderer().gpu.compute_raster {
+        return None;
+    }
     let models = CloudAndReference::open(&dir.join(file), triangulation).unwrap();
     let run = |raster| {
         let settings = Settings {
@@ -174,6 +180,9 @@ fn the_compute_path_draws_the_clouds_as_the_raster_path_does() {
 /// low bits of a half-float sum from run to run under compute culling.
 #[test]
 fn a_frame_drawn_in_compute_is_the_same_bytes_every_time() {
+    if !common::renderer().gpu.compute_raster {
+        return;
+    }
     let knot = Scene::open(&common::default_model()).unwrap();
     let mut cases = vec![
         (knot, Mode::Shaded, "knot"),

@@ -5,7 +5,7 @@
 use crate::common;
 
 use spt::eval::metrics::{Comparison, compare};
-use spt::render::{Camera, Mode, Raster, Settings};
+use spt::render::{Camera, Mode, Settings};
 use spt::tree::scene::Scene;
 
 /// Splats (ε = 0) against the mesh for 8 views around the model.
@@ -97,7 +97,7 @@ fn contours_show_no_specks_of_the_hidden_side() {
     let (width, height) = (800, 600);
     let aspect = width as f64 / height as f64;
     let camera = Camera::framed(scene.meta(), scene.index.chunks(), fov, aspect);
-    for raster in Raster::ALL {
+    for raster in common::rasters() {
         let settings = Settings {
             error_px: 0.0,
             mode: Mode::Normals,
@@ -185,7 +185,7 @@ fn a_model_translated_by_1e7_renders_the_same_image() {
         Scene::open(&path).unwrap(),
     );
     let fov = 45f64.to_radians();
-    for raster in Raster::ALL {
+    for raster in common::rasters() {
         let settings = Settings {
             raster,
             ..Settings::default()
@@ -276,10 +276,11 @@ fn hard_views_render_without_garbage() {
             },
         ),
     ];
-    for ((what, camera, settings), raster) in cases
-        .into_iter()
-        .flat_map(|case| Raster::ALL.map(|raster| (case, raster)))
-    {
+    for ((what, camera, settings), raster) in cases.into_iter().flat_map(|case| {
+        common::rasters()
+            .into_iter()
+            .map(move |raster| (case, raster))
+    }) {
         let settings = Settings { raster, ..settings };
         let what = format!("{what}, {} raster", raster.name());
         let img = frame(&scene, &camera, &settings);
@@ -418,7 +419,7 @@ fn splats_crossing_the_near_plane_are_skipped_not_garbled() {
     let eye = p + n * (leaf.radius() as f64 * 0.01);
     for (error_px, raster) in [0.0, 1.0]
         .into_iter()
-        .flat_map(|e| Raster::ALL.map(|r| (e, r)))
+        .flat_map(|e| common::rasters().into_iter().map(move |r| (e, r)))
     {
         let camera = Camera {
             eye,

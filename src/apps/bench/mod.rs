@@ -75,9 +75,10 @@ pub struct BenchArgs {
     /// GPU backend: vulkan, gl, metal, dx12 or all (default: $SPT_BACKEND, else any).
     #[arg(long)]
     pub backend: Option<String>,
-    /// How the splat passes draw (docs/gpu.md). Compute rasterization culls in compute:
-    /// its sweep has no vertex-culling rows.
-    #[arg(long, value_enum, default_value = "hardware")]
+    /// How the splat passes draw (docs/gpu.md; auto: compute on a GPU, hardware on a
+    /// CPU adapter). Compute rasterization culls in compute: its sweep has no
+    /// vertex-culling rows.
+    #[arg(long, value_enum, default_value = "auto")]
     pub raster: Raster,
 }
 
@@ -99,8 +100,8 @@ impl Bench<'_> {
     /// splats are drawn in compute (which culls in compute).
     fn cullings(&self) -> &'static [Culling] {
         match self.raster {
-            Raster::Hardware => &[Culling::Compute, Culling::Vertex],
             Raster::Compute => &[Culling::Compute],
+            _ => &[Culling::Compute, Culling::Vertex],
         }
     }
 
@@ -255,8 +256,8 @@ fn frame_progress(args: &BenchArgs, paths: &[(String, Vec<Camera>)]) -> Progress
     let orbit_cams = args.views as u64 * 3;
     let positive = args.eps.iter().filter(|e| **e > 0.0).count() as u64;
     let cullings = match args.raster {
-        Raster::Hardware => 2,
         Raster::Compute => 1,
+        _ => 2,
     };
     let total = cams
         + cams * args.eps.len() as u64 * cullings * per_camera
@@ -281,14 +282,14 @@ fn frame_progress(args: &BenchArgs, paths: &[(String, Vec<Camera>)]) -> Progress
 }
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
-    let args = effective_args(args)?;
+    let mut args = effective_args(args)?;
     let scene = Scene::open(&args.model)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot make the folder", args.out.display()))?;
-    let gpu = Gpu::new(args.backend.as_deref())?;
-    let env = environment(&args, &scene, &gpu);
+    let renderer = Renderer::new(Gpu::new(args.backend.as_deref())?);
+    args.raster = renderer.raster(args.raster);
+    let env = environment(&args, &scene, &renderer.gpu);
     println!("adapter   {}", env.label());
-    let renderer = Renderer::new(gpu);
     let gpu_scene = renderer.upload(&scene);
     let paths = camera_paths(&scene, &args);
     let progress = frame_progress(&args, &paths);

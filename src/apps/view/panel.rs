@@ -221,6 +221,8 @@ fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
     if compute_raster {
         ui.horizontal(|ui| {
             ui.label("Raster");
+            ui.radio_value(&mut s.raster, Raster::Auto, "auto")
+                .on_hover_text(Raster::Auto.description());
             ui.radio_value(&mut s.raster, Raster::Hardware, "hardware")
                 .on_hover_text(Raster::Hardware.description());
             ui.radio_value(&mut s.raster, Raster::Compute, "compute")

@@ -30,6 +30,16 @@ pub fn renderer() -> &'static spt::render::Renderer {
     })
 }
 
+/// The ways of drawing the splats that the shared renderer's adapter has: both, or
+/// the raster pipeline alone where compute shaders cannot write the G-buffer.
+pub fn rasters() -> Vec<spt::render::Raster> {
+    let compute = renderer().gpu.compute_raster;
+    spt::render::Raster::ALL
+        .into_iter()
+        .filter(|r| compute || *r == spt::render::Raster::Hardware)
+        .collect()
+}
+
 /// Runs the `spt` binary with `args`: (exit code, stdout, stderr).
 pub fn run_spt<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (Option<i32>, String, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_spt"))
