@@ -11,7 +11,6 @@ use bytemuck::{Pod, Zeroable};
 use super::bindings::{Slot, cull as slots};
 use super::gpu_scene::Share;
 use super::shaders::{WORKGROUP_SIZE, module};
-use super::targets::{FrameTargets, stamp};
 
 /// A slice's compaction record (`struct Compaction` in cull.wgsl): the arguments of the
 /// two indirect draws, of the survivors on an outline and of the others, whose
@@ -154,13 +153,14 @@ impl CullPass {
 
     /// Writes every slice's compaction record and ranges for its share (through the
     /// queue: they take effect at the next submit), then records the culling of each
-    /// slice with nodes to test: the frame's first pass (its start timestamp).
+    /// slice with nodes to test: the frame's first pass (`timestamps`: its start).
     pub fn encode(
         &self,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-        targets: &FrameTargets,
+        frame_bind: &wgpu::BindGroup,
         shares: &[Share],
+        timestamps: Option<wgpu::ComputePassTimestampWrites>,
     ) {
         for share in shares {
             let slice = share.slice;
@@ -174,10 +174,10 @@ impl CullPass {
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("cull"),
-            timestamp_writes: targets.compute_timestamps(Some(stamp::START), None),
+            timestamp_writes: timestamps,
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &targets.frame_bind, &[]);
+        pass.set_bind_group(0, frame_bind, &[]);
         for share in shares.iter().filter(|s| s.count > 0) {
             pass.set_bind_group(1, &share.slice.cull, &[]);
             pass.dispatch_workgroups(share.count.div_ceil(WORKGROUP_SIZE), 1, 1);

@@ -7,12 +7,14 @@
 //!
 //! ```text
 //! plan ─► cull ─► splats (visibility, attributes; or points) | mesh ─► shading
-//!          frame (uniform) · gbuffer · targets · gpu_scene (upload) · counters
-//!          residency (which slices stay under a GPU budget) · streamed
+//!             └─► raster (the same in compute) ─► resolve ─┘
+//!          frame (uniform) · gbuffer · accumulation · targets · gpu_scene (upload)
+//!          counters · residency (which slices stay under a GPU budget) · streamed
 //! ```
 //!
 //! [`Renderer`] composes them.
 
+mod accumulation;
 pub mod bindings;
 pub mod camera;
 mod counters;

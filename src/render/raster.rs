@@ -21,37 +21,18 @@
 
 use std::sync::OnceLock;
 
+use super::accumulation::{Accumulation, FLOAT_DEPTH, sums_bytes};
 use super::bindings::{Slot, accumulate, raster as slots, resolve as out};
-use super::gbuffer::{COVERAGE, GBUFFER, GBuffer, target};
-use super::gpu::Gpu;
+use super::gbuffer::{COVERAGE, GBUFFER, GBuffer};
 use super::gpu_scene::Share;
 use super::settings::Mode;
-use super::shaders::{ColorSource, QuadReach, SplatClass, module};
+use super::shaders::{
+    ColorSource, QuadReach, RASTER_WORKGROUP, RESOLVE_TILE, RasterPass, SplatClass, module,
+};
 use super::targets::{FrameTargets, stamp};
 use crate::io::geometry::PointAttributes;
 use crate::surfel::shape::SplatShape;
 use crate::tree::NodeRecord;
-
-/// Threads per workgroup of the raster passes (`RASTER_WORKGROUP` in WGSL): the
-/// workgroup that shares a large footprint's pixels.
-pub const RASTER_WORKGROUP: u32 = 64;
-/// The resolve's workgroups are tiles of this many pixels a side.
-pub const RESOLVE_TILE: u32 = 8;
-/// Channels of the fixed-point sums (`SUM_*` in accumulate.wgsl).
-pub const SUM_CHANNELS: u32 = 8;
-/// Pass 1's depth as the resolve writes it for pass 3 (reversed Z; 0: none).
-const FLOAT_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
-
-/// Which pass a raster pipeline runs (WGSL override `RASTER_PASS`; its values are given
-/// to WGSL as constants).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum RasterPass {
-    Visibility = 0,
-    Attributes = 1,
-    PointDepth = 2,
-    PointWinner = 3,
-    PointWrite = 4,
-}
 
 /// The pipelines of one pass: the outline splats', then the inner ones'.
 type ByClass = [wgpu::ComputePipeline; 2];
@@ -106,8 +87,13 @@ fn storage_texture(slot: Slot, format: wgpu::TextureFormat) -> wgpu::BindGroupLa
 }
 
 impl ComputeRaster {
-    pub fn new(gpu: &Gpu, frame_layout: &wgpu::BindGroupLayout) -> ComputeRaster {
-        let device = &gpu.device;
+    /// The layouts on `device`; `on_cpu`: the adapter is a CPU rasterizer (the
+    /// fragments then take every coverage sample, see `skip_surrounded`).
+    pub fn new(
+        device: &wgpu::Device,
+        frame_layout: &wgpu::BindGroupLayout,
+        on_cpu: bool,
+    ) -> ComputeRaster {
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(label),
@@ -154,7 +140,7 @@ impl ComputeRaster {
             slice_layout,
             accumulation_layout,
             resolve_layout,
-            skip_surrounded: gpu.info.device_type != wgpu::DeviceType::Cpu,
+            skip_surrounded: !on_cpu,
             visibility: OnceLock::new(),
             points: OnceLock::new(),
             attributes: Default::default(),
@@ -303,6 +289,12 @@ impl ComputeRaster {
         pass.dispatch_workgroups(w.div_ceil(RESOLVE_TILE), h.div_ceil(RESOLVE_TILE), 1);
     }
 
+    /// The per-pixel buffers of a `size` frame drawing into `gbuffer`.
+    pub fn accumulation(&self, gbuffer: &GBuffer, size: (u32, u32)) -> Accumulation {
+        let layouts = [&self.accumulation_layout, &self.resolve_layout];
+        Accumulation::new(&self.device, layouts, gbuffer, size)
+    }
+
     /// Checks that the per-pixel buffers of a `size` frame fit one storage binding.
     pub fn check_size(&self, size: (u32, u32)) -> anyhow::Result<()> {
         let bytes = sums_bytes(size);
@@ -326,80 +318,6 @@ impl ComputeRaster {
 fn grid(groups: u32, max: u32) -> (u32, u32) {
     let x = groups.clamp(1, max);
     (x, groups.div_ceil(x))
-}
-
-/// Bytes of the fixed-point sums' low (or high) words for a `size` frame.
-fn sums_bytes((width, height): (u32, u32)) -> u64 {
-    SUM_CHANNELS as u64 * width as u64 * height as u64 * 4
-}
-
-/// The compute rasterizer's per-pixel buffers for one frame size, and the bind groups
-/// of the passes that read and write them; made by a frame's targets when a frame is
-/// first drawn in compute.
-pub(super) struct Accumulation {
-    /// Group 2 of the raster passes and the resolve.
-    bind: wgpu::BindGroup,
-    /// Group 1 of the resolve: the G-buffer's sums and coverage, and `depth`.
-    resolve_bind: wgpu::BindGroup,
-    /// Pass 1's depth as the resolve writes it, for pass 3.
-    pub depth_view: wgpu::TextureView,
-}
-
-impl Accumulation {
-    pub fn new(raster: &ComputeRaster, gbuffer: &GBuffer, size: (u32, u32)) -> Accumulation {
-        let device = &raster.device;
-        let pixels = size.0 as u64 * size.1 as u64 * 4;
-        let buffer = |label, bytes| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes,
-                usage: wgpu::BufferUsages::STORAGE,
-                mapped_at_creation: false,
-            })
-        };
-        let buffers = [
-            buffer("visible", pixels),
-            buffer("sums", sums_bytes(size)),
-            buffer("carries", sums_bytes(size)),
-            buffer("covered", pixels),
-            buffer("nearest point", pixels),
-        ];
-        let entries: Vec<_> = accumulate::ALL
-            .iter()
-            .zip(&buffers)
-            .map(|(slot, b)| wgpu::BindGroupEntry {
-                binding: slot.binding,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("accumulation"),
-            layout: &raster.accumulation_layout,
-            entries: &entries,
-        });
-        let usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING;
-        let depth = target(device, size, FLOAT_DEPTH, "visible depth", usage);
-        let depth_view = depth.create_view(&Default::default());
-        let view = |slot: Slot, view| wgpu::BindGroupEntry {
-            binding: slot.binding,
-            resource: wgpu::BindingResource::TextureView(view),
-        };
-        let resolve_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("resolved gbuffer"),
-            layout: &raster.resolve_layout,
-            entries: &[
-                view(out::COLOR_OUT, &gbuffer.color_view),
-                view(out::NORMAL_OUT, &gbuffer.normal_view),
-                view(out::COVERAGE_OUT, &gbuffer.coverage_view),
-                view(out::DEPTH_OUT, &depth_view),
-            ],
-        });
-        Accumulation {
-            bind,
-            resolve_bind,
-            depth_view,
-        }
-    }
 }
 
 #[cfg(test)]

@@ -17,6 +17,7 @@
 
 use rayon::prelude::*;
 
+use super::accumulation::Accumulation;
 use super::camera::Camera;
 use super::counters::read_counters_now;
 use super::cull::CullPass;
@@ -26,7 +27,7 @@ use super::gpu::Gpu;
 use super::gpu_scene::{GpuScene, MeshUpload, SliceUpload};
 use super::mesh::MeshPass;
 use super::plan::{EncodedFrame, plan};
-use super::raster::{Accumulation, ComputeRaster};
+use super::raster::ComputeRaster;
 use super::readback;
 use super::settings::{Culling, Mode, Raster, Settings};
 use super::shading::ShadingPass;
@@ -101,7 +102,11 @@ impl Renderer {
         Renderer {
             cull: CullPass::new(device, &frame_layout),
             splats: SplatPasses::new(&gpu, &frame_layout),
-            raster: ComputeRaster::new(&gpu, &frame_layout),
+            raster: ComputeRaster::new(
+                device,
+                &frame_layout,
+                gpu.info.device_type == wgpu::DeviceType::Cpu,
+            ),
             mesh: MeshPass::new(device, &frame_layout),
             shading: ShadingPass::new(device, &frame_layout),
             frame_layout,
@@ -153,8 +158,10 @@ impl Renderer {
         let queue = &self.gpu.queue;
         queue.write_buffer(&targets.frame_buffer, 0, bytemuck::bytes_of(&uniform));
         let shares = gpu_scene.shares(&frame.ranges);
+        let start = targets.compute_timestamps(Some(stamp::START), None);
         if compute {
-            self.cull.encode(queue, encoder, targets, &shares);
+            self.cull
+                .encode(queue, encoder, &targets.frame_bind, &shares, start);
         }
         if rasterized {
             let (accumulation, gbuffer) = self.accumulation(targets);
@@ -207,7 +214,7 @@ impl Renderer {
     ) -> (&'t Accumulation, &'t wgpu::BindGroup) {
         let (accumulation, bind) = targets.accumulation.get_or_init(|| {
             let g = &targets.gbuffer;
-            let accumulation = Accumulation::new(&self.raster, g, targets.size);
+            let accumulation = self.raster.accumulation(g, targets.size);
             let bind = self
                 .shading
                 .bind(&self.gpu.device, g, &accumulation.depth_view);

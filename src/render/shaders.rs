@@ -11,12 +11,29 @@
 //! upgrades. The test below parses and validates every composed module with naga, so a
 //! broken shader fails `cargo test` without a GPU.
 
-use super::raster::{RASTER_WORKGROUP, RESOLVE_TILE, RasterPass, SUM_CHANNELS};
 use super::settings::Mode;
 use crate::surfel::clip::{NO_CLIP, WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
 
 /// Threads per workgroup of the compute passes (`@workgroup_size(WORKGROUP_SIZE)`).
 pub const WORKGROUP_SIZE: u32 = 256;
+
+/// Threads per workgroup of the raster passes (`RASTER_WORKGROUP` in WGSL): the
+/// workgroup that shares a large footprint's pixels.
+pub const RASTER_WORKGROUP: u32 = 64;
+/// The resolve's workgroups are tiles of this many pixels a side.
+pub const RESOLVE_TILE: u32 = 8;
+/// Channels of the fixed-point sums (`SUM_*` in accumulate.wgsl).
+pub const SUM_CHANNELS: u32 = 8;
+/// Which pass a raster pipeline runs (WGSL override `RASTER_PASS`; its values are given
+/// to WGSL as constants).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum RasterPass {
+    Visibility = 0,
+    Attributes = 1,
+    PointDepth = 2,
+    PointWinner = 3,
+    PointWrite = 4,
+}
 
 /// Every WGSL file of `shaders/`, by the name `#import` uses.
 const FILES: &[(&str, &str)] = &[

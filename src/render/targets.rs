@@ -5,9 +5,9 @@
 use std::sync::OnceLock;
 
 use super::Gpu;
+use super::accumulation::Accumulation;
 use super::frame::FrameUniform;
 use super::gbuffer::{GBuffer, target};
-use super::raster::Accumulation;
 
 /// The shaded output: written linear, stored sRGB-encoded.
 pub const OUTPUT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
