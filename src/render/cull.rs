@@ -100,8 +100,8 @@ impl Compaction {
     ];
 }
 
-/// A storage-buffer entry of bind group 1, visible to the compute stage.
-fn storage(slot: Slot, read_only: bool, min_size: u64) -> wgpu::BindGroupLayoutEntry {
+/// A storage-buffer entry of `slot`, visible to the compute stage.
+pub(super) fn storage(slot: Slot, read_only: bool, min_size: u64) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding: slot.binding,
         visibility: wgpu::ShaderStages::COMPUTE,

@@ -23,6 +23,7 @@ use std::sync::OnceLock;
 
 use super::accumulation::{Accumulation, FLOAT_DEPTH, sums_bytes};
 use super::bindings::{Slot, accumulate, raster as slots, resolve as out};
+use super::cull::storage;
 use super::gbuffer::{COVERAGE, GBUFFER, GBuffer};
 use super::gpu_scene::Share;
 use super::settings::Mode;
@@ -55,21 +56,8 @@ pub(super) struct ComputeRaster {
     points: OnceLock<[ByClass; 3]>,
     attributes: [OnceLock<ByClass>; ColorSource::COUNT],
     resolve: OnceLock<wgpu::ComputePipeline>,
-}
-
-/// A compute-stage entry of `slot`: a storage buffer (read-only or not) of at least
-/// `min_size` bytes.
-fn storage(slot: Slot, read_only: bool, min_size: u64) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding: slot.binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: wgpu::BufferSize::new(min_size),
-        },
-        count: None,
-    }
+    /// The raster passes' shader module, parsed once for all their pipelines.
+    shader: OnceLock<wgpu::ShaderModule>,
 }
 
 /// A compute-stage entry of `slot`: a write-only storage texture of `format`.
@@ -145,6 +133,7 @@ impl ComputeRaster {
             points: OnceLock::new(),
             attributes: Default::default(),
             resolve: OnceLock::new(),
+            shader: OnceLock::new(),
         }
     }
 
@@ -175,7 +164,7 @@ impl ComputeRaster {
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some("raster"),
                 layout: Some(&self.raster_layout),
-                module: &module(&self.device, "raster"),
+                module: self.shader.get_or_init(|| module(&self.device, "raster")),
                 entry_point: Some("raster"),
                 compilation_options: wgpu::PipelineCompilationOptions {
                     constants: &constants,
