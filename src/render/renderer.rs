@@ -147,10 +147,7 @@ impl Renderer {
         if settings.mode == Mode::Mesh && gpu_scene.mesh.is_none() {
             anyhow::bail!("mesh mode needs a model with faces, read from its PLY file");
         }
-        let rasterized = self.rasterized(settings)?;
-        if rasterized {
-            self.raster.check_size(targets.size)?;
-        }
+        let rasterized = self.rasterized(settings, targets.size)?;
         let compute =
             (settings.culling == Culling::Compute || rasterized) && settings.mode != Mode::Mesh;
         let frame = plan(scene, camera, settings, targets.size, gpu_scene, compute);
@@ -192,18 +189,27 @@ impl Renderer {
         }
     }
 
-    /// Whether `settings` draw the splat passes in compute; an error where they ask
-    /// for it on an adapter without it.
-    fn rasterized(&self, settings: &Settings) -> anyhow::Result<bool> {
-        let asked = self.raster(settings.raster) == Raster::Compute && settings.mode != Mode::Mesh;
-        if asked && !self.gpu.compute_raster {
+    /// Whether `settings` draw the splat passes of a `size` frame in compute: an error
+    /// where they ask for it and the adapter cannot (no storage textures of the
+    /// G-buffer's formats, or per-pixel buffers larger than it binds); [`Raster::Auto`]
+    /// then draws through the raster pipeline.
+    fn rasterized(&self, settings: &Settings, size: (u32, u32)) -> anyhow::Result<bool> {
+        let chosen = self.raster(settings.raster) == Raster::Compute && settings.mode != Mode::Mesh;
+        if !chosen {
+            return Ok(false);
+        }
+        let fits = self.raster.check_size(size);
+        if settings.raster == Raster::Auto {
+            return Ok(fits.is_ok());
+        }
+        if !self.gpu.compute_raster {
             anyhow::bail!(
                 "this adapter ({}) cannot draw the splats in compute (no storage textures \
                  of the G-buffer's formats): use --raster hardware",
                 self.gpu.info.name
             );
         }
-        Ok(asked)
+        fits.map(|()| true)
     }
 
     /// `targets`' compute rasterizer buffers and pass 3's bind group of what they
