@@ -3,7 +3,8 @@
 //! [`crate::tree::scene::Scene`] (it imports tree and surfel, and of io only the data
 //! model; files are opened through the tree). One module per pass, each with its
 //! layouts, pipeline, encoding and WGSL (`shaders/`, composed by [`shaders`]; the bind
-//! slots they share in [`bindings`]; the splat passes behind [`splat_path`]):
+//! slots they share in [`bindings`]; the splat passes through the raster pipeline
+//! ([`splats`]) or in compute ([`raster`]), both writing the G-buffer that shading reads):
 //!
 //! ```text
 //! plan ─► cull ─► splats (visibility, attributes; or points) | mesh ─► shading
@@ -33,7 +34,6 @@ pub mod residency;
 pub(crate) mod settings;
 mod shaders;
 mod shading;
-mod splat_path;
 mod splats;
 mod streamed;
 mod targets;

@@ -25,7 +25,6 @@ use super::gbuffer::{ADD, GBuffer, Writes, color_targets, depth_state, target};
 use super::gpu_scene::Share;
 use super::settings::Mode;
 use super::shaders::{ColorSource, QuadReach, SplatClass, module};
-use super::splat_path::SplatPath;
 use super::targets::{FrameTargets, stamp};
 use crate::io::geometry::PointAttributes;
 use crate::surfel::shape::SplatShape;
@@ -345,10 +344,13 @@ impl SplatPasses {
     }
 }
 
-/// The splat passes through the raster pipeline: each pass one render pass over the
-/// G-buffer, its pipelines drawing every slice's share.
-impl SplatPath for SplatPasses {
-    fn encode(
+impl SplatPasses {
+    /// Records the splat passes of display mode `mode` (points, or visibility then
+    /// attributes) for the nodes of `shares`, each pass one render pass over the
+    /// G-buffer, its pipelines drawing every slice's share: after compute culling
+    /// (`compacted`) each slice's survivor lists, else every node of its ranges, tested
+    /// as it is drawn. Writes the passes' timestamps into `targets`' queries.
+    pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &FrameTargets,
