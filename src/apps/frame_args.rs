@@ -5,7 +5,7 @@ use anyhow::bail;
 use glam::{DVec3, Vec3};
 
 use crate::io::up::UpAxis;
-use crate::render::{Camera, Culling, Mode, OrbitAxes, Raster, Settings};
+use crate::render::{Camera, Culling, Mode, OrbitAxes, PrefixCut, Raster, Settings};
 use crate::tree::TreeMeta;
 use crate::tree::scene::Scene;
 
@@ -70,6 +70,11 @@ pub struct RenderArgs {
     /// rasterization (docs/gpu.md); auto: compute on a GPU, hardware on a CPU adapter.
     #[arg(long, value_enum, default_value = "auto")]
     pub raster: Raster,
+    /// Where the CPU ends each chunk's prefix: at the node (it reads the nodes of the
+    /// last block) or at the block of 64 (the GPU tests the rest); auto: node on a CPU
+    /// adapter, block on a GPU. Both draw the same picture.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub prefix_cut: PrefixCut,
     /// Render this many frames of the same view and report median and p95 times (the
     /// image of the last one is written).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=10_000))]
@@ -142,6 +147,7 @@ impl RenderArgs {
             background: self.background.map(|c| c.clamp(0.0, 1.0) as f32),
             culling: self.culling,
             raster: self.raster,
+            prefix_cut: self.prefix_cut,
             edl_strength: self.edl_strength.clamp(0.0, 100.0),
             edl_radius_px: self.edl_radius.clamp(0.5, 16.0),
             ..Settings::default()
@@ -213,6 +219,17 @@ impl clap::ValueEnum for Mode {
 impl clap::ValueEnum for Raster {
     fn value_variants<'a>() -> &'a [Self] {
         &Raster::CHOICES
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()).help(self.description()))
+    }
+}
+
+/// `--prefix-cut`'s values, by their names.
+impl clap::ValueEnum for PrefixCut {
+    fn value_variants<'a>() -> &'a [Self] {
+        &PrefixCut::CHOICES
     }
 
     fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {

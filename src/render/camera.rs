@@ -267,14 +267,12 @@ impl Camera {
     pub fn view_cone(&self, meta: &TreeMeta, aspect: f64) -> ViewCone {
         let (right, up, forward) = self.axes();
         let tan_y = (self.fov_y * 0.5).tan();
-        ViewCone {
-            eye: self.eye - DVec3::from(meta.origin),
-            right,
-            up,
-            forward,
-            tan_half_fov: [tan_y * aspect, tan_y],
-            near: self.near_plane(meta, aspect),
-        }
+        ViewCone::new(
+            self.eye - DVec3::from(meta.origin),
+            [right, up, forward],
+            [tan_y * aspect, tan_y],
+            self.near_plane(meta, aspect),
+        )
     }
 
     /// World-aligned camera-relative → view space (rotation only), f32.

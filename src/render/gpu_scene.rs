@@ -54,9 +54,6 @@ pub struct GpuScene {
     pub(super) slice_nodes: usize,
     pub(super) total: usize,
     resident_bytes: u64,
-    /// The ε the last frame raised its own to, where slices were missing: where the
-    /// next frame's search starts (`plan.rs`).
-    pub(super) last_fit: std::cell::Cell<Option<f64>>,
 }
 
 /// One slice uploaded, to be added with [`GpuScene::insert`].
@@ -86,7 +83,6 @@ impl GpuScene {
             slice_nodes,
             total,
             resident_bytes: 0,
-            last_fit: std::cell::Cell::new(None),
         }
     }
 
@@ -131,6 +127,16 @@ impl GpuScene {
     /// Whether every node of `r` is on the GPU.
     pub fn covers(&self, r: &Range<usize>) -> bool {
         self.slices_of(r).all(|k| self.is_resident(k))
+    }
+
+    /// Nodes on the GPU from list index `start` on, up to `count`: the run of resident
+    /// slices that starts with `start`'s.
+    pub fn resident_run(&self, start: usize, count: usize) -> usize {
+        let mut end = start;
+        while end < start + count && self.is_resident(end / self.slice_nodes) {
+            end = self.slice_range(end / self.slice_nodes).end;
+        }
+        end.min(start + count) - start
     }
 
     /// The parts of `ranges` that are on the GPU.
@@ -184,15 +190,18 @@ impl GpuScene {
         self.mesh = Some(mesh.0);
     }
 
-    /// Each resident slice with its share of `ranges` (list indices, ascending; the
-    /// parts in slices not resident are left out).
+    /// Each resident slice with its share of `ranges` (list indices, ascending and
+    /// disjoint; the parts in slices not resident are left out). Each slice's ranges are
+    /// found by binary search: a frame of tens of thousands of ranges over hundreds of
+    /// slices reads each range about once.
     pub(super) fn shares(&self, ranges: &[Range<usize>]) -> Vec<Share<'_>> {
         self.resident()
             .map(|slice| {
                 let (first, end) = (slice.first, slice.first + slice.count as usize);
-                let local: Vec<Range<u32>> = ranges
+                let from = ranges.partition_point(|r| r.end <= first);
+                let local: Vec<Range<u32>> = ranges[from..]
                     .iter()
-                    .filter(|r| r.start < end && r.end > first)
+                    .take_while(|r| r.start < end)
                     .map(|r| (r.start.max(first) - first) as u32..(r.end.min(end) - first) as u32)
                     .collect();
                 Share {

@@ -47,6 +47,6 @@ pub use gpu::Gpu;
 pub use gpu_scene::{GpuScene, MeshUpload, SliceUpload};
 pub use plan::EncodedFrame;
 pub use renderer::{FrameStats, Image, Renderer};
-pub use settings::{Culling, Mode, Raster, Settings};
+pub use settings::{Culling, Mode, PrefixCut, Raster, Settings};
 pub use shaders::module as shader_module;
 pub use targets::{FrameTargets, OUTPUT, OUTPUT_GAMMA};

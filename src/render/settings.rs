@@ -174,6 +174,47 @@ impl Raster {
     }
 }
 
+/// Where the CPU ends each chunk's prefix (docs/viewer.md); each choice:
+/// [`PrefixCut::description`]. Either draws the same picture: the GPU's test rejects
+/// the nodes past the exact end.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum PrefixCut {
+    /// [`PrefixCut::Node`] on a CPU adapter, [`PrefixCut::Block`] on a GPU
+    /// ([`crate::render::Renderer::trims_prefixes`]).
+    Auto,
+    Node,
+    Block,
+}
+
+impl PrefixCut {
+    /// What `--prefix-cut` takes.
+    pub const CHOICES: [PrefixCut; 3] = [PrefixCut::Auto, PrefixCut::Node, PrefixCut::Block];
+
+    /// The choice's name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            PrefixCut::Auto => "auto",
+            PrefixCut::Node => "node",
+            PrefixCut::Block => "block",
+        }
+    }
+
+    /// What the choice does, in one line.
+    pub fn description(self) -> &'static str {
+        match self {
+            PrefixCut::Auto => "Node on a CPU adapter (lavapipe, llvmpipe), block on a GPU",
+            PrefixCut::Node => {
+                "At the node: the CPU searches the nodes of each prefix's last block (reads \
+                 nodes; the GPU tests no node past the exact end)"
+            }
+            PrefixCut::Block => {
+                "At the block of 64 nodes: the CPU reads only its index; the GPU tests up \
+                 to 63 nodes more per chunk"
+            }
+        }
+    }
+}
+
 /// How a frame is drawn.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
@@ -191,6 +232,8 @@ pub struct Settings {
     /// How the splat passes draw; [`Raster::Compute`] culls in compute whatever
     /// `culling` says (it draws the survivor lists).
     pub raster: Raster,
+    /// Where the CPU ends each chunk's prefix.
+    pub prefix_cut: PrefixCut,
     /// The eye the level of detail is chosen for (file coordinates) when it is frozen
     /// while the camera moves; None: the camera's own eye.
     pub lod_eye: Option<DVec3>,
@@ -212,6 +255,7 @@ impl Default for Settings {
             background: [1.0, 1.0, 1.0],
             culling: Culling::Compute,
             raster: Raster::Auto,
+            prefix_cut: PrefixCut::Auto,
             lod_eye: None,
             edl_strength: 1.0,
             edl_radius_px: 1.5,

@@ -58,7 +58,8 @@ impl Renderer {
         size: (u32, u32),
     ) {
         loop {
-            let frame = plan(scene, camera, settings, size, gpu, false);
+            // Only the slices it wants: no prefix need be trimmed.
+            let frame = plan(scene, camera, settings, size, gpu, (false, false));
             let bytes_of = |k| self.slice_bytes(scene, gpu, k);
             let decision = residency.after_frame(&frame.wanted_slices, bytes_of, usize::MAX);
             for &k in &decision.evict {

@@ -36,6 +36,9 @@ use super::chunks::Chunk;
 use super::record::decode;
 use super::{NodeRecord, TreeMeta};
 
+mod fit;
+mod within;
+
 /// Nodes per block of the suffix maximum of δ.
 pub const BLOCK: usize = 64;
 
@@ -57,18 +60,38 @@ pub struct ViewCone {
     pub up: DVec3,
     pub forward: DVec3,
     pub tan_half_fov: [f64; 2],
+    /// √(1 + t²) of each tangent: a sphere's reach across a side plane per unit radius.
+    secants: [f64; 2],
     pub near: f64,
 }
 
 impl ViewCone {
+    /// The cone of a view from `eye` along unit axes `[right, up, forward]`, with
+    /// tangents `tan_half_fov` of its half fields of view and its near plane.
+    pub fn new(
+        eye: DVec3,
+        [right, up, forward]: [DVec3; 3],
+        tan_half_fov: [f64; 2],
+        near: f64,
+    ) -> Self {
+        ViewCone {
+            eye,
+            right,
+            up,
+            forward,
+            tan_half_fov,
+            secants: tan_half_fov.map(|t| (1.0 + t * t).sqrt()),
+            near,
+        }
+    }
+
     /// Whether a sphere may be seen (false only when the GPU's test would cull every
     /// splat inside it; 10⁻⁴ of slack for its f32 arithmetic).
     pub fn sees_sphere(&self, centre: DVec3, r: f64) -> bool {
         let v = centre - self.eye;
         let (x, y, depth) = (v.dot(self.right), v.dot(self.up), v.dot(self.forward));
         let r = r + 1e-4 * (v.length() + r);
-        let [tx, ty] = self.tan_half_fov;
-        let (sx, sy) = ((1.0 + tx * tx).sqrt(), (1.0 + ty * ty).sqrt());
+        let ([tx, ty], [sx, sy]) = (self.tan_half_fov, self.secants);
         depth + r >= self.near && x.abs() - r * sx <= tx * depth && y.abs() - r * sy <= ty * depth
     }
 
@@ -85,20 +108,40 @@ impl ViewCone {
 /// Consecutive chunks per page: a frame tests a page's bounds before its chunks'.
 pub const PAGE: usize = 64;
 
-/// The bounds of a page of [`PAGE`] consecutive chunks (which lie close together: the
-/// list orders the chunks of a level band in the hierarchy's spatial order), as one
-/// [`Chunk`]: skipping a page skips its chunks, whose bounds lie within its own.
-fn page_of(chunks: &[Chunk]) -> Chunk {
-    let mut page = chunks[0];
+/// A page of [`PAGE`] consecutive chunks (which lie close together: the list orders the
+/// chunks of a level band in the hierarchy's spatial order): what a frame tests to skip
+/// them all.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Page {
+    /// The union of the chunks' boxes, radii and least errors, as one [`Chunk`]: a page
+    /// too coarse or unseen has only such chunks.
+    bounds: Chunk,
+    /// The largest first-block head and first-block δ suffix maximum (each its chunk's
+    /// largest e_parent and δ) of the chunks, f16 bits: with the eye at d from the
+    /// page's box, every chunk's prefix is empty when head ≤ ε (d − δ) (the block test
+    /// of [`PrefixIndex::prefix_bound`] holds for each one's first block).
+    head: u16,
+    delta: u16,
+}
+
+/// The [`Page`] of `chunks`, whose first blocks' heads and δ suffix maxima are
+/// `firsts`.
+fn page_of(chunks: &[Chunk], firsts: impl Iterator<Item = (u16, u16)>) -> Page {
+    let mut bounds = chunks[0];
     for c in &chunks[1..] {
         for k in 0..3 {
-            page.centre_min[k] = page.centre_min[k].min(c.centre_min[k]);
-            page.centre_max[k] = page.centre_max[k].max(c.centre_max[k]);
+            bounds.centre_min[k] = bounds.centre_min[k].min(c.centre_min[k]);
+            bounds.centre_max[k] = bounds.centre_max[k].max(c.centre_max[k]);
         }
-        page.radius_max = page.radius_max.max(c.radius_max);
-        page.error_min = page.error_min.min(c.error_min);
+        bounds.radius_max = bounds.radius_max.max(c.radius_max);
+        bounds.error_min = bounds.error_min.min(c.error_min);
     }
-    page
+    let (head, delta) = firsts.fold((0, 0), |(h, d), (head, delta)| (h.max(head), d.max(delta)));
+    Page {
+        bounds,
+        head,
+        delta,
+    }
 }
 
 /// Distances from `eye` to the nearest and farthest points of a chunk's box of centres.
@@ -117,7 +160,7 @@ fn distances(chunk: &Chunk, eye: DVec3) -> (f64, f64) {
 #[derive(Debug, Clone, PartialEq)]
 pub struct PrefixIndex {
     chunks: Vec<Chunk>,
-    pages: Vec<Chunk>,
+    pages: Vec<Page>,
     error_scale: f32,
     /// The suffix maxima of all chunks' blocks, f16 bits of δ / error scale; chunk c's
     /// start at `block_at[c]`.
@@ -266,9 +309,20 @@ impl PrefixIndex {
             block_at.push(at);
             at += (c.count as usize).div_ceil(BLOCK);
         }
+        // A chunk of no node has no block: it adds nothing to its page's largest.
+        let first = |c: usize| match chunks[c].count {
+            0 => (0, 0),
+            _ => (heads[block_at[c]], delta_suffix[block_at[c]]),
+        };
+        let pages = (0..chunks.len().div_ceil(PAGE))
+            .map(|p| {
+                let range = p * PAGE..((p + 1) * PAGE).min(chunks.len());
+                page_of(&chunks[range.clone()], range.map(first))
+            })
+            .collect();
         Ok(PrefixIndex {
             chunks: chunks.to_vec(),
-            pages: chunks.chunks(PAGE).map(page_of).collect(),
+            pages,
             error_scale: meta.error_scale,
             delta_suffix,
             heads,
@@ -288,6 +342,15 @@ impl PrefixIndex {
 
     pub fn chunks(&self) -> &[Chunk] {
         &self.chunks
+    }
+
+    /// Whether the frame skips every chunk of `page`, seen from `eye`: all too coarse
+    /// or unseen ([`PrefixIndex::skipped`]), or all too fine (each one's prefix empty).
+    fn page_skipped(&self, page: &Page, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> bool {
+        let (d_min, d_max) = distances(&page.bounds, eye);
+        let scale = self.error_scale;
+        self.skipped(&page.bounds, (d_min, d_max), eps, cone)
+            || decode(page.head, scale) <= eps * (d_min - decode(page.delta, scale))
     }
 
     /// Whether the frame skips `chunk` (or page) whole, its distances from the eye
@@ -321,18 +384,28 @@ impl PrefixIndex {
     /// A prefix of chunk `c` (eye at `d_min` from its box) that holds the exact one,
     /// from the index alone: up to the first block whose head is beyond, so at most a
     /// block longer than [`PrefixIndex::chunk_prefix`]. (Every node of a block beyond
-    /// is: its e_parent is at most the head's, its Δ the block's.)
+    /// is: its e_parent is at most the head's, its Δ the block's.) Most chunks of a
+    /// view are drawn from none or all of their blocks: the first and last blocks are
+    /// tested before the search between them.
     fn prefix_bound(&self, c: usize, d_min: f64, eps: f64) -> usize {
         let heads = &self.heads[self.block_at[c]..];
         let count = self.chunks[c].count as usize;
-        let (mut lo, mut hi) = (0, count.div_ceil(BLOCK));
-        while lo < hi {
-            let mid = lo + (hi - lo) / 2;
-            if self.beyond(c, mid * BLOCK, heads[mid], d_min, eps) {
-                hi = mid
-            } else {
-                lo = mid + 1
-            }
+        let blocks = count.div_ceil(BLOCK);
+        let beyond = |b: usize| self.beyond(c, b * BLOCK, heads[b], d_min, eps);
+        if blocks == 0 || beyond(0) {
+            return 0;
+        }
+        if !beyond(blocks - 1) {
+            return count;
+        }
+        // The first block beyond lies in [lo, lo + n), from [1, blocks − 1); halving n
+        // with a select rather than a branch on the test, whose outcome a CPU cannot
+        // predict.
+        let (mut lo, mut n) = (1, blocks - 1);
+        while n > 1 {
+            let half = n / 2;
+            lo = if beyond(lo + half - 1) { lo } else { lo + half };
+            n -= half;
         }
         (lo * BLOCK).min(count)
     }
@@ -376,11 +449,7 @@ impl PrefixIndex {
     /// [`PrefixIndex::ranges`] from the index alone (no node read): each chunk's prefix
     /// rounded up to its block, a superset of the exact ranges.
     pub fn ranges_bound(&self, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> Vec<Range<usize>> {
-        let mut out = Vec::new();
-        for p in self.prefixes(eye, eps, cone) {
-            push_range(&mut out, p.start, p.bound);
-        }
-        out
+        self.prefixes(eye, eps, cone).bounds()
     }
 
     /// In one pass, [`PrefixIndex::ranges_bound`] and the ranges with each chunk's
@@ -394,19 +463,29 @@ impl PrefixIndex {
         cone: Option<&ViewCone>,
         refine: impl Fn(Range<usize>) -> bool,
     ) -> (Vec<Range<usize>>, Vec<Range<usize>>) {
-        let prefixes = self.prefixes(eye, eps, cone);
+        self.refined(&self.prefixes(eye, eps, cone), nodes, refine)
+    }
+
+    /// [`PrefixIndex::ranges_refined`] of the chunks' prefix bounds `prefixes`.
+    pub fn refined(
+        &self,
+        prefixes: &Prefixes,
+        nodes: &[NodeRecord],
+        refine: impl Fn(Range<usize>) -> bool,
+    ) -> (Vec<Range<usize>>, Vec<Range<usize>>) {
+        let Prefixes {
+            eps,
+            list: prefixes,
+        } = prefixes;
+        let eps = *eps;
         let exact: Vec<bool> = prefixes
             .iter()
             .map(|p| refine(p.start..p.start + p.bound))
             .collect();
         let lengths: Vec<usize> = prefixes
-            .par_iter()
-            .zip(&exact)
-            .with_min_len(PARALLEL_CHUNKS)
-            .map(|(p, &exact)| match exact {
-                true => self.prefix_within(p.chunk, nodes, p.d_min, eps, p.bound),
-                false => p.bound,
-            })
+            .par_chunks(PARALLEL_CHUNKS)
+            .zip(exact.par_chunks(PARALLEL_CHUNKS))
+            .flat_map_iter(|(group, exact)| self.prefixes_within(group, exact, nodes, eps))
             .collect();
         let (mut bounds, mut refined) = (Vec::new(), Vec::new());
         for (p, n) in prefixes.iter().zip(lengths) {
@@ -416,19 +495,17 @@ impl PrefixIndex {
         (bounds, refined)
     }
 
-    /// The chunks the view may need, in list order, with their prefix bounds (> 0).
-    /// Pages of chunks are searched in parallel: a city tile's view meets tens of
-    /// thousands of chunks, about 0.1 µs each.
-    fn prefixes(&self, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> Vec<Prefix> {
+    /// The chunks the view from `eye` (culled by `cone`) may need at `eps`, with their
+    /// prefix bounds. Pages of chunks are searched in parallel: a city tile's view
+    /// meets tens of thousands of chunks.
+    pub fn prefixes(&self, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> Prefixes {
         let chunks_of = |p: usize| p * PAGE..((p + 1) * PAGE).min(self.chunks.len());
-        (0..self.pages.len())
+        let list = (0..self.pages.len())
             .into_par_iter()
-            .filter(|&p| {
-                let page = &self.pages[p];
-                !self.skipped(page, distances(page, eye), eps, cone)
-            })
+            .filter(|&p| !self.page_skipped(&self.pages[p], eye, eps, cone))
             .flat_map_iter(|p| chunks_of(p).filter_map(move |c| self.prefix_of(c, eye, eps, cone)))
-            .collect()
+            .collect();
+        Prefixes { eps, list }
     }
 
     /// Chunk c's [`Prefix`], when the view may need any of it.
@@ -458,6 +535,30 @@ struct Prefix {
     start: usize,
     d_min: f64,
     bound: usize,
+}
+
+/// The chunks a view may need at `eps`, in list order, each with its prefix bound
+/// (> 0): what [`PrefixIndex::prefixes`] finds, for [`PrefixIndex::refined`] and
+/// [`PrefixIndex::least_fitting_eps`].
+pub struct Prefixes {
+    eps: f64,
+    list: Vec<Prefix>,
+}
+
+impl Prefixes {
+    /// The ε they were found for.
+    pub fn eps(&self) -> f64 {
+        self.eps
+    }
+
+    /// Their bounds as list ranges ([`PrefixIndex::ranges_bound`]).
+    pub fn bounds(&self) -> Vec<Range<usize>> {
+        let mut out = Vec::new();
+        for p in &self.list {
+            push_range(&mut out, p.start, p.bound);
+        }
+        out
+    }
 }
 
 /// Appends the range of `n` nodes from `start` to `out` (ascending), joined to the last

@@ -22,7 +22,7 @@ use crate::common;
 use spt::apps::cloud_quality::{CloudAndReference, Triangulation, ViewFigures, measure};
 use spt::apps::stats::quantile;
 use spt::eval::perceptual::{downsample, flip_mean};
-use spt::render::{Camera, Image, Mode, Raster, Settings};
+use spt::render::{Camera, Image, Mode, PrefixCut, Raster, Settings};
 use spt::tree::scene::Scene;
 
 /// How much higher the compute path's median FLIP may be than the raster path's: 2 %.
@@ -217,5 +217,53 @@ fn a_frame_drawn_in_compute_is_the_same_bytes_every_time() {
         assert!(covered(&first) > 256 * 256 / 10, "{what}: drawn");
         assert!(first.rgba == second.rgba, "{what}: two frames differ");
         assert!(first.depth == second.depth, "{what}: depths differ");
+    }
+}
+
+/// Ending each chunk's prefix at its block rather than its node hands the GPU more
+/// nodes to test and draws the same bytes: the GPU's test rejects every node past the
+/// exact end (compute rasterization, whose frames do not depend on the order of the
+/// survivors).
+#[test]
+fn a_prefix_cut_at_the_block_draws_what_one_cut_at_the_node_draws() {
+    if !common::renderer().gpu.compute_raster {
+        return;
+    }
+    let mut cases = vec![(Scene::open(&common::default_model()).unwrap(), "knot")];
+    if let Some(dir) = common::shared_data() {
+        cases.push((
+            Scene::open(&dir.join("terrain_utm.ply")).unwrap(),
+            "terrain_utm",
+        ));
+    }
+    let r = common::renderer();
+    for (scene, what) in cases {
+        let gpu = r.upload(&scene);
+        let camera = Camera::orbit(scene.meta(), 30.0, 30.0, 1.6, 45f64.to_radians());
+        let frame = |prefix_cut| {
+            let settings = Settings {
+                raster: Raster::Compute,
+                prefix_cut,
+                ..Settings::default()
+            };
+            r.render(&scene, &gpu, &camera, &settings, 256, 256)
+                .unwrap()
+        };
+        let ((node, node_stats), (block, block_stats)) =
+            (frame(PrefixCut::Node), frame(PrefixCut::Block));
+        eprintln!(
+            "{what}: nodes tested, cut at the node {}, at the block {}",
+            node_stats.tested, block_stats.tested
+        );
+        assert!(
+            block_stats.tested > node_stats.tested,
+            "{what}: the block cut tests more"
+        );
+        assert_eq!(
+            block_stats.selected, node_stats.selected,
+            "{what}: survivors"
+        );
+        assert!(node.rgba == block.rgba, "{what}: the pictures differ");
+        assert!(node.depth == block.depth, "{what}: depths differ");
     }
 }

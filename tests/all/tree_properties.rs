@@ -59,6 +59,61 @@ fn check_bounds(list: &spt::tree::SequentialList, views: &[(glam::DVec3, f64)]) 
         assert!(exact.iter().all(|r| inside[r.clone()].iter().all(|&b| b)));
         let (e, b) = (tested(&exact), tested(&bound));
         assert!(b < e + BLOCK * list.chunks.len().max(1), "{b} against {e}");
+        // The searches of a frame, run in lockstep, end where each chunk's own does.
+        for (c, chunk) in list.chunks.iter().enumerate() {
+            let within = overlap(&exact, chunk.range());
+            if within > 0 {
+                assert_eq!(within, view.index.chunk_prefix(c, &list.nodes, eye, eps));
+            }
+        }
+        check_fit(&view, eye, eps);
+    }
+}
+
+/// Nodes of `ranges` within `r`.
+fn overlap(ranges: &[std::ops::Range<usize>], r: std::ops::Range<usize>) -> usize {
+    let overlap =
+        |q: &std::ops::Range<usize>| q.end.min(r.end).saturating_sub(q.start.max(r.start));
+    ranges.iter().map(overlap).sum()
+}
+
+/// With a third of each chunk loaded (and its first block, which holds a root's
+/// infinite parent error), the least fitting ε's prefix bounds lie in it, and just
+/// below that ε they do not (unless it is the asked one). Chunks the eye is within reach
+/// of need more at any ε; they are left out.
+fn check_fit(view: &TreeView, eye: glam::DVec3, eps: f64) {
+    let chunks = view.index.chunks();
+    let loaded = |_start: usize, count: usize| (count / 3).max(BLOCK);
+    let fitting = |e: f64| {
+        let bounds = view.index.ranges_bound(eye, e, None);
+        let fit = |c: &spt::tree::chunks::Chunk| {
+            overlap(&bounds, c.range()) <= loaded(0, c.count as usize)
+        };
+        chunks.iter().map(fit).collect::<Vec<bool>>()
+    };
+    let ever = fitting(1e300);
+    let fits = |e: f64| {
+        fitting(e)
+            .iter()
+            .zip(&ever)
+            .all(|(&now, &ever)| now || !ever)
+    };
+    let asked = view.index.prefixes(eye, eps, None);
+    let fit = view.index.least_fitting_eps(&asked, loaded);
+    assert!(fit >= eps);
+    // Chunks too coarse at ε may enter at the fitting ε: the renderer then fits again.
+    let again = view
+        .index
+        .least_fitting_eps(&view.index.prefixes(eye, fit, None), loaded);
+    assert!(
+        fits(again),
+        "ε {eps} raised to {fit}, then {again}: the bounds do not fit"
+    );
+    if again > eps * (1.0 + 1e-6) {
+        assert!(
+            !fits(again * (1.0 - 1e-6)),
+            "ε {again} is not the least that fits"
+        );
     }
 }
 
