@@ -96,7 +96,13 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     println!("raster    {}", renderer.raster(settings.raster).name());
     print_times(&mut gpu_ms, passes_ms, &mut wall_ms, stats.selected);
     let plan = Summary::of(&mut plan_ms).map_or(0.0, |s| s.median);
-    println!("cpu plan  {plan:.3} ms per frame (median): chunks in view, their prefixes");
+    let cut = match renderer.trims_prefixes(settings.prefix_cut) {
+        true => "node",
+        false => "block",
+    };
+    println!(
+        "cpu plan  {plan:.3} ms per frame (median): chunks in view, their prefixes cut at the {cut}"
+    );
     println!("wrote     {}", output.display());
     Ok(())
 }
