@@ -9,7 +9,7 @@ use super::input::Command;
 use super::viewer::{ERROR_PX_RANGE, Viewer};
 use crate::apps::text::count;
 use crate::render::residency::mib;
-use crate::render::{Culling, Mode, Raster};
+use crate::render::{Culling, Mode, PrefixCut, Raster};
 
 /// What the panel shows besides the viewer itself.
 pub struct PanelStatus<'a> {
@@ -229,6 +229,13 @@ fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
                 .on_hover_text(Raster::Compute.description());
         });
     }
+    ui.horizontal(|ui| {
+        ui.label("Prefix cut");
+        for cut in PrefixCut::CHOICES {
+            ui.radio_value(&mut s.prefix_cut, cut, cut.name())
+                .on_hover_text(cut.description());
+        }
+    });
     ui.horizontal(|ui| {
         ui.label("Background");
         ui.color_edit_button_rgb(&mut s.background);
