@@ -61,9 +61,9 @@ pub(super) fn fitting_eps(
     // prefix rounded up to its block; the drawn ranges are trimmed only where their
     // nodes are on the GPU, and so in memory.
     let index = &scene.index;
-    let drawn = |prefixes: &Prefixes| match trim {
-        true => gpu.clip(&index.refined(prefixes, scene.nodes(), |r| gpu.covers(&r)).1),
-        false => gpu.clip(&prefixes.bounds()),
+    let drawn = |prefixes: &Prefixes, bounds: &[Range<usize>]| match trim {
+        true => gpu.clip(&index.refined(prefixes, scene.nodes(), |r| gpu.covers(&r))),
+        false => gpu.clip(bounds),
     };
     let fits = |r: &[Range<usize>]| r.iter().all(|r| gpu.covers(r));
     let asked = index.prefixes(eye, eps, Some(cone));
@@ -72,20 +72,22 @@ pub(super) fn fitting_eps(
         return (eps, Vec::new(), wanted);
     }
     if fits(&wanted) {
-        return (eps, drawn(&asked), wanted);
+        let ranges = drawn(&asked, &wanted);
+        return (eps, ranges, wanted);
     }
-    let mut fitting = asked;
+    let (mut fitting, mut bounds) = (asked, wanted.clone());
     for _ in 0..FIT_ROUNDS {
         let raised = index.least_fitting_eps(&fitting, |start, n| gpu.resident_run(start, n));
         if raised == fitting.eps() {
             break;
         }
         fitting = index.prefixes(eye, raised, Some(cone));
-        if fits(&fitting.bounds()) {
+        bounds = fitting.bounds();
+        if fits(&bounds) {
             break;
         }
     }
-    (fitting.eps(), drawn(&fitting), wanted)
+    (fitting.eps(), drawn(&fitting, &bounds), wanted)
 }
 
 /// Plans a frame of `scene` seen by `camera` over `size` pixels, with what `gpu` holds

@@ -199,8 +199,8 @@ impl Renderer {
 
     /// Whether `cut` ends each prefix at its node: [`PrefixCut::Auto`] does on a CPU
     /// adapter only. Trimming costs the CPU a binary search in each prefix's last block
-    /// of nodes (memory-mapped, mostly cache misses: 0.4 µs a chunk, 8 ms on one core for
-    /// the 22,000 prefixes of a 200 M-point tile seen whole; docs/viewer.md) and saves
+    /// of nodes (memory-mapped, mostly cache misses: about 0.4 µs a chunk, 11.6 ms on one
+    /// core for the prefixes of a 200 M-point tile seen whole; docs/viewer.md) and saves
     /// the GPU's test of at most 63 nodes per chunk: a few nanoseconds on a GPU, about as
     /// much as the search on a CPU adapter, whose culling runs on the same cores.
     pub fn trims_prefixes(&self, cut: PrefixCut) -> bool {

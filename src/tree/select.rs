@@ -452,9 +452,9 @@ impl PrefixIndex {
         self.prefixes(eye, eps, cone).bounds()
     }
 
-    /// In one pass, [`PrefixIndex::ranges_bound`] and the ranges with each chunk's
-    /// prefix exact where `refine` says so of its bound (a list range) and the bound
-    /// elsewhere: nodes are read only there.
+    /// [`PrefixIndex::ranges_bound`] and the ranges with each chunk's prefix exact where
+    /// `refine` says so of its bound (a list range) and the bound elsewhere: nodes are
+    /// read only there.
     pub fn ranges_refined(
         &self,
         nodes: &[NodeRecord],
@@ -463,16 +463,18 @@ impl PrefixIndex {
         cone: Option<&ViewCone>,
         refine: impl Fn(Range<usize>) -> bool,
     ) -> (Vec<Range<usize>>, Vec<Range<usize>>) {
-        self.refined(&self.prefixes(eye, eps, cone), nodes, refine)
+        let prefixes = self.prefixes(eye, eps, cone);
+        (prefixes.bounds(), self.refined(&prefixes, nodes, refine))
     }
 
-    /// [`PrefixIndex::ranges_refined`] of the chunks' prefix bounds `prefixes`.
+    /// The ranges of `prefixes`, each chunk's prefix exact where `refine` says so of
+    /// its bound (a list range) and the bound elsewhere: nodes are read only there.
     pub fn refined(
         &self,
         prefixes: &Prefixes,
         nodes: &[NodeRecord],
         refine: impl Fn(Range<usize>) -> bool,
-    ) -> (Vec<Range<usize>>, Vec<Range<usize>>) {
+    ) -> Vec<Range<usize>> {
         let Prefixes {
             eps,
             list: prefixes,
@@ -487,12 +489,11 @@ impl PrefixIndex {
             .zip(exact.par_chunks(PARALLEL_CHUNKS))
             .flat_map_iter(|(group, exact)| self.prefixes_within(group, exact, nodes, eps))
             .collect();
-        let (mut bounds, mut refined) = (Vec::new(), Vec::new());
+        let mut refined = Vec::new();
         for (p, n) in prefixes.iter().zip(lengths) {
-            push_range(&mut bounds, p.start, p.bound);
             push_range(&mut refined, p.start, n);
         }
-        (bounds, refined)
+        refined
     }
 
     /// The chunks the view from `eye` (culled by `cone`) may need at `eps`, with their
