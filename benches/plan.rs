@@ -6,7 +6,10 @@
 //!
 //! `cargo bench --bench plan -- --noplot` on the default model; `SPT_BENCH_SPT=FILE`
 //! adds an `.spt` file of your choice, opened as the viewer streams it (its nodes
-//! memory-mapped), such as the 200 M-point tile of `tools/gen_cloud.rs`. Threads:
+//! memory-mapped), such as the 200 M-point tile of `tools/gen_cloud.rs`. With only the
+//! list's first tenth loaded, a frame first finds the least ε that fits and the slices
+//! the asked one wants ([`spt::tree::select::PrefixIndex::fit`]), then searches the
+//! prefixes at that ε. Threads:
 //! `RAYON_NUM_THREADS`.
 
 use std::path::{Path, PathBuf};
@@ -42,6 +45,16 @@ fn plan(c: &mut Criterion) {
         });
         group.bench_function("cut at the node", |b| {
             b.iter(|| index.ranges_refined(scene.nodes(), cone.eye, eps, Some(&cone), |_| true))
+        });
+        // Under a GPU memory budget: the list's first tenth loaded, in slices of 2¹⁹
+        // nodes (about what a 2 GiB budget gives the 200 M-point tile).
+        let tenth = scene.nodes().len() / 10;
+        let loaded = |start: usize, count: usize| tenth.saturating_sub(start).min(count);
+        group.bench_function("first tenth loaded, cut at the block", |b| {
+            b.iter(|| {
+                let fit = index.fit(cone.eye, eps, Some(&cone), 1 << 19, loaded);
+                (index.prefixes(cone.eye, fit.eps, Some(&cone)).bounds(), fit)
+            })
         });
         group.finish();
     }

@@ -13,7 +13,7 @@ use super::camera::Camera;
 use super::gpu_scene::GpuScene;
 use super::settings::Settings;
 use crate::tree::scene::Scene;
-use crate::tree::select::{Prefixes, ViewCone, error_per_distance, tested};
+use crate::tree::select::{Fit, Prefixes, ViewCone, error_per_distance, tested};
 
 /// What the CPU decided for one recorded frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -40,16 +40,17 @@ pub struct EncodedFrame {
     pub plan_ms: f64,
 }
 
-/// Rounds of [`fitting_eps`]: each raises ε to fit the chunks found at the last; a
-/// round more is needed only where chunks too coarse at one ε enter at the next.
-const FIT_ROUNDS: usize = 4;
-
 /// The least ε ≥ `eps` whose ranges (seen from `eye`, chunks culled by `cone`) lie in
-/// the slices `gpu` holds ([`crate::tree::select::PrefixIndex::least_fitting_eps`]),
-/// those ranges, and the ranges at `eps`. Any ε gives a complete cut of the tree, so a
-/// frame drawn while slices are missing is coarser, never holed. (An eye within reach of
-/// a chunk not on the GPU needs part of it at any ε: the ranges are then cut to what is
+/// the slices `gpu` holds, those ranges, and what the asked `eps` wants (ranges whose
+/// slices are those of its prefixes). Any ε gives a complete cut of the tree, so a frame
+/// drawn while slices are missing is coarser, never holed. (An eye within reach of a
+/// chunk not on the GPU needs part of it at any ε: the ranges are then cut to what is
 /// there.) `trim`: end each drawn prefix at its node, not its block.
+///
+/// With every slice resident the prefixes at `eps` are all there is to find. Otherwise
+/// ε and the wanted slices come first, from block tests alone
+/// ([`crate::tree::select::PrefixIndex::fit`]), and prefixes are searched once, at the
+/// ε drawn: at a coarse ε most chunks end at their first block.
 pub(super) fn fitting_eps(
     scene: &Scene,
     (eye, cone): (DVec3, &ViewCone),
@@ -57,37 +58,23 @@ pub(super) fn fitting_eps(
     gpu: &GpuScene,
     trim: bool,
 ) -> (f64, Vec<Range<usize>>, Vec<Range<usize>>) {
-    // The fit reads no node (a streamed file's nodes are on disk): it fits each chunk's
-    // prefix rounded up to its block; the drawn ranges are trimmed only where their
-    // nodes are on the GPU, and so in memory.
+    // The fit reads no node (a streamed file's nodes are on disk): the drawn ranges are
+    // trimmed only where their nodes are on the GPU, and so in memory.
     let index = &scene.index;
-    let drawn = |prefixes: &Prefixes, bounds: &[Range<usize>]| match trim {
+    let drawn = |prefixes: &Prefixes| match trim {
         true => gpu.clip(&index.refined(prefixes, scene.nodes(), |r| gpu.covers(&r))),
-        false => gpu.clip(bounds),
+        false => gpu.clip(&prefixes.bounds()),
     };
-    let fits = |r: &[Range<usize>]| r.iter().all(|r| gpu.covers(r));
-    let asked = index.prefixes(eye, eps, Some(cone));
-    let wanted = asked.bounds();
+    if gpu.resident_slices() == gpu.planned_slices() {
+        let asked = index.prefixes(eye, eps, Some(cone));
+        return (eps, drawn(&asked), asked.bounds());
+    }
+    let loaded = |start, count| gpu.resident_run(start, count);
+    let Fit { eps: fit, wanted } = index.fit(eye, eps, Some(cone), gpu.slice_nodes, loaded);
     if gpu.resident_slices() == 0 {
         return (eps, Vec::new(), wanted);
     }
-    if fits(&wanted) {
-        let ranges = drawn(&asked, &wanted);
-        return (eps, ranges, wanted);
-    }
-    let (mut fitting, mut bounds) = (asked, wanted.clone());
-    for _ in 0..FIT_ROUNDS {
-        let raised = index.least_fitting_eps(&fitting, |start, n| gpu.resident_run(start, n));
-        if raised == fitting.eps() {
-            break;
-        }
-        fitting = index.prefixes(eye, raised, Some(cone));
-        bounds = fitting.bounds();
-        if fits(&bounds) {
-            break;
-        }
-    }
-    (fitting.eps(), drawn(&fitting, &bounds), wanted)
+    (fit, drawn(&index.prefixes(eye, fit, Some(cone))), wanted)
 }
 
 /// Plans a frame of `scene` seen by `camera` over `size` pixels, with what `gpu` holds

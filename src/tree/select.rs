@@ -39,6 +39,8 @@ use super::{NodeRecord, TreeMeta};
 mod fit;
 mod within;
 
+pub use fit::Fit;
+
 /// Nodes per block of the suffix maximum of δ.
 pub const BLOCK: usize = 64;
 
@@ -169,6 +171,10 @@ pub struct PrefixIndex {
     /// `delta_suffix`.
     heads: Vec<u16>,
     block_at: Vec<usize>,
+    /// Each chunk's first block's head and δ suffix maximum, decoded, side by side in
+    /// chunk order: the test that ends most chunks' searches reads them in sequence
+    /// rather than missing the cache in the per-block arrays.
+    firsts: Vec<(f64, f64)>,
 }
 
 /// The head of every block of [`BLOCK`] nodes of each chunk, chunk after chunk: the
@@ -320,6 +326,9 @@ impl PrefixIndex {
                 page_of(&chunks[range.clone()], range.map(first))
             })
             .collect();
+        let scale = meta.error_scale;
+        let decoded = |(head, delta)| (decode(head, scale), decode(delta, scale));
+        let firsts = (0..chunks.len()).map(|c| decoded(first(c))).collect();
         Ok(PrefixIndex {
             chunks: chunks.to_vec(),
             pages,
@@ -327,6 +336,7 @@ impl PrefixIndex {
             delta_suffix,
             heads,
             block_at,
+            firsts,
         })
     }
 
@@ -381,6 +391,12 @@ impl PrefixIndex {
         decode(e, self.error_scale) <= eps * (d_min - decode(delta, self.error_scale))
     }
 
+    /// Whether chunk c's first block is beyond (its prefix empty), seen from `d_min`.
+    fn first_beyond(&self, c: usize, d_min: f64, eps: f64) -> bool {
+        let (head, delta) = self.firsts[c];
+        head <= eps * (d_min - delta)
+    }
+
     /// A prefix of chunk `c` (eye at `d_min` from its box) that holds the exact one,
     /// from the index alone: up to the first block whose head is beyond, so at most a
     /// block longer than [`PrefixIndex::chunk_prefix`]. (Every node of a block beyond
@@ -392,7 +408,7 @@ impl PrefixIndex {
         let count = self.chunks[c].count as usize;
         let blocks = count.div_ceil(BLOCK);
         let beyond = |b: usize| self.beyond(c, b * BLOCK, heads[b], d_min, eps);
-        if blocks == 0 || beyond(0) {
+        if blocks == 0 || self.first_beyond(c, d_min, eps) {
             return 0;
         }
         if !beyond(blocks - 1) {
@@ -513,7 +529,8 @@ impl PrefixIndex {
     fn prefix_of(&self, c: usize, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> Option<Prefix> {
         let chunk = &self.chunks[c];
         let d = distances(chunk, eye);
-        if self.skipped(chunk, d, eps, cone) {
+        // Too fine (an empty prefix) is the cheaper test: before the cone's.
+        if self.first_beyond(c, d.0, eps) || self.skipped(chunk, d, eps, cone) {
             return None;
         }
         let bound = self.prefix_bound(c, d.0, eps);
@@ -540,7 +557,7 @@ struct Prefix {
 
 /// The chunks a view may need at `eps`, in list order, each with its prefix bound
 /// (> 0): what [`PrefixIndex::prefixes`] finds, for [`PrefixIndex::refined`] and
-/// [`PrefixIndex::least_fitting_eps`].
+/// the GPU's culling ranges.
 pub struct Prefixes {
     eps: f64,
     list: Vec<Prefix>,

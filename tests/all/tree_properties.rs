@@ -80,7 +80,8 @@ fn overlap(ranges: &[std::ops::Range<usize>], r: std::ops::Range<usize>) -> usiz
 /// With a third of each chunk loaded (and its first block, which holds a root's
 /// infinite parent error), the least fitting ε's prefix bounds lie in it, and just
 /// below that ε they do not (unless it is the asked one). Chunks the eye is within reach
-/// of need more at any ε; they are left out.
+/// of need more at any ε; they are left out. The wanted ranges lie in the same units of
+/// loading as the asked prefixes.
 fn check_fit(view: &TreeView, eye: glam::DVec3, eps: f64) {
     let chunks = view.index.chunks();
     let loaded = |_start: usize, count: usize| (count / 3).max(BLOCK);
@@ -98,23 +99,33 @@ fn check_fit(view: &TreeView, eye: glam::DVec3, eps: f64) {
             .zip(&ever)
             .all(|(&now, &ever)| now || !ever)
     };
-    let asked = view.index.prefixes(eye, eps, None);
-    let fit = view.index.least_fitting_eps(&asked, loaded);
-    assert!(fit >= eps);
-    // Chunks too coarse at ε may enter at the fitting ε: the renderer then fits again.
-    let again = view
-        .index
-        .least_fitting_eps(&view.index.prefixes(eye, fit, None), loaded);
+    // A unit of loading that is not a multiple of the block, so that slice boundaries
+    // fall inside blocks.
+    let unit = 3 * BLOCK / 2 + 7;
+    let fit = view.index.fit(eye, eps, None, unit, loaded);
+    assert!(fit.eps >= eps);
     assert!(
-        fits(again),
-        "ε {eps} raised to {fit}, then {again}: the bounds do not fit"
+        fits(fit.eps),
+        "ε {eps} raised to {}: the bounds do not fit",
+        fit.eps
     );
-    if again > eps * (1.0 + 1e-6) {
+    if fit.eps > eps * (1.0 + 1e-6) {
         assert!(
-            !fits(again * (1.0 - 1e-6)),
-            "ε {again} is not the least that fits"
+            !fits(fit.eps * (1.0 - 1e-6)),
+            "ε {} is not the least that fits",
+            fit.eps
         );
     }
+    let units = |ranges: &[std::ops::Range<usize>]| {
+        let mut k: Vec<usize> = ranges
+            .iter()
+            .flat_map(|r| r.start / unit..(r.end - 1) / unit + 1)
+            .collect();
+        k.dedup();
+        k
+    };
+    let asked = view.index.ranges_bound(eye, eps, None);
+    assert_eq!(units(&fit.wanted), units(&asked), "ε {eps}: wanted units");
 }
 
 fn check_model(g: &Geometry, what: &str, views: usize) {
