@@ -3,6 +3,7 @@
 //! vertex and index buffers. Made by `upload.rs`; drawn by the passes.
 
 use std::ops::Range;
+use std::sync::atomic::AtomicBool;
 
 /// One slice of the list on the GPU, with what compute culling needs.
 pub(super) struct Slice {
@@ -54,6 +55,9 @@ pub struct GpuScene {
     pub(super) slice_nodes: usize,
     pub(super) total: usize,
     resident_bytes: u64,
+    /// Whether the last frame planned found its asked ε's ranges all resident: the
+    /// next one searches at that ε first (`plan.rs`).
+    pub(super) asked_fitted: AtomicBool,
 }
 
 /// One slice uploaded, to be added with [`GpuScene::insert`].
@@ -83,6 +87,7 @@ impl GpuScene {
             slice_nodes,
             total,
             resident_bytes: 0,
+            asked_fitted: AtomicBool::new(true),
         }
     }
 

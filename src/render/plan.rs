@@ -6,6 +6,7 @@
 //! the frame says which slices the asked ε wanted, for the streaming to fetch.
 
 use std::ops::Range;
+use std::sync::atomic::Ordering;
 
 use glam::DVec3;
 
@@ -47,8 +48,9 @@ pub struct EncodedFrame {
 /// chunk not on the GPU needs part of it at any ε: the ranges are then cut to what is
 /// there.) `trim`: end each drawn prefix at its node, not its block.
 ///
-/// With every slice resident the prefixes at `eps` are all there is to find. Otherwise
-/// ε and the wanted slices come first, from block tests alone
+/// Where the last frame's asked ε fitted (every slice resident, say), the prefixes at
+/// `eps` come first, and are all there is to find if they fit. Otherwise ε and the
+/// wanted slices come first, from block tests alone
 /// ([`crate::tree::select::PrefixIndex::fit`]), and prefixes are searched once, at the
 /// ε drawn: at a coarse ε most chunks end at their first block.
 pub(super) fn fitting_eps(
@@ -65,12 +67,19 @@ pub(super) fn fitting_eps(
         true => gpu.clip(&index.refined(prefixes, scene.nodes(), |r| gpu.covers(&r))),
         false => gpu.clip(&prefixes.bounds()),
     };
-    if gpu.resident_slices() == gpu.planned_slices() {
+    let all = gpu.resident_slices() == gpu.planned_slices();
+    if all || gpu.asked_fitted.load(Ordering::Relaxed) {
         let asked = index.prefixes(eye, eps, Some(cone));
-        return (eps, drawn(&asked), asked.bounds());
+        let wanted = asked.bounds();
+        let fits = wanted.iter().all(|r| gpu.covers(r));
+        gpu.asked_fitted.store(fits, Ordering::Relaxed);
+        if fits {
+            return (eps, drawn(&asked), wanted);
+        }
     }
     let loaded = |start, count| gpu.resident_run(start, count);
     let Fit { eps: fit, wanted } = index.fit(eye, eps, Some(cone), gpu.slice_nodes, loaded);
+    gpu.asked_fitted.store(fit == eps, Ordering::Relaxed);
     if gpu.resident_slices() == 0 {
         return (eps, Vec::new(), wanted);
     }
