@@ -127,12 +127,19 @@ impl Gpu {
         })
     }
 
+    /// Whether the adapter is a CPU rasterizer (lavapipe, llvmpipe, WARP): its "GPU"
+    /// work runs on the cores that plan the frame, and branches spare work where a GPU's
+    /// lanes would wait.
+    pub fn on_cpu(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// Whether pass 2 reads pass 1's depth to leave out the coverage samples of pixels
     /// inside the picture's outlines (WGSL `SKIP_SURROUNDED_SAMPLES`): where it can
     /// ([`Gpu::read_only_depth`]) and where branches spare work, not on a CPU
     /// rasterizer. Knot at 512×512, pass 2: H100 −10 %, lavapipe +20 to +30 %.
     pub fn skips_surrounded_samples(&self) -> bool {
-        self.read_only_depth && self.info.device_type != wgpu::DeviceType::Cpu
+        self.read_only_depth && !self.on_cpu()
     }
 
     /// The format the viewer sees the output in, to draw its panel and to present it:

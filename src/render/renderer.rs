@@ -101,11 +101,7 @@ impl Renderer {
         Renderer {
             cull: CullPass::new(device, &frame_layout),
             splats: SplatPasses::new(&gpu, &frame_layout),
-            raster: ComputeRaster::new(
-                device,
-                &frame_layout,
-                gpu.info.device_type == wgpu::DeviceType::Cpu,
-            ),
+            raster: ComputeRaster::new(device, &frame_layout, gpu.on_cpu()),
             mesh: MeshPass::new(device, &frame_layout),
             shading: ShadingPass::new(device, &frame_layout),
             frame_layout,
@@ -189,9 +185,7 @@ impl Renderer {
     pub fn raster(&self, asked: Raster) -> Raster {
         let gpu = &self.gpu;
         match asked {
-            Raster::Auto if gpu.compute_raster && gpu.info.device_type != wgpu::DeviceType::Cpu => {
-                Raster::Compute
-            }
+            Raster::Auto if gpu.compute_raster && !gpu.on_cpu() => Raster::Compute,
             Raster::Auto => Raster::Hardware,
             chosen => chosen,
         }
@@ -205,7 +199,7 @@ impl Renderer {
     /// much as the search on a CPU adapter, whose culling runs on the same cores.
     pub fn trims_prefixes(&self, cut: PrefixCut) -> bool {
         match cut {
-            PrefixCut::Auto => self.gpu.info.device_type == wgpu::DeviceType::Cpu,
+            PrefixCut::Auto => self.gpu.on_cpu(),
             PrefixCut::Node => true,
             PrefixCut::Block => false,
         }
