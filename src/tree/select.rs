@@ -355,12 +355,22 @@ impl PrefixIndex {
     }
 
     /// Whether the frame skips every chunk of `page`, seen from `eye`: all too coarse
-    /// or unseen ([`PrefixIndex::skipped`]), or all too fine (each one's prefix empty).
+    /// or unseen ([`PrefixIndex::skipped`]), or all too fine.
     fn page_skipped(&self, page: &Page, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> bool {
-        let (d_min, d_max) = distances(&page.bounds, eye);
+        let d = distances(&page.bounds, eye);
+        self.skipped(&page.bounds, d, eps, cone) || self.page_too_fine(page, d.0, eps)
+    }
+
+    /// Whether every chunk of `page`, its box `d_min` from the eye, is too fine at
+    /// `eps` (each one's prefix empty), and so at any larger ε.
+    fn page_too_fine(&self, page: &Page, d_min: f64, eps: f64) -> bool {
         let scale = self.error_scale;
-        self.skipped(&page.bounds, (d_min, d_max), eps, cone)
-            || decode(page.head, scale) <= eps * (d_min - decode(page.delta, scale))
+        decode(page.head, scale) <= eps * (d_min - decode(page.delta, scale))
+    }
+
+    /// The chunks of page `p`.
+    fn page_chunks(&self, p: usize) -> Range<usize> {
+        p * PAGE..((p + 1) * PAGE).min(self.chunks.len())
     }
 
     /// Whether the frame skips `chunk` (or page) whole, its distances from the eye
@@ -516,11 +526,12 @@ impl PrefixIndex {
     /// prefix bounds. Pages of chunks are searched in parallel: a city tile's view
     /// meets tens of thousands of chunks.
     pub fn prefixes(&self, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> Prefixes {
-        let chunks_of = |p: usize| p * PAGE..((p + 1) * PAGE).min(self.chunks.len());
         let list = (0..self.pages.len())
             .into_par_iter()
             .filter(|&p| !self.page_skipped(&self.pages[p], eye, eps, cone))
-            .flat_map_iter(|p| chunks_of(p).filter_map(move |c| self.prefix_of(c, eye, eps, cone)))
+            .flat_map_iter(|p| {
+                (self.page_chunks(p)).filter_map(move |c| self.prefix_of(c, eye, eps, cone))
+            })
             .collect();
         Prefixes { eps, list }
     }

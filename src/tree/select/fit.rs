@@ -28,7 +28,7 @@ use std::ops::Range;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::{BLOCK, PAGE, PrefixIndex, ViewCone, distances};
+use super::{BLOCK, PrefixIndex, ViewCone, distances};
 use crate::tree::record::decode;
 
 /// Relative margin above each chunk's threshold, so that the block test, rounded, holds
@@ -61,12 +61,12 @@ impl PrefixIndex {
         unit: usize,
         loaded: impl Fn(usize, usize) -> usize + Sync,
     ) -> Fit {
-        let chunks_of = |p: usize| p * PAGE..((p + 1) * PAGE).min(self.chunks.len());
         let per_chunk: Vec<ChunkFit> = (0..self.pages.len())
             .into_par_iter()
             .filter(|&p| !self.page_unasked(p, eye, eps, cone))
             .flat_map_iter(|p| {
-                let fits = chunks_of(p).map(|c| self.chunk_fit(c, eye, eps, cone, unit, &loaded));
+                let chunks = self.page_chunks(p);
+                let fits = chunks.map(|c| self.chunk_fit(c, eye, eps, cone, unit, &loaded));
                 fits.filter(|f| f.0.is_some() || f.1.is_some())
             })
             .collect();
@@ -80,9 +80,7 @@ impl PrefixIndex {
     fn page_unasked(&self, p: usize, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> bool {
         let page = &self.pages[p];
         let d_min = distances(&page.bounds, eye).0;
-        let scale = self.error_scale;
-        cone.is_some_and(|v| !v.sees_chunk(&page.bounds))
-            || decode(page.head, scale) <= eps * (d_min - decode(page.delta, scale))
+        cone.is_some_and(|v| !v.sees_chunk(&page.bounds)) || self.page_too_fine(page, d_min, eps)
     }
 
     /// Chunk c's wanted range at `eps` (its prefix rounded up to `unit`s) and the
