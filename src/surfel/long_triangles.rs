@@ -140,6 +140,9 @@ pub struct Reach {
     /// Its semi-axes over the circumellipse's, which passes through the corners and
     /// covers the triangle with 4π / (3√3) ≈ 2.42 times its area; s² times that.
     pub scale: f64,
+    /// Its scale where the triangle is a wall (its unit normal's z under
+    /// [`WALL_NORMAL_Z`]).
+    pub wall_scale: f64,
     /// Its least minor / major semi-axis ([`super::shape::MIN_PACKED_RATIO`]: as thin
     /// as the triangle's circumellipse, up to what the format holds).
     pub min_ratio: f64,
@@ -161,6 +164,7 @@ impl Reach {
     /// the bound of 0.5 %, for FLIP 0.118 → 0.108).
     pub const CORNERS: Reach = Reach {
         scale: 1.0,
+        wall_scale: 1.0,
         min_ratio: MIN_RATIO,
         wall_colour_from_above: false,
     };
@@ -185,7 +189,8 @@ fn triangle_splat(corners: [Corner; 3], colored: bool, reach: Reach) -> Option<S
     let face = cross.normalize();
     let g = (a + b + c) / 3.0;
     let (major, r, ratio) = steiner_ellipse(face, [a, b, c]);
-    let r = r * reach.scale;
+    let wall = face.z.abs() < WALL_NORMAL_Z;
+    let r = r * if wall { reach.wall_scale } else { reach.scale };
     let shape = Shape::ellipse(face, major, ratio.max(reach.min_ratio));
     let at = |k: &Corner| (k.position, k.normal);
     let (normal, mut shape) = fit_field(
@@ -195,7 +200,7 @@ fn triangle_splat(corners: [Corner; 3], colored: bool, reach: Reach) -> Option<S
     )
     .unwrap_or((face, shape));
     let mut color = corners.iter().map(|k| k.color).sum::<DVec3>() / 3.0;
-    if reach.wall_colour_from_above && face.z.abs() < WALL_NORMAL_Z {
+    if reach.wall_colour_from_above && wall {
         color = colour_from_above(&corners);
     } else if colored {
         let at = |k: &Corner| (k.position, k.color);
@@ -355,6 +360,27 @@ mod tests {
         );
         assert!(s.covers(((a + b + c) / 3.0).as_vec3()));
         assert!(!s.covers((c + (a - c) * 0.1).as_vec3()), "the tip");
+    }
+
+    #[test]
+    fn a_wall_takes_the_wall_s_reach_and_a_level_needle_reaches_its_tip() {
+        // The same needle lying level and standing as a wall.
+        let level = [DVec3::ZERO, 4.0 * DVec3::X, DVec3::new(2.0, 12.0, 0.0)];
+        let standing = level.map(|p| DVec3::new(p.x, 0.0, p.y));
+        let reach = Reach {
+            wall_scale: 0.8,
+            ..Reach::CORNERS
+        };
+        let tip = |[a, _, c]: [DVec3; 3]| (c + (a - c) * 0.1).as_vec3();
+        let lying = triangle_splat(level.map(flat_corner), false, reach).unwrap();
+        assert!(lying.covers(tip(level)), "a level needle's tip");
+        let corners = standing.map(|position| Corner {
+            normal: DVec3::Y,
+            ..flat_corner(position)
+        });
+        let wall = triangle_splat(corners, false, reach).unwrap();
+        assert!(wall.covers(((standing[0] + standing[1] + standing[2]) / 3.0).as_vec3()));
+        assert!(!wall.covers(tip(standing)), "a wall's tip");
     }
 
     #[test]

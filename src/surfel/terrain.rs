@@ -47,14 +47,20 @@ use crate::io::triangulate::height_field_keeping;
 /// its own splat).
 pub const LONG_SPACINGS: f32 = 1.5;
 
-/// A TIN triangle's splat: 0.85 times its circumellipse (1.75 times its area), as thin
-/// as the triangle. Scales 0.75, 0.8, 0.85, 0.9 and 1: FLIP 0.1209, 0.1197, 0.1191,
-/// 0.1188, 0.1193 on terrain_utm and 0.1079, 0.1084, 0.1097, 0.1125, 0.1179 on
-/// autzen_trim, where the fans from a tree's top to the ground overlap more the larger
-/// they are. Held to MIN_RATIO, a needle's ellipse was too wide, and 0.643 (the
-/// triangle's own area, long beyond 2 spacings) scored best: 0.1242 and 0.1270.
+/// A TIN triangle's splat: a wall's 0.85 times its circumellipse (1.75 times its
+/// area), any other's the circumellipse, as thin as the triangle. Scales 0.75, 0.8,
+/// 0.85, 0.9 and 1 for every long triangle, when a tree's crown still stood on a fan
+/// of them: FLIP 0.1209, 0.1197, 0.1191, 0.1188, 0.1193 on terrain_utm and 0.1079,
+/// 0.1084, 0.1097, 0.1125, 0.1179 on autzen_trim, where the fans overlapped more the
+/// larger they were. Held to MIN_RATIO, a needle's ellipse was too wide, and 0.643 (the
+/// triangle's own area, long beyond 2 spacings) scored best: 0.1242 and 0.1270. Where
+/// the ground runs on under a bridge deck, its needles span the deck's width; at 0.85
+/// their tips left rows of slits beside the deck (the simulated scan's invented surface
+/// under the deck 1.7–2.1 % → 0.0–0.6 % with the circumellipse; terrain_utm FLIP 0.1712
+/// → 0.1711, autzen_trim 0.1580 → 0.1600).
 pub const TIN_REACH: Reach = Reach {
-    scale: 0.85,
+    scale: 1.0,
+    wall_scale: 0.85,
     min_ratio: super::shape::MIN_PACKED_RATIO,
     wall_colour_from_above: true,
 };
