@@ -8,7 +8,7 @@ use anyhow::Context;
 pub use crate::apps::frame_args::RenderArgs;
 use crate::apps::stats::Summary;
 use crate::apps::text::count;
-use crate::render::{Gpu, PrefixCut, Renderer};
+use crate::render::{Gpu, Renderer};
 use crate::tree::report::Silent;
 use crate::tree::scene::Scene;
 use crate::tree::select::error_per_distance;
@@ -96,11 +96,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     println!("raster    {}", renderer.raster(settings.raster).name());
     print_times(&mut gpu_ms, passes_ms, &mut wall_ms, stats.selected);
     let plan = Summary::of(&mut plan_ms).map_or(0.0, |s| s.median);
-    let cut = match renderer.trims_prefixes(settings.prefix_cut) {
-        true => PrefixCut::Node,
-        false => PrefixCut::Block,
-    }
-    .name();
+    let cut = renderer.prefix_cut(settings.prefix_cut).name();
     println!(
         "cpu plan  {plan:.3} ms per frame (median): chunks in view, their prefixes cut at the {cut}"
     );

@@ -145,7 +145,7 @@ impl Renderer {
         let rasterized = self.rasterized(settings, targets.size)?;
         let compute =
             (settings.culling == Culling::Compute || rasterized) && settings.mode != Mode::Mesh;
-        let trim = self.trims_prefixes(settings.prefix_cut);
+        let trim = self.prefix_cut(settings.prefix_cut) == PrefixCut::Node;
         let frame = plan(
             scene,
             camera,
@@ -191,17 +191,17 @@ impl Renderer {
         }
     }
 
-    /// Whether `cut` ends each prefix at its node: [`PrefixCut::Auto`] does on a CPU
-    /// adapter only. Trimming costs the CPU a binary search in each prefix's last block
+    /// The cut `asked` makes on this adapter: [`PrefixCut::Auto`] ends each prefix at
+    /// its node on a CPU adapter only, at its block on a GPU. Trimming costs the CPU a binary search in each prefix's last block
     /// of nodes (memory-mapped, mostly cache misses: about 0.4 µs a chunk, 11.6 ms on one
     /// core for the prefixes of a 200 M-point tile seen whole; docs/viewer.md) and saves
     /// the GPU's test of at most 63 nodes per chunk: a few nanoseconds on a GPU, about as
     /// much as the search on a CPU adapter, whose culling runs on the same cores.
-    pub fn trims_prefixes(&self, cut: PrefixCut) -> bool {
-        match cut {
-            PrefixCut::Auto => self.gpu.on_cpu(),
-            PrefixCut::Node => true,
-            PrefixCut::Block => false,
+    pub fn prefix_cut(&self, asked: PrefixCut) -> PrefixCut {
+        match asked {
+            PrefixCut::Auto if self.gpu.on_cpu() => PrefixCut::Node,
+            PrefixCut::Auto => PrefixCut::Block,
+            chosen => chosen,
         }
     }
 

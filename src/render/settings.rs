@@ -180,7 +180,7 @@ impl Raster {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum PrefixCut {
     /// [`PrefixCut::Node`] on a CPU adapter, [`PrefixCut::Block`] on a GPU
-    /// ([`crate::render::Renderer::trims_prefixes`]).
+    /// ([`crate::render::Renderer::prefix_cut`]).
     Auto,
     Node,
     Block,
