@@ -13,6 +13,7 @@ mod corners;
 pub(crate) mod covering;
 pub(crate) mod field;
 pub(crate) mod footprint;
+pub(crate) mod free_roofs;
 pub mod grid;
 pub(crate) mod isolated;
 pub(crate) mod layers;
