@@ -315,7 +315,7 @@ impl ModelInfo {
         line(
             "",
             format!(
-                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, splats of long triangles (a frame's grid, a terrain's TIN) {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}, a terrain's splats held to its tile's spacing {}, a terrain's vegetation drawn apart from its TIN {}, bridge decks' samples in a TIN of their own {}",
+                "degenerate triangles {}, isolated vertices {} ({} within the triangles' splats: not drawn), cancelled normals {}, given normals {}, fallback radii {}, capped radii {}, clipped boundaries {}, wall splats under a terrain's edges {}, splats of long triangles (a frame's grid, a terrain's TIN) {}, normals on a depth step from the steps around {}, splats shrunk to the sensor's pixels {}, a terrain's splats held to its tile's spacing {}, a terrain's vegetation and lone returns drawn apart from its TIN {}, samples of bridge decks and free-standing roofs in a TIN of their own {}",
                 count(st.degenerate_triangles),
                 count(st.isolated_vertices),
                 count(st.redundant_vertices),
@@ -330,7 +330,7 @@ impl ModelInfo {
                 count(st.footprint_capped),
                 count(st.tile_capped),
                 count(st.vegetation),
-                count(st.bridge_decks)
+                count(st.decks)
             ),
         );
         let t = &self.timing;

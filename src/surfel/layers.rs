@@ -5,16 +5,18 @@
 //!
 //! - **vegetation** (ASPRS classes 3–5; among the samples the file leaves
 //!   unclassified, those whose 3D neighbourhood samples no surface,
-//!   [`super::cloud::scattered`]) gets a cloud's surfels among itself
-//!   ([`super::vegetation`]);
-//! - **bridge decks** (class 17), and buildings (class 6) that no sample shows a wall
-//!   under ([`super::free_roofs`]), get a TIN of their own, and the ground's TIN runs on
-//!   under them;
+//!   [`super::cloud::scattered`]; and the lone returns over the ground that hold no
+//!   triangle of their own, [`super::free_roofs`]) gets a cloud's surfels among
+//!   itself ([`super::vegetation`]);
+//! - **bridge decks** (class 17), and the slabs (flat roofs, decks without their class)
+//!   that no sample shows a wall under ([`super::free_roofs`]), get a TIN of their own,
+//!   and the ground's TIN runs on under them;
 //! - the rest (ground, roofs, walls, whatever else) keeps the TIN ([`super::terrain`]).
 
 use glam::Vec3;
 
-use super::{cloud, free_roofs};
+use super::cloud;
+use super::free_roofs::{self, Standing};
 use super::terrain::{self, Cover, TinSplats};
 use super::{Surfel, SurfelStats};
 use crate::io::Geometry;
@@ -29,14 +31,13 @@ pub enum Layer {
 
 /// ASPRS class of a bridge deck.
 pub const BRIDGE_DECK: u8 = 17;
-/// ASPRS class of a building.
-pub const BUILDING: u8 = 6;
 
 /// The layer of each sample of `g` (the first `own` its own): vegetation by its class
 /// (3–5), or, for a sample its file leaves unclassified (class 0 or 1, or no classes
-/// at all), by its geometry; decks by class, and free-standing roofs by class and
-/// geometry. A sample's layer does not depend on which
-/// piece of an out-of-core job holds it but through its neighbours.
+/// at all), by its geometry; decks by class; among the rest, the slabs that stand free
+/// as decks and the lone returns as vegetation, by their geometry. A sample's layer
+/// does not depend on which piece of an out-of-core job holds it but through its
+/// neighbours.
 pub fn labels(g: &Geometry, own: usize, scale: f32) -> Vec<Layer> {
     let class = |i: usize| g.attributes.as_deref().map_or(0, |a| a[i].class);
     let unclassified = |i: usize| matches!(class(i), 0 | 1);
@@ -45,22 +46,26 @@ pub fn labels(g: &Geometry, own: usize, scale: f32) -> Vec<Layer> {
     } else {
         Vec::new()
     };
-    let buildings: Vec<u32> = (0..g.positions.len() as u32)
-        .filter(|&i| class(i as usize) == BUILDING)
-        .collect();
-    let mut free = vec![false; g.positions.len()];
-    for (&i, f) in buildings.iter().zip(free_roofs::free_standing(&g.positions, &buildings)) {
-        free[i as usize] = f;
-    }
-    (0..g.positions.len())
+    let mut labels: Vec<Layer> = (0..g.positions.len())
         .map(|i| match class(i) {
             3..=5 => Layer::Plants,
             BRIDGE_DECK => Layer::Deck,
-            BUILDING if free[i] => Layer::Deck,
             _ if unclassified(i) && plants.get(i) == Some(&true) => Layer::Plants,
             _ => Layer::Ground,
         })
-        .collect()
+        .collect();
+    let ground: Vec<u32> = (0..g.positions.len() as u32)
+        .filter(|&i| labels[i as usize] == Layer::Ground)
+        .collect();
+    let standing = free_roofs::free_standing(&g.positions, &ground);
+    for (&i, standing) in ground.iter().zip(standing) {
+        match standing {
+            Standing::Joined => {}
+            Standing::Slab => labels[i as usize] = Layer::Deck,
+            Standing::Lone => labels[i as usize] = Layer::Plants,
+        }
+    }
+    labels
 }
 
 /// Each layer's samples, its own (the first `own` of the model) first, then its

@@ -113,12 +113,12 @@ pub struct SurfelStats {
     /// A terrain's splats whose axes were held within a few of its tile's spacings
     /// ([`cloud::TILE_SPACINGS`]).
     pub tile_capped: u64,
-    /// A terrain's vegetation (by class or geometry), drawn apart from its TIN
-    /// ([`vegetation`]).
+    /// A terrain's vegetation (by class or geometry) and lone returns
+    /// ([`free_roofs`]), drawn apart from its TIN ([`vegetation`]).
     pub vegetation: u64,
-    /// A terrain's samples classified as bridge decks, drawn as a TIN of their own
-    /// ([`layers`]).
-    pub bridge_decks: u64,
+    /// A terrain's samples drawn as a TIN of their own over the ground's ([`layers`]):
+    /// bridge decks (by class) and roofs that stand free ([`free_roofs`]).
+    pub decks: u64,
     /// The pixel grid a sensor frame's samples lie on in their file's order
     /// ([`grid`]): its surfels are then those of the grid's triangulation, as a mesh's,
     /// and the rules for frames without one (depth steps, footprint) do not run.
@@ -353,7 +353,7 @@ fn terrain_path(
         let none = terrain::Cover::none();
         match layers::tin_among((g, scale), (decks, decks_own), &none, surfels, stats) {
             Some(deck) => {
-                stats.bridge_decks = decks_own as u64;
+                stats.decks = decks_own as u64;
                 splats.extend(deck.splats);
             }
             // Too few to make a triangle: drawn as plants are, among themselves (own

@@ -585,8 +585,10 @@ fn an_unclassified_porous_crown_is_found_by_its_geometry_and_hangs_no_curtain() 
 
 /// A gully 6 m deep across a tile 40 m square (ground, class 2, on a 0.5 m grid) under a
 /// bridge deck 8 m wide at 3 m (class 17, when `deck_class`; else 6, a building's), seen
-/// from straight above: no return under the deck.
-fn tile_with_a_bridge(deck_class: u8) -> Geometry {
+/// from straight above: no return under the deck. With `wall`, a sample 1.5 m under
+/// each of the deck's samples on its south edge, as a pulse from the south would find
+/// on a wall there.
+fn tile_with_a_bridge(deck_class: u8, wall: bool) -> Geometry {
     let (mut points, mut classes) = (Vec::new(), Vec::new());
     for i in 0..80 {
         for j in 0..80 {
@@ -596,6 +598,10 @@ fn tile_with_a_bridge(deck_class: u8) -> Geometry {
             let on_deck = (16.0..24.0).contains(&y) && (4.0..36.0).contains(&x);
             points.push([x, y, if on_deck { 3.0 } else { floor }]);
             classes.push(if on_deck { deck_class } else { 2 });
+            if wall && on_deck && y == 16.0 {
+                points.push([x, y - 0.05, 1.5]);
+                classes.push(deck_class);
+            }
         }
     }
     let (mut g, _) = Geometry::from_points(&points).unwrap();
@@ -607,17 +613,18 @@ fn tile_with_a_bridge(deck_class: u8) -> Geometry {
 }
 
 #[test]
-fn a_bridge_deck_stands_on_no_wall_and_the_ground_runs_on_under_it() {
-    let (deck, roof) = (
-        leaf_surfels(&tile_with_a_bridge(17)),
-        leaf_surfels(&tile_with_a_bridge(6)),
+fn a_bridge_deck_and_a_roof_no_sample_shows_a_wall_under_stand_free() {
+    let (deck, roof, walled) = (
+        leaf_surfels(&tile_with_a_bridge(17, false)),
+        leaf_surfels(&tile_with_a_bridge(6, false)),
+        leaf_surfels(&tile_with_a_bridge(6, true)),
     );
     // Splats centred between the deck (3 m) and the floor where the gully is deep
     // (x 14–26, floor under −4 m): a wall's, from the deck's edge to the floor.
     let walls = |leaves: &LeafSurfels| {
         (leaves.surfels.iter())
             .map(|s| at(leaves, s))
-            .filter(|p| (14.0..26.0).contains(&p.x) && (-3.0..2.0).contains(&p.z))
+            .filter(|p| (14.0..26.0).contains(&p.x) && (-3.0..1.0).contains(&p.z))
             .count()
     };
     // The gully floor's splats under the deck's middle.
@@ -626,22 +633,20 @@ fn a_bridge_deck_stands_on_no_wall_and_the_ground_runs_on_under_it() {
             .filter(|s| at(leaves, s).z < -3.0 && (18.0..22.0).contains(&at(leaves, s).y))
             .count()
     };
+    let seen = [&deck, &roof, &walled].map(|l| (walls(l), under(l), l.stats.decks));
     eprintln!(
-        "splats from the deck down to the floor: {} as a deck, {} as a roof; floor splats under it {} and {}",
-        walls(&deck),
-        walls(&roof),
-        under(&deck),
-        under(&roof)
+        "(splats from the deck down to the floor, floor splats under it, samples drawn as a deck): as a deck {:?}, as a roof {:?}, as a roof on a sampled wall {:?}",
+        seen[0], seen[1], seen[2]
     );
     assert!(
-        walls(&roof) > 10,
-        "a roof of the same shape stands on walls"
+        walls(&walled) > 10,
+        "a roof on a sampled wall stands on walls"
     );
-    assert_eq!(walls(&deck), 0);
-    assert!(under(&deck) > 10 && under(&roof) == 0);
+    assert_eq!(under(&walled), 0);
+    for free in [&deck, &roof] {
+        assert_eq!(walls(free), 0);
+        assert!(under(free) > 10);
+    }
     // 16 rows of 64 samples.
-    assert_eq!(
-        (deck.stats.bridge_decks, roof.stats.bridge_decks),
-        (1024, 0)
-    );
+    assert_eq!(seen.map(|s| s.2), [1024, 1024, 0]);
 }
