@@ -4,7 +4,9 @@
 //! triangulation at 1×, hole rate (see `spt::apps::cloud_quality`); for a sensor frame,
 //! FLIP of the same triangulation over the points moved within their depth step. With `--images DIR`,
 //! each view's splats, triangulation, reference and the splats' FLIP heat map as PNG. With `--bounds`, also the
-//! triangulation's own splats and the triangulation shaded with the cloud's normals.
+//! triangulation's own splats (also against the cloud's splats) and the triangulation
+//! shaded with the cloud's normals. With `--write-mesh OUT.ply`, the triangulation
+//! written as a mesh.
 //!
 //! ```text
 //! cargo run --release --example cloud_quality -- kinect_rgb.ply --grid 640x480
@@ -13,10 +15,15 @@
 
 use std::path::PathBuf;
 
+use anyhow::Context;
 use clap::Parser;
-use spt::apps::cloud_quality::{CloudAndReference, Triangulation, ViewImages, measure};
+use spt::apps::cloud_quality::{
+    CloudAndReference, Triangulation, ViewImages, measure, triangulated,
+};
 use spt::apps::stats::quantile;
 use spt::eval::perceptual::flip_heat_map;
+use spt::io::ply::{Encoding, FaceList, PlyLayout, PolyMesh, write_ply};
+use spt::io::scalar::Scalar;
 use spt::render::{Gpu, Renderer, Settings};
 
 #[derive(Parser)]
@@ -51,6 +58,44 @@ struct Args {
     /// triangulation shaded with the cloud's estimated normals, against the reference.
     #[arg(long)]
     bounds: bool,
+    /// Write the triangulation as a PLY mesh (double coordinates, the cloud's colours),
+    /// and measure nothing.
+    #[arg(long, value_name = "OUT.ply")]
+    write_mesh: Option<PathBuf>,
+}
+
+/// Writes the triangulated cloud `g` to `path` as a binary PLY, positions in the file's
+/// coordinates as doubles, one vertex per row of the cloud's file: the rows it dropped
+/// (a frame's pixels without depth) are NaN, so that a sensor frame keeps its grid.
+fn write_mesh(path: &std::path::Path, g: &spt::io::Geometry) -> anyhow::Result<()> {
+    let row = |v: usize| g.rows.as_ref().map_or(v, |r| r[v] as usize);
+    let rows = g
+        .positions
+        .len()
+        .checked_sub(1)
+        .map_or(0, |last| row(last) + 1);
+    let mut positions = vec![[f64::NAN; 3]; rows];
+    let mut colors = vec![[0u8; 3]; rows];
+    for (v, p) in g.positions.iter().enumerate() {
+        positions[row(v)] = (p.as_dvec3() + g.origin).to_array();
+        if let Some(c) = &g.colors {
+            colors[row(v)] = [c[v][0], c[v][1], c[v][2]];
+        }
+    }
+    let triangles: Vec<[u32; 3]> = (g.triangles.iter())
+        .map(|t| t.map(|v| row(v as usize) as u32))
+        .collect();
+    let mesh = PolyMesh {
+        positions,
+        normals: None,
+        colors: g.colors.is_some().then_some(colors),
+        faces: FaceList::triangles(&triangles),
+    };
+    let mut layout = PlyLayout::standard(Encoding::BinaryLittleEndian, &mesh);
+    for p in layout.vertex_properties.iter_mut().take(3) {
+        p.1 = Scalar::F64;
+    }
+    write_ply(path, &mesh, &layout).with_context(|| format!("writing {}", path.display()))
 }
 
 fn parse_grid(s: &str) -> Result<(u32, u32), String> {
@@ -66,6 +111,12 @@ fn main() -> anyhow::Result<()> {
         (None, true) => Triangulation::Terrain,
         (None, false) => anyhow::bail!("say how to triangulate: --grid WxH or --terrain"),
     };
+    if let Some(out) = &args.write_mesh {
+        let g = triangulated(&args.cloud, triangulation)?;
+        write_mesh(out, &g)?;
+        println!("{}: {} triangles", out.display(), g.triangles.len());
+        return Ok(());
+    }
     let renderer = Renderer::new(Gpu::new(None)?);
     eprintln!("adapter: {}", renderer.gpu.describe());
     let models = if args.bounds {
@@ -132,9 +183,18 @@ fn main() -> anyhow::Result<()> {
         );
     }
     if args.bounds {
+        let bound = |f: Option<f64>| f.unwrap_or(f64::NAN);
+        for (k, f) in figures.iter().enumerate() {
+            println!(
+                "view {k}: triangulation's own splats {:.4}, against the cloud's splats {:.4}",
+                bound(f.mesh_splat_flip),
+                bound(f.mesh_splats_against_cloud)
+            );
+        }
         println!(
-            "median triangulation's own splats {:.4}; triangulation at 1x with the cloud's normals {:.4}",
+            "median triangulation's own splats {:.4}, against the cloud's splats {:.4}; triangulation at 1x with the cloud's normals {:.4}",
             median(|f| f.mesh_splat_flip.unwrap_or(f64::NAN)),
+            median(|f| f.mesh_splats_against_cloud.unwrap_or(f64::NAN)),
             median(|f| f.cloud_normals_flip.unwrap_or(f64::NAN)),
         );
     }

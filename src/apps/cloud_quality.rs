@@ -55,16 +55,9 @@ impl CloudAndReference {
     }
 
     fn build(path: &Path, triangulation: Triangulation, bounds: bool) -> anyhow::Result<Self> {
-        let mut geometry: Geometry = read_model(path)?.drawable(path)?.geometry;
+        let meshed = triangulated(path, triangulation)?;
+        let mut geometry = meshed.clone();
         geometry.triangles.clear();
-        let triangles = match triangulation {
-            Triangulation::Grid { width, height } => sensor_grid(&geometry, width, height)
-                .map_err(anyhow::Error::msg)
-                .with_context(|| format!("{}: not a sensor grid", path.display()))?,
-            Triangulation::Terrain => terrain(&geometry),
-        };
-        let mut meshed = geometry.clone();
-        meshed.triangles = triangles;
         let requantized = matches!(triangulation, Triangulation::Grid { .. }).then(|| {
             let mut moved = meshed.clone();
             requantize(&mut moved);
@@ -88,6 +81,18 @@ impl CloudAndReference {
             cloud_normals,
         })
     }
+}
+
+/// The cloud read from `path` (faces, if any, dropped), triangulated.
+pub fn triangulated(path: &Path, triangulation: Triangulation) -> anyhow::Result<Geometry> {
+    let mut geometry: Geometry = read_model(path)?.drawable(path)?.geometry;
+    geometry.triangles = match triangulation {
+        Triangulation::Grid { width, height } => sensor_grid(&geometry, width, height)
+            .map_err(anyhow::Error::msg)
+            .with_context(|| format!("{}: not a sensor grid", path.display()))?,
+        Triangulation::Terrain => terrain(&geometry),
+    };
+    Ok(geometry)
 }
 
 /// Moves each point of a sensor frame along its ray (toward the file's origin, where
@@ -142,6 +147,9 @@ pub struct ViewFigures {
     /// The triangulation at 1× shaded with the cloud's estimated normals against the
     /// reference: the share of the splats' error that their normals alone make.
     pub cloud_normals_flip: Option<f64>,
+    /// The triangulation's own splats against the cloud's splats: how alike the same
+    /// samples draw as a mesh and as a cloud.
+    pub mesh_splats_against_cloud: Option<f64>,
     pub hole_rate: f64,
 }
 
@@ -201,21 +209,31 @@ pub fn measure(
             }
             None => None,
         };
-        let (mesh_splat_flip, cloud_normals_flip) = match &cloud_normals_gpu {
-            Some((scene, gpu)) => {
-                let splats =
-                    renderer.render(&models.reference, &mesh_gpu, &camera, settings, size, size)?;
-                let shaded = renderer.render(scene, gpu, &camera, &Settings::mesh(), size, size)?;
-                (
-                    Some(flip_mean(&splats.0, &images.reference)),
-                    Some(flip_mean(&shaded.0, &images.reference)),
-                )
-            }
-            None => (None, None),
-        };
+        let (mesh_splat_flip, cloud_normals_flip, mesh_splats_against_cloud) =
+            match &cloud_normals_gpu {
+                Some((scene, gpu)) => {
+                    let splats = renderer.render(
+                        &models.reference,
+                        &mesh_gpu,
+                        &camera,
+                        settings,
+                        size,
+                        size,
+                    )?;
+                    let shaded =
+                        renderer.render(scene, gpu, &camera, &Settings::mesh(), size, size)?;
+                    (
+                        Some(flip_mean(&splats.0, &images.reference)),
+                        Some(flip_mean(&shaded.0, &images.reference)),
+                        Some(flip_mean(&splats.0, &images.splats)),
+                    )
+                }
+                None => (None, None, None),
+            };
         out.push(ViewFigures {
             mesh_splat_flip,
             cloud_normals_flip,
+            mesh_splats_against_cloud,
             splat_flip: flip_mean(&images.splats, &images.reference),
             splat_ssim: ssim_mean(&images.splats, &images.reference),
             mesh_flip: flip_mean(&images.mesh, &images.reference),

@@ -15,6 +15,7 @@ use crate::io::las::LasSummary;
 use crate::io::model::{ElementSummary, Model, Summary};
 use crate::io::rebase::MAX_OFFSET;
 use crate::io::{Bounds, GeometryStats};
+use crate::surfel::outward::{OPEN_AREA, Sides};
 use crate::surfel::{LeafSurfels, NormalsTurned, SurfelStats, leaf_surfels};
 use crate::tree::spt_file::{SptFile, is_spt};
 use crate::tree::{NodeRecord, TreeMeta};
@@ -29,6 +30,36 @@ fn estimated_normals(turned: NormalsTurned) -> &'static str {
             "toward the sensor at the file's origin (a frame's: drawn two-sided)"
         }
     }
+}
+
+/// What the orientation vote did to a mesh's pieces ([`crate::surfel::outward`]).
+fn mesh_sides(sides: Sides) -> String {
+    let mut kinds = Vec::new();
+    let pieces = |n: u64| if n == 1 { "piece" } else { "pieces" };
+    if sides.turned > 0 {
+        let n = sides.turned;
+        kinds.push(format!(
+            "{n} closed {} turned outward (wound inward)",
+            pieces(n)
+        ));
+    }
+    if sides.kept > 0 {
+        let n = sides.kept;
+        kinds.push(format!("{n} closed {} facing outward as wound", pieces(n)));
+    }
+    if sides.open > 0 {
+        let n = sides.open;
+        let drawn = if sides.two_sided {
+            "drawn two-sided: their front is not known".to_owned()
+        } else {
+            format!("under {} % of the area", 100.0 * OPEN_AREA)
+        };
+        kinds.push(format!(
+            "{n} open {} keeping the file's winding ({drawn})",
+            pieces(n)
+        ));
+    }
+    format!("by piece: {}", kinds.join(", "))
 }
 
 #[derive(Debug, Serialize)]
@@ -286,10 +317,10 @@ impl ModelInfo {
                 s.radius_min,
                 s.radius_median,
                 s.radius_max,
-                match (s.oriented_normals, s.stats.turned_outward) {
-                    (true, false) => "oriented",
-                    (true, true) => "oriented (all turned outward: the triangles wind inward)",
-                    _ => estimated_normals(s.normals_turned),
+                match (s.oriented_normals, s.stats.sides) {
+                    (_, sides) if sides != Sides::default() => mesh_sides(sides),
+                    (true, _) => "oriented".to_owned(),
+                    _ => estimated_normals(s.normals_turned).to_owned(),
                 }
             ),
         );
@@ -302,12 +333,16 @@ impl ModelInfo {
                 0 => rows / grid.width as u64,
                 _ => grid.height as u64,
             };
+            let triangles = if self.present.faces {
+                "the file's triangles, wound to face the sensor"
+            } else {
+                "neighbouring pixels joined, not across a depth edge"
+            };
             line(
                 "pixel grid",
                 format!(
                     "{} × {height} in the file's row order: splats of the grid's triangles \
-                     (neighbouring pixels joined, not across a depth edge; a long one \
-                     drawn by a splat of its own)",
+                     ({triangles}; a long one drawn by a splat of its own)",
                     grid.width
                 ),
             );
@@ -556,7 +591,9 @@ impl SptInfo {
             format!(
                 "colours {}, normals {}, LiDAR attributes {}",
                 if m.has_colors { "yes" } else { "no" },
-                if m.oriented_normals {
+                if m.oriented_normals && m.two_sided {
+                    "oriented, their front not known (an open mesh's: drawn two-sided)"
+                } else if m.oriented_normals {
                     "oriented"
                 } else {
                     estimated_normals(m.normals_turned)

@@ -132,7 +132,7 @@ impl FrameUniform {
             edl_radius_px: settings.edl_radius_px,
             intensity_range: meta.intensity_range.map(f32::from),
             has_attributes: meta.has_attributes as u32,
-            oriented_normals: meta.oriented_normals as u32,
+            oriented_normals: (meta.oriented_normals && !meta.two_sided) as u32,
             elevation_up: elevation_up.as_vec3().to_array(),
             elevation_pad: 0.0,
         }

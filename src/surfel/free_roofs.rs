@@ -42,6 +42,7 @@ use std::collections::HashMap;
 
 use glam::{DMat3, DVec3, Vec2, Vec3};
 
+use super::sets::Sets;
 use crate::io::triangulate::height_field;
 
 /// Height between an edge's ends, in spacings, beyond which it drops: 0.75 m at the
@@ -303,33 +304,6 @@ fn walled_tops(positions: &[Vec3], standing: &[(usize, usize)], spacing: f32) ->
         .filter(|&k| (boxes[k].1 - boxes[k].0).length() >= WALL_SPACINGS * spacing)
         .map(|k| standing[k].0)
         .collect()
-}
-
-/// Disjoint sets of `0..n` (union–find with path halving), each named by its least
-/// member.
-struct Sets {
-    parent: Vec<usize>,
-}
-
-impl Sets {
-    fn new(n: usize) -> Sets {
-        Sets {
-            parent: (0..n).collect(),
-        }
-    }
-
-    fn root(&mut self, mut k: usize) -> usize {
-        while self.parent[k] != k {
-            self.parent[k] = self.parent[self.parent[k]];
-            k = self.parent[k];
-        }
-        k
-    }
-
-    fn join(&mut self, a: usize, b: usize) {
-        let (a, b) = (self.root(a), self.root(b));
-        self.parent[a.max(b)] = a.min(b);
-    }
 }
 
 #[cfg(test)]

@@ -20,7 +20,7 @@
 //! neighbours alike lie about one pitch apart: a cloud written in any other order (a
 //! scanned mesh's vertices, a tile sorted in space) has no grid.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::isolated;
@@ -45,15 +45,58 @@ pub struct FrameMesh {
 pub fn frame_triangles(g: &Geometry, sensor: Vec3) -> Option<FrameMesh> {
     let (grid, pitch) = pixel_grid(g, sensor)?;
     let max_edge = MAX_EDGE_PITCHES * pitch as f64;
-    let mut triangles = sensor_grid_within(g, (grid.width, grid.height), max_edge).ok()?;
+    let triangles = sensor_grid_within(g, (grid.width, grid.height), max_edge).ok()?;
+    Some(facing_the_sensor(g, sensor, (grid, pitch), triangles))
+}
+
+/// The frame mesh of `triangles` on `grid`, all wound to face `sensor` where most of
+/// their area faced away.
+fn facing_the_sensor(
+    g: &Geometry,
+    sensor: Vec3,
+    (grid, pitch): (PixelGrid, f32),
+    mut triangles: Vec<[u32; 3]>,
+) -> FrameMesh {
     if facing_away(&g.positions, &triangles, sensor) {
         triangles.par_iter_mut().for_each(|t| t.swap(1, 2));
     }
-    Some(FrameMesh {
+    FrameMesh {
         grid,
         pitch,
         triangles,
-    })
+    }
+}
+
+/// Frame `g`'s own triangles (a depth frame meshed on its sensor grid, as depth-camera
+/// tools write it), if its vertices lie on a pixel grid seen from `sensor`
+/// ([`pixel_grid`]): all wound to face the sensor, where most of their area faced
+/// away. Drawn as the frame's cloud is, its splats are the cloud's.
+pub fn meshed_frame(g: &Geometry, sensor: Vec3) -> Option<FrameMesh> {
+    let grid = pixel_grid(g, sensor)?;
+    Some(facing_the_sensor(g, sensor, grid, g.triangles.clone()))
+}
+
+/// Each vertex's normal for the mesh pass: the file's where it gives one, else
+/// normalize(Σ (b − a) × (c − a)) over its triangles (area-weighted face normals,
+/// wound as `triangles` are), zero for a vertex of none.
+pub fn vertex_normals(
+    points: &[Vec3],
+    triangles: &[[u32; 3]],
+    given: Option<&[Vec3]>,
+) -> Vec<Vec3> {
+    let mut sums = vec![DVec3::ZERO; points.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|v| points[v as usize].as_dvec3());
+        let cross = (b - a).cross(c - a);
+        t.iter().for_each(|&v| sums[v as usize] += cross);
+    }
+    let given = |v: usize| given.map_or(Vec3::ZERO, |g| g[v]);
+    (sums.iter().enumerate())
+        .map(|(v, s)| match given(v) {
+            Vec3::ZERO => s.normalize_or_zero().as_vec3(),
+            n => n,
+        })
+        .collect()
 }
 
 /// The splats of frame `g`'s mesh seen from `sensor` ([`long_triangles::disks`]): a

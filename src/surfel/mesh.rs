@@ -17,6 +17,7 @@ use glam::{DVec3, Vec3};
 
 use super::cloud::neighbour_disks;
 use super::covering::RadiusRule;
+use super::outward::{Sides, Vote, orient_pieces};
 use super::triangle::{RADIUS_MARGIN, triangle_terms};
 use super::{Surfel, SurfelStats};
 use crate::io::geometry::unit_vector;
@@ -24,9 +25,6 @@ use rayon::prelude::*;
 
 /// A vertex's face normals cancel when |Σ cross| ≤ CANCELLED · Σ |cross|.
 pub const CANCELLED: f32 = 1e-5;
-/// Normals face inward when their flux through the surface is below −INWARD of its
-/// spread ([`orient_outward`]).
-pub const INWARD: f64 = 0.02;
 
 /// A vertex position in unit-scaled f64.
 #[inline]
@@ -103,15 +101,16 @@ enum Source {
     NoFaces,
 }
 
-/// Which way a mesh's normals turn ([`orient_outward`]).
+/// Which way a mesh's normals turn ([`super::outward`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Outward {
-    /// By the vote of its own vertices.
+    /// By the votes of its own pieces ([`orient_pieces`]).
     Vote,
-    /// As decided for the whole model, of which this is a piece
-    /// ([`crate::tree::out_of_core`]): negated when `turn`. The piece's own vertices
-    /// (its first `own`) give their terms of the model's vote about its mean vertex
-    /// `mean` ([`outward_flux`]), taken before the normals turn.
+    /// As decided for the whole model, of which this is a part
+    /// ([`crate::tree::out_of_core`]), the model one piece: negated when `turn`. The
+    /// part's own vertices (its first `own`) give their terms of the model's vote
+    /// about its mean vertex `mean` ([`Vote::over`]), taken before the normals turn;
+    /// whether the model is open is the model's to say when its parts are joined.
     Piece { turn: bool, own: usize, mean: DVec3 },
 }
 
@@ -121,8 +120,8 @@ pub struct MeshDisks {
     pub redundant: Vec<u32>,
     /// The vertex normals (the surfels' are their shading fields', `super::field`).
     pub normals: Vec<Vec3>,
-    /// A piece's terms of the orientation vote ([`Outward::Piece`]).
-    pub vote: Option<(f64, f64)>,
+    /// A part's terms of the orientation vote ([`Outward::Piece`]).
+    pub vote: Option<Vote>,
 }
 
 /// Normals and radii of the vertices of a mesh, written into `surfels` (one per
@@ -139,14 +138,17 @@ pub fn vertex_disks(
 ) -> MeshDisks {
     let isolated = face_disks(points, scale, triangles, given, surfels, stats);
     let mut vote = None;
-    stats.turned_outward = match outward {
-        Outward::Vote => orient_outward(points, surfels),
+    stats.sides = match outward {
+        Outward::Vote => orient_pieces(points, triangles, surfels),
         Outward::Piece { turn, own, mean } => {
-            vote = Some(outward_flux(&points[..own], &surfels[..own], mean));
+            vote = Some(Vote::over(&points[..own], &surfels[..own], mean));
             if turn {
                 surfels.par_iter_mut().for_each(|s| s.normal = -s.normal);
             }
-            turn
+            Sides {
+                turned: u64::from(turn),
+                ..Sides::default()
+            }
         }
     };
     let normals = super::ring::ring_shapes(points, scale, triangles, surfels, colored);
@@ -276,42 +278,4 @@ fn largest_face_normals(
     for (v, (_, nrm)) in best {
         surfels[v as usize].normal = unit_vector(nrm).unwrap_or(Vec3::Z);
     }
-}
-
-/// Negates every normal when they face inward on the whole, and says whether it did.
-///
-/// For a closed surface S with outward normals, ∫_S (p − c)·n dA = 3·volume > 0 for
-/// any point c (the divergence theorem); the sum over vertices, with dA ≈ r² (the
-/// covering radius squared) and c the mean vertex, estimates it. Divided by
-/// ∫_S |p − c| dA it is 1 for a sphere, about 4a/L for a closed tube of radius a and
-/// length L, and near 0 for an open sheet, which has no inside: normals turn only
-/// below −[`INWARD`]. A mesh whose triangles wind inward (the generated knot: −0.26;
-/// bunny 0.62, dragon 0.32) so gets outward normals, and the renderer can tell a
-/// surface's back from its front (`shaders/splat.wgsl`, `BACK_WEIGHT`).
-pub fn orient_outward(points: &[Vec3], surfels: &mut [Surfel]) -> bool {
-    let n = points.len().max(1) as f64;
-    let c = points.par_iter().map(|p| p.as_dvec3()).sum::<DVec3>() / n;
-    if !faces_inward(outward_flux(points, surfels, c)) {
-        return false;
-    }
-    surfels.par_iter_mut().for_each(|s| s.normal = -s.normal);
-    true
-}
-
-/// The sums (Σ r² (p − c)·n, Σ r² |p − c|) of [`orient_outward`]'s vote over `surfels`
-/// (at `points`), about the model's mean vertex `c`: sums of pieces add up.
-pub fn outward_flux(points: &[Vec3], surfels: &[Surfel], c: DVec3) -> (f64, f64) {
-    points
-        .par_iter()
-        .zip(surfels.par_iter())
-        .map(|(p, s)| {
-            let (r, d) = (s.radius as f64, p.as_dvec3() - c);
-            (r * r * d.dot(s.normal.as_dvec3()), r * r * d.length())
-        })
-        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
-}
-
-/// Whether the vote's sums `(flux, spread)` say the normals face inward.
-pub fn faces_inward((flux, spread): (f64, f64)) -> bool {
-    flux < -INWARD * spread
 }

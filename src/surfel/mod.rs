@@ -21,8 +21,10 @@ pub(crate) mod levels;
 pub mod long_triangles;
 pub(crate) mod mesh;
 pub mod octahedral;
+pub mod outward;
 pub(crate) mod pca;
 pub(crate) mod ring;
+pub(crate) mod sets;
 pub mod shape;
 pub mod terrain;
 pub(crate) mod triangle;
@@ -95,9 +97,10 @@ pub struct SurfelStats {
     /// Cloud surfels on a boundary of their sampling, clipped where it ends
     /// ([`cloud::BOUNDARY_CLIP_OFFSET`]); a terrain's are left whole.
     pub clipped_boundaries: u64,
-    /// A mesh's normals all negated to face outward (its triangles wound inward, or
-    /// its given normals pointing in): see [`mesh::orient_outward`].
-    pub turned_outward: bool,
+    /// Which of a mesh's pieces were turned to face outward (their triangles wound
+    /// inward, or their given normals pointing in), which faced out, and which are
+    /// open and keep the file's winding ([`outward`]).
+    pub sides: outward::Sides,
     /// A terrain's wall surfels, under the edges where its height drops steeply
     /// ([`walls`]): surfels that no sample of the file is.
     pub wall_splats: u64,
@@ -158,6 +161,9 @@ pub struct LeafSurfels {
     /// False for normals estimated from neighbours, whose sign is arbitrary: such
     /// surfels must be drawn two-sided.
     pub oriented_normals: bool,
+    /// Oriented normals whose front is not known: a mesh mostly of open pieces, kept
+    /// as wound ([`outward`]); drawn two-sided.
+    pub two_sided: bool,
     /// Which way estimated normals were turned: up on a terrain, toward the sensor on
     /// a sensor frame ([`cloud::Orientation`]); not oriented out of a surface, but
     /// consistent. [`NormalsTurned::No`] when `oriented_normals`.
@@ -264,7 +270,7 @@ pub fn mesh_surfels_of(
     g: &Geometry,
     own: usize,
     (turn, mean): (bool, DVec3),
-) -> (LeafSurfels, (f64, f64)) {
+) -> (LeafSurfels, outward::Vote) {
     let outward = Outward::Piece { turn, own, mean };
     let (mut leaves, vote) = leaf_surfels_among(g, own, outward);
     leaves.vertex_normals = Vec::new();
@@ -272,10 +278,10 @@ pub fn mesh_surfels_of(
     (leaves, vote.unwrap_or_default())
 }
 
-/// The sums of a mesh's orientation vote ([`mesh::outward_flux`]) over the first `own`
+/// The terms of a mesh's orientation vote ([`outward::Vote`]) over the first `own`
 /// vertices of a piece of it (as [`mesh_surfels_of`] takes it), about the model's mean
-/// vertex `c`: the pieces' sums add up to the whole model's vote.
-pub fn mesh_flux_of(g: &Geometry, own: usize, c: DVec3) -> (f64, f64) {
+/// vertex `c`: the pieces' terms add up to the whole model's vote.
+pub fn mesh_flux_of(g: &Geometry, own: usize, c: DVec3) -> outward::Vote {
     let mut surfels = initial_surfels(g);
     let given = g.normals.as_deref();
     let scale = model_scale(g);
@@ -288,7 +294,7 @@ pub fn mesh_flux_of(g: &Geometry, own: usize, c: DVec3) -> (f64, f64) {
         &mut surfels,
         &mut stats,
     );
-    mesh::outward_flux(&g.positions[..own], &surfels[..own], c)
+    outward::Vote::over(&g.positions[..own], &surfels[..own], c)
 }
 
 /// The unit scale of `g` ([`unit_scale`] of its core's extent and its reach).
@@ -376,7 +382,7 @@ fn leaf_surfels_among(
     g: &Geometry,
     own: usize,
     outward: Outward,
-) -> (LeafSurfels, Option<(f64, f64)>) {
+) -> (LeafSurfels, Option<outward::Vote>) {
     let scale = model_scale(g);
     let given = g.normals.as_deref();
     let mut stats = SurfelStats {
@@ -390,10 +396,12 @@ fn leaf_surfels_among(
     let (mut normals_turned, mut walls) = (NormalsTurned::No, Vec::new());
     let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
     let frame = match orientation {
-        cloud::Orientation::Toward(sensor)
-            if g.triangles.is_empty() && own == g.positions.len() =>
-        {
-            grid::frame_triangles(g, sensor)
+        cloud::Orientation::Toward(sensor) if own == g.positions.len() => {
+            if g.triangles.is_empty() {
+                grid::frame_triangles(g, sensor)
+            } else {
+                grid::meshed_frame(g, sensor)
+            }
         }
         _ => None,
     };
@@ -401,6 +409,9 @@ fn leaf_surfels_among(
         (redundant, walls) =
             grid::frame_disks(g, (mesh, sensor, scale), given, &mut surfels, &mut stats);
         stats.pixel_grid = Some(mesh.grid);
+        if !g.triangles.is_empty() {
+            vertex_normals = grid::vertex_normals(&g.positions, &mesh.triangles, given);
+        }
         let oriented = given.is_some() && stats.given_normals == own as u64;
         if !oriented {
             normals_turned = NormalsTurned::of(orientation);
@@ -451,6 +462,7 @@ fn leaf_surfels_among(
         has_colors: g.colors.is_some(),
         has_attributes: g.attributes.is_some(),
         oriented_normals: oriented,
+        two_sided: stats.sides.two_sided,
         normals_turned,
         stats,
         redundant,

@@ -64,6 +64,9 @@ pub struct TreeMeta {
     pub depth: u32,
     pub has_colors: bool,
     pub oriented_normals: bool,
+    /// Oriented normals whose front is not known (a mesh's open pieces, kept as
+    /// wound): drawn two-sided, as unoriented ones are.
+    pub two_sided: bool,
     /// Which way the leaves' estimated normals were turned ([`NormalsTurned::No`] when
     /// `oriented_normals`): the builder's decision, on the model's core box.
     pub normals_turned: NormalsTurned,
@@ -127,6 +130,7 @@ impl TreeMeta {
             depth: 0,
             has_colors: false,
             oriented_normals: false,
+            two_sided: false,
             normals_turned: NormalsTurned::No,
             has_attributes: false,
             intensity_range: [0, 0],
@@ -413,6 +417,7 @@ pub fn build_records_scaled(
 ) -> NodeSet {
     let n = leaves.surfels.len();
     let (oriented, normals_turned) = (leaves.oriented_normals, leaves.normals_turned);
+    let two_sided = leaves.two_sided;
     let bounds = leaf_bounds(&leaves);
     // Leaf id k is surfel leaf_order[k]: the leaves' records in id order.
     let in_leaf_order = std::mem::take(&mut hierarchy.leaf_order);
@@ -459,6 +464,7 @@ pub fn build_records_scaled(
         depth: depth as u32,
         has_colors: bounds.2,
         oriented_normals: oriented,
+        two_sided,
         normals_turned,
         has_attributes: !attributes.is_empty(),
         intensity_range: attributes::intensity_range(attributes.get(..n).unwrap_or(&[])),

@@ -195,7 +195,11 @@ pub fn build_from_geometry(
     let mut leaves = surfels_step(&geometry, report);
     let normals = std::mem::take(&mut leaves.vertex_normals);
     let mesh = (keep_mesh && !geometry.triangles.is_empty()).then(|| MeshData {
-        positions: leaves.surfels.iter().map(|s| s.position).collect(),
+        // The vertices' surfels, not the splats of a meshed frame's long triangles
+        // that follow them.
+        positions: (leaves.surfels.iter().take(geometry.positions.len()))
+            .map(|s| s.position)
+            .collect(),
         normals,
         // The file's colours: the surfels' are fitted to pass 2's blend.
         colors: geometry

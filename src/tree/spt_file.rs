@@ -16,7 +16,8 @@
 //!                 8 = estimated normals turned up (a terrain's), 16 = turned toward
 //!                 the origin (a sensor frame's); bits 5–7: the up axis, 0 none (a
 //!                 sensor frame's view; z in files written before it was stored),
-//!                 1–6 z, y, x, −z, −y, −x
+//!                 1–6 z, y, x, −z, −y, −x; 256 = oriented normals whose front is
+//!                 not known, drawn two-sided (a mesh's open pieces, as wound)
 //!     20     4  depth (largest level)
 //!     24     8  leaf count
 //!     32     8  node count
@@ -74,6 +75,9 @@ pub const MAGIC: &[u8; 8] = b"spt-tree";
 pub const VERSION: u32 = 8;
 /// Where the up axis's code ([`UpAxis::code`], 0 for none) lies in the flags.
 const UP_SHIFT: u32 = 5;
+
+/// The flag of [`TreeMeta::two_sided`], after the up axis's three bits.
+const TWO_SIDED_BIT: u32 = 8;
 /// The oldest version read: version 2 files are version 3 files without attributes.
 pub const OLDEST_READ: u32 = 2;
 pub const HEADER_BYTES: usize = 256;
@@ -158,7 +162,8 @@ pub fn header_for(m: &TreeMeta, chunks: &[Chunk], checksum: u64) -> Vec<u8> {
         | (m.has_attributes as u32) << 2
         | ((m.normals_turned == NormalsTurned::Up) as u32) << 3
         | ((m.normals_turned == NormalsTurned::TowardOrigin) as u32) << 4
-        | m.up.map_or(0, UpAxis::code) << UP_SHIFT;
+        | m.up.map_or(0, UpAxis::code) << UP_SHIFT
+        | (m.two_sided as u32) << TWO_SIDED_BIT;
     h.extend_from_slice(&flags.to_le_bytes());
     h.extend_from_slice(&m.depth.to_le_bytes());
     h.extend_from_slice(&m.leaf_count.to_le_bytes());
@@ -368,6 +373,7 @@ fn meta_of(b: &[u8], version: u32) -> Result<TreeMeta, String> {
         depth: u32_at(b, 20),
         has_colors: flags & 1 != 0,
         oriented_normals: flags & 2 != 0,
+        two_sided: flags & 1 << TWO_SIDED_BIT != 0,
         normals_turned: match flags & 24 {
             8 => NormalsTurned::Up,
             16 => NormalsTurned::TowardOrigin,

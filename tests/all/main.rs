@@ -12,6 +12,7 @@ mod docs;
 mod file_quirks;
 mod hostile_inputs;
 mod layers;
+mod mesh_sides;
 mod out_of_core;
 mod ply_roundtrip;
 mod ply_tristrips;

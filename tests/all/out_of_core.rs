@@ -244,16 +244,16 @@ fn sphere(mesh: &mut spt::io::ply::PolyMesh, centre: [f64; 3], radius: f64, outw
 
 #[test]
 fn a_mesh_whose_first_job_votes_against_the_model_is_built_again_right() {
-    // A small sphere wound inward on the left, a large one wound outward on the right:
-    // the left half of the small one (the first job) votes to turn, the model not.
+    // A sphere wound inward: the first job, a part of it, looks open and votes to keep
+    // its normals; the model, closed, to turn them.
     let mut mesh = spt::io::ply::PolyMesh::default();
-    sphere(&mut mesh, [-3.0, 0.0, 0.0], 1.0, false);
-    sphere(&mut mesh, [3.0, 0.0, 0.0], 2.0, true);
+    sphere(&mut mesh, [-3.0, 0.0, 0.0], 2.0, false);
     let dir = common::temp_dir();
-    let input = dir.path().join("spheres.ply");
+    let input = dir.path().join("sphere.ply");
     common::write_standard(&input, &mesh, spt::io::ply::Encoding::BinaryLittleEndian);
     let (built, list) = build_in_jobs(&input, 3000, dir.path());
     assert!(built.rebuilt, "the first job's guess was the model's vote");
+    assert!(!list.meta.two_sided, "a closed sphere is drawn one-sided");
     let (ours, theirs) = (
         leaves_by_position(&list),
         leaves_by_position(&in_memory_list(&input)),
@@ -315,4 +315,36 @@ fn a_model_whose_disks_dwarf_its_points_box_gets_their_error_scale() {
         list.meta
     );
     check_structure(&list.meta, &list.nodes, &list.parents, &list.chunks).unwrap();
+}
+
+#[test]
+fn an_open_mesh_built_in_jobs_keeps_its_winding_and_is_drawn_two_sided() {
+    // A 100 × 100 sheet bent into a trough (concave upward), wound to face up.
+    let n = 100u32;
+    let mut mesh = spt::io::ply::PolyMesh::default();
+    for j in 0..n {
+        for i in 0..n {
+            let x = i as f64 / (n - 1) as f64 - 0.5;
+            mesh.positions
+                .push([x, j as f64 / (n - 1) as f64, 2.0 * x * x]);
+        }
+    }
+    let at = |i: u32, j: u32| j * n + i;
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            mesh.faces.push(&[at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            mesh.faces.push(&[at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    let dir = common::temp_dir();
+    let input = dir.path().join("trough.ply");
+    common::write_standard(&input, &mesh, spt::io::ply::Encoding::BinaryLittleEndian);
+    let (built, list) = build_in_jobs(&input, 3000, dir.path());
+    assert!(built.jobs > 1 && !built.rebuilt);
+    let memory = in_memory_list(&input);
+    assert!(list.meta.two_sided && memory.meta.two_sided);
+    for (_, (r, _)) in leaves_by_position(&list) {
+        let up = spt::surfel::octahedral::oct_decode(r.normal).z;
+        assert!(up > 0.0, "a normal turned down: {up}");
+    }
 }

@@ -9,13 +9,7 @@ use spt::io::ply::{Encoding, FaceList, PolyMesh, read_ply};
 use spt::surfel::{LeafSurfels, leaf_surfels, mesh_surfels_of};
 
 fn load(mesh: &PolyMesh, name: &str) -> (Geometry, LeafSurfels) {
-    let dir = common::temp_dir();
-    let path = dir.path().join(name);
-    common::write_double(&path, mesh);
-    let g = read_ply(&path).unwrap().geometry;
-    let leaves = leaf_surfels(&g);
-    common::assert_sane(&leaves, name);
-    (g, leaves)
+    common::mesh_leaves(mesh, name)
 }
 
 /// A bumpy 8 × 8 grid of quads (two triangles each).
@@ -357,7 +351,7 @@ fn octahedron(inward: bool) -> PolyMesh {
 fn normals_of_a_closed_mesh_face_outward_whichever_way_it_winds() {
     for inward in [false, true] {
         let (g, leaves) = load(&octahedron(inward), "octahedron.ply");
-        assert_eq!(leaves.stats.turned_outward, inward);
+        assert_eq!(leaves.stats.sides.turned, inward as u64);
         let centre = g.positions.iter().sum::<Vec3>() / g.positions.len() as f32;
         for (p, s) in g.positions.iter().zip(&leaves.surfels) {
             assert!(

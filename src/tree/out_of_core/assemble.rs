@@ -123,7 +123,7 @@ fn stream<T: bytemuck::Pod>(
 }
 
 /// The meta of the whole tree.
-fn meta(model: &Model, parts: &[Part], top: &Top, oriented: bool) -> TreeMeta {
+fn meta(model: &Model, parts: &[Part], top: &Top, (oriented, two_sided): (bool, bool)) -> TreeMeta {
     let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
     for p in parts {
         lo = lo.min(p.centre_min);
@@ -149,6 +149,7 @@ fn meta(model: &Model, parts: &[Part], top: &Top, oriented: bool) -> TreeMeta {
             .unwrap_or(0),
         has_colors: model.has_colors,
         oriented_normals: oriented,
+        two_sided,
         normals_turned: normals_turned(parts, oriented),
         has_attributes: model.has_attributes,
         intensity_range: attributes::intensity_range(&samples),
@@ -170,11 +171,13 @@ fn normals_turned(parts: &[Part], oriented: bool) -> NormalsTurned {
 }
 
 /// Writes the `.spt` file of the jobs' `parts`, joined by the top tree of `split`,
-/// atomically; returns its meta.
+/// atomically, flagged `two_sided` (an open mesh, [`TreeMeta::two_sided`]); returns its
+/// meta.
 pub fn write_file(
     path: &std::path::Path,
     model: &Model,
     (split, parts): (&Split, &[Part]),
+    two_sided: bool,
 ) -> anyhow::Result<TreeMeta> {
     let oriented = parts.iter().all(|p| p.oriented);
     let top = if parts.len() > 1 {
@@ -189,7 +192,7 @@ pub fn write_file(
             roots: vec![(root, u32::MAX)],
         }
     };
-    let meta = meta(model, parts, &top, oriented);
+    let meta = meta(model, parts, &top, (oriented, two_sided));
     let layout = layout(parts, &top, &part_tables(parts, model.has_attributes)?);
     let chunks = chunk_table(&layout, &top);
     let header = header_for(&meta, &chunks, 0);

@@ -17,6 +17,7 @@ use super::job::{Model, Part, build_leaves};
 use super::mesh_spill::MeshVertex;
 use super::spill::read_records;
 use crate::io::Geometry;
+use crate::surfel::outward::Vote;
 use crate::surfel::{mesh_flux_of, mesh_surfels_of};
 
 /// A job's spill files: own vertices, halo vertices, triangles.
@@ -105,7 +106,7 @@ fn geometry(model: &Model, (own, halo, triangles): Files) -> anyhow::Result<(Geo
 
 /// The job's own vertices' terms of the orientation vote, about the model's mean
 /// vertex `c` (relative to the origin).
-pub fn flux(model: &Model, files: Files, c: DVec3) -> anyhow::Result<(f64, f64)> {
+pub fn flux(model: &Model, files: Files, c: DVec3) -> anyhow::Result<Vote> {
     let (g, own) = geometry(model, files)?;
     Ok(mesh_flux_of(&g, own, c))
 }
@@ -117,7 +118,7 @@ pub fn build(
     files: Files,
     (turn, c): (bool, DVec3),
     part: &Path,
-) -> anyhow::Result<(Part, (f64, f64))> {
+) -> anyhow::Result<(Part, Vote)> {
     let (g, own) = geometry(model, files)?;
     anyhow::ensure!(own > 0, "{}: a job without vertices", files.0.display());
     let (leaves, vote) = mesh_surfels_of(&g, own, (turn, c));

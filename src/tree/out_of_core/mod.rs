@@ -47,6 +47,7 @@ use std::path::Path;
 use glam::{DVec3, IVec3};
 
 use crate::io::formats::ModelStream;
+use crate::surfel::outward::Vote;
 use crate::tree::TreeMeta;
 use job::{Model, Part};
 use spill::{GRID, Grid};
@@ -145,7 +146,7 @@ pub fn build_file(
         chunk_nodes: crate::tree::chunks::chunk_nodes_for((scan.count + scan.count / 2) as usize),
     };
     let mut model = model;
-    let (parts, rebuilt) = loop {
+    let (parts, rebuilt, two_sided) = loop {
         let run = Run {
             stream: &stream,
             scan: &scan,
@@ -156,10 +157,10 @@ pub fn build_file(
             options,
             progress,
         };
-        let (parts, rebuilt) = if stream.has_faces() {
+        let (parts, rebuilt, two_sided) = if stream.has_faces() {
             run.mesh_parts()?
         } else {
-            (run.cloud_parts()?, false)
+            (run.cloud_parts()?, false, false)
         };
         // Errors are stored as f16 multiples of the scale, so it must not be far below
         // the leaves' own (their disks reach past the points' box by their radii, which
@@ -167,13 +168,13 @@ pub fn build_file(
         // everything is built again with theirs; on other models this never happens.
         let needed = parts.iter().map(|p| p.disk_extent).fold(0.0, f32::max);
         if needed <= SCALE_SLACK * model.error_scale {
-            break (parts, rebuilt);
+            break (parts, rebuilt, two_sided);
         }
         model.error_scale = needed;
     };
     progress.stage("write", 0);
     let split = drop_empty(split, &jobs);
-    let meta = assemble::write_file(output, &model, (&split, &parts))?;
+    let meta = assemble::write_file(output, &model, (&split, &parts), two_sided)?;
     Ok(Built {
         meta,
         jobs: parts.len(),
@@ -234,8 +235,9 @@ impl Run<'_> {
 
     /// A mesh's spill and jobs: its vertices with the triangles and vertices their
     /// surfels read, the orientation vote over every job, then each job's build.
-    /// Also says whether the jobs were built twice.
-    fn mesh_parts(&self) -> anyhow::Result<(Vec<Part>, bool)> {
+    /// Also says whether the jobs were built twice, and whether the model is open
+    /// ([`TreeMeta::two_sided`]).
+    fn mesh_parts(&self) -> anyhow::Result<(Vec<Part>, bool, bool)> {
         anyhow::ensure!(
             self.jobs.len() < mesh_spill::NO_JOB as usize,
             "{} jobs: a mesh is split into fewer than {}; raise --memory",
@@ -260,15 +262,18 @@ impl Run<'_> {
         let live: Vec<usize> = (0..self.jobs.len())
             .filter(|&j| self.jobs[j].points > 0)
             .collect();
-        // The orientation is the whole model's vote, which needs every job's face
-        // normals. Rather than a pass of its own, the first job's vote is the guess that
-        // the jobs are built with, each adding its terms as it is built; in the rare
-        // case that the model's vote disagrees, they are built again.
+        // The orientation is the whole model's vote (the model one piece: whether it
+        // faces inward, where it is closed), which needs every job's face normals.
+        // Rather than a pass of its own, the first job's vote is the guess that the
+        // jobs are built with, each adding its terms as it is built; in the rare case
+        // that the model's vote decides otherwise, they are built again. A job is a
+        // part of the model and looks open: its guess is not to turn, wrong only for a
+        // closed model wound inward. Whether the model is open changes nothing in its
+        // parts: it is said in the file's flags.
         let c = self.scan.mean - self.model.origin;
-        let first = mesh_job::flux(self.model, of(live[0]), c)?;
-        let guess = crate::surfel::mesh::faces_inward(first);
+        let guess = mesh_job::flux(self.model, of(live[0]), c)?.turns();
         let mut built = self.build_mesh_jobs(&live, &of, (guess, c))?;
-        let rebuilt = crate::surfel::mesh::faces_inward(built.1) != guess;
+        let rebuilt = built.1.turns() != guess;
         if rebuilt {
             built = self.build_mesh_jobs(&live, &of, (!guess, c))?;
         }
@@ -277,25 +282,24 @@ impl Run<'_> {
                 std::fs::remove_file(f)?;
             }
         }
-        Ok((built.0, rebuilt))
+        Ok((built.0, rebuilt, !built.1.closed()))
     }
 
     /// Builds the mesh jobs `live` with their normals turned when `turn`; returns the
-    /// parts and the sums of the model's orientation vote about `c`.
+    /// parts and the model's orientation vote about `c`.
     fn build_mesh_jobs<'f>(
         &self,
         live: &[usize],
         of: &dyn Fn(usize) -> mesh_job::Files<'f>,
         (turn, c): (bool, DVec3),
-    ) -> anyhow::Result<(Vec<Part>, (f64, f64))> {
+    ) -> anyhow::Result<(Vec<Part>, Vote)> {
         self.progress.stage("build", self.scan.count);
         let mut parts: Vec<Part> = Vec::with_capacity(live.len());
-        let mut vote = (0.0, 0.0);
+        let mut vote = Vote::default();
         for &j in live {
-            let (part, (flux, spread)) =
-                mesh_job::build(self.model, of(j), (turn, c), &self.part_path(j))?;
+            let (part, terms) = mesh_job::build(self.model, of(j), (turn, c), &self.part_path(j))?;
             parts.push(part);
-            vote = (vote.0 + flux, vote.1 + spread);
+            vote = vote.plus(terms);
             self.progress.advance(self.jobs[j].points);
         }
         Ok((parts, vote))

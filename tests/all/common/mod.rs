@@ -119,6 +119,18 @@ pub fn to_mesh(g: &Geometry) -> PolyMesh {
     }
 }
 
+/// `mesh` written as `name` (double coordinates) in a temporary folder, read back, and
+/// its leaf surfels, checked sane.
+pub fn mesh_leaves(mesh: &PolyMesh, name: &str) -> (Geometry, LeafSurfels) {
+    let dir = temp_dir();
+    let path = dir.path().join(name);
+    write_double(&path, mesh);
+    let g = spt::io::ply::read_ply(&path).unwrap().geometry;
+    let leaves = spt::surfel::leaf_surfels(&g);
+    assert_sane(&leaves, name);
+    (g, leaves)
+}
+
 /// Every surfel finite, with a unit normal and a finite radius > 0.
 pub fn assert_sane(leaves: &LeafSurfels, what: &str) {
     for (i, s) in leaves.surfels.iter().enumerate() {
