@@ -155,18 +155,45 @@ fn oct_decode(e: vec2<f32>) -> vec3<f32> {
     return normalize(vec3<f32>(x, y, z));
 }
 
-fn decode_node(a: vec4<u32>, b: vec4<u32>) -> Node {
+// A node's record, its errors in world units: `error_scale` is the placement's (the
+// model's error scale times the instance's scale).
+fn decode_node(a: vec4<u32>, b: vec4<u32>, error_scale: f32) -> Node {
     var n: Node;
     n.position = bitcast<vec3<f32>>(a.xyz);
     n.radius = bitcast<f32>(a.w);
     n.normal = oct_decode(unpack2x16snorm(b.x));
     n.color = unpack4x8unorm(b.y);
-    let errors = unpack2x16float(b.z) * frame.error_scale;
+    let errors = unpack2x16float(b.z) * error_scale;
     n.error = errors.x;
     n.parent_error = errors.y;
-    n.delta = unpack2x16float(b.w).x * frame.error_scale;
+    n.delta = unpack2x16float(b.w).x * error_scale;
     n.level = b.w >> 16u;
     return n;
+}
+
+// Where a model is drawn (src/render/placement.rs): one per instance of the frame, or
+// the one of a model drawn alone. A model point x lies at offset + scale · R x, world
+// axes, relative to the eye (the offset is computed in f64 on the CPU, so that an
+// instance far from the origin keeps its precision). The identity (R = I, scale 1)
+// gives the same bits as no placement: R x = x and 1 · x = x exactly.
+struct Placement {
+    offset: vec3<f32>,
+    scale: f32,
+    // The unit quaternion of R, (x, y, z, w) as four snorm16.
+    rotation: vec2<u32>,
+    // The model's error scale times `scale`: stored errors to world units.
+    error_scale: f32,
+    pad: u32,
+}
+
+fn placement_rotation(p: Placement) -> vec4<f32> {
+    return normalize(vec4<f32>(unpack2x16snorm(p.rotation.x), unpack2x16snorm(p.rotation.y)));
+}
+
+// v rotated by the unit quaternion q: v + w t + q × t with t = 2 q × v.
+fn rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let t = 2.0 * cross(q.xyz, v);
+    return v + q.w * t + cross(q.xyz, t);
 }
 
 // Drawn iff fine enough (e ≤ ε·d) and its parent is not, seen conservatively
@@ -202,18 +229,22 @@ fn radius_color(radius: f32) -> vec3<f32> {
     return mix(vec3<f32>(0.15, 0.3, 0.95), vec3<f32>(0.95, 0.25, 0.15), t);
 }
 
-// A node's disk in view space: centre, unit normal, rendered radius.
+// A node's disk in view space: centre, unit normal, rendered radius; and its centre
+// in world axes relative to the eye, and the rotation of its placement.
 struct ViewDisk {
     center: vec3<f32>,
     normal: vec3<f32>,
     radius: f32,
+    world: vec3<f32>,
+    rotation: vec4<f32>,
 }
 
-fn view_disk(n: Node) -> ViewDisk {
-    let world = n.position + frame.model_offset;
+fn view_disk(n: Node, p: Placement) -> ViewDisk {
+    let q = placement_rotation(p);
+    let world = p.offset + p.scale * rotate(q, n.position);
     let center = (frame.view * vec4<f32>(world, 1.0)).xyz;
-    let normal = normalize((frame.view * vec4<f32>(n.normal, 0.0)).xyz);
-    return ViewDisk(center, normal, n.radius);
+    let normal = normalize((frame.view * vec4<f32>(rotate(q, n.normal), 0.0)).xyz);
+    return ViewDisk(center, normal, n.radius * p.scale, world, q);
 }
 
 // The per-splat culling of both strategies (vertex stage, or compute compaction): the
@@ -222,7 +253,7 @@ fn view_disk(n: Node) -> ViewDisk {
 fn splat_visible(n: Node, disk: ViewDisk) -> bool {
     var lod_distance = length(disk.center);
     if frame.lod_frozen != 0u {
-        lod_distance = length(n.position + frame.model_offset - frame.lod_eye);
+        lod_distance = length(disk.world - frame.lod_eye);
     }
     if !selected(n, lod_distance) {
         return false;

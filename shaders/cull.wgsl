@@ -28,11 +28,12 @@ struct Compaction {
     first: u32,
 }
 
-// A range of the slice to test: its first node, and the running total of the nodes of
-// the ranges up to and including it.
+// A range of the slice to test: its first node, the running total of the nodes of the
+// ranges up to and including it, and the placement it is drawn at (`placements`).
 struct TestRange {
     start: u32,
     end: u32,
+    placement: u32,
 }
 
 @group(1) @binding(0) var<storage, read> nodes: array<vec4<u32>>;
@@ -40,10 +41,14 @@ struct TestRange {
 @group(1) @binding(2) var<storage, read_write> compaction: Compaction;
 @group(1) @binding(3) var<storage, read> ranges: array<TestRange>;
 @group(1) @binding(4) var<storage, read> shapes: array<SplatShape>;
+@group(1) @binding(5) var<storage, read> placements: array<Placement>;
+// Each survivor's placement, beside `survivors`; a model drawn alone binds one element,
+// which every survivor shares (its placement 0).
+@group(1) @binding(6) var<storage, read_write> survivor_placements: array<u32>;
 
-// The node (slice index) that thread i tests: in the first range whose running end
-// exceeds i, found by binary search.
-fn tested_node(i: u32) -> u32 {
+// The node (slice index) that thread i tests, and its range's placement: in the first
+// range whose running end exceeds i, found by binary search.
+fn tested_node(i: u32) -> vec2<u32> {
     var lo = 0u;
     var hi = compaction.range_count - 1u;
     while lo < hi {
@@ -58,7 +63,13 @@ fn tested_node(i: u32) -> u32 {
     if lo > 0u {
         before = ranges[lo - 1u].end;
     }
-    return ranges[lo].start + (i - before);
+    return vec2<u32>(ranges[lo].start + (i - before), ranges[lo].placement);
+}
+
+// Stores survivor `i` at `placement` in list slot `slot`.
+fn keep(slot: u32, i: u32, placement: u32) {
+    survivors[slot] = i;
+    survivor_placements[min(slot, arrayLength(&survivor_placements) - 1u)] = placement;
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
@@ -66,17 +77,19 @@ fn cull(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= compaction.count {
         return;
     }
-    let i = tested_node(id.x);
-    let node = decode_node(nodes[2u * i], nodes[2u * i + 1u]);
-    let disk = view_disk(node);
+    let tested = tested_node(id.x);
+    let i = tested.x;
+    let placement = placements[tested.y];
+    let node = decode_node(nodes[2u * i], nodes[2u * i + 1u], placement.error_scale);
+    let disk = view_disk(node, placement);
     if !splat_visible(node, disk) {
         return;
     }
     let packed = shapes[i];
     // `on_outline`, with the shape decoded only where its kind does not decide.
-    if outline_by_kind(packed.clip) || silhouette_near(disk, shape_frame(packed, disk.normal)) {
-        survivors[arrayLength(&survivors) - 1u - atomicAdd(&compaction.outline.instance_count, 1u)] = i;
+    if outline_by_kind(packed.clip) || silhouette_near(disk, shape_frame(packed, disk.normal, disk.rotation)) {
+        keep(arrayLength(&survivors) - 1u - atomicAdd(&compaction.outline.instance_count, 1u), i, tested.y);
     } else {
-        survivors[atomicAdd(&compaction.inner.instance_count, 1u)] = i;
+        keep(atomicAdd(&compaction.inner.instance_count, 1u), i, tested.y);
     }
 }

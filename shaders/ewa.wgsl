@@ -170,12 +170,14 @@ fn not_placed() -> Placed {
     return out;
 }
 
-// Node `index` of the slice placed on the screen; with `cull`, tested first (the
+// Node `index` of the slice at placement `placement_index` (its instance's, or 0 for a
+// model drawn alone) placed on the screen; with `cull`, tested first (the
 // selection test and, for one class of splat, `on_outline`). The splat's `clip` holds
 // its quad's depth, its xy are the caller's.
-fn place_splat(index: u32, cull: bool) -> Placed {
-    let node = decode_node(nodes[2u * index], nodes[2u * index + 1u]);
-    let disk = view_disk(node);
+fn place_splat(index: u32, placement_index: u32, cull: bool) -> Placed {
+    let placement = placements[placement_index];
+    let node = decode_node(nodes[2u * index], nodes[2u * index + 1u], placement.error_scale);
+    let disk = view_disk(node, placement);
     if cull && !splat_visible(node, disk) {
         return not_placed();
     }
@@ -184,7 +186,7 @@ fn place_splat(index: u32, cull: bool) -> Placed {
     let r = disk.radius;
     let near = frame.near;
     let packed = shapes[index];
-    let shape = shape_frame(packed, normal);
+    let shape = shape_frame(packed, normal, disk.rotation);
     let u = shape.u;
     let v = shape.v;
     let ratio = shape.ratio;

@@ -26,6 +26,8 @@
 @group(1) @binding(2) var<storage, read> shapes: array<SplatShape>;
 @group(1) @binding(3) var<storage, read> attributes: array<u32>;
 @group(1) @binding(4) var<storage, read> compaction: Survivors;
+@group(1) @binding(5) var<storage, read> placements: array<Placement>;
+@group(1) @binding(6) var<storage, read> survivor_placements: array<u32>;
 @group(2) @binding(0) var<storage, read_write> visible: array<atomic<u32>>;
 @group(2) @binding(1) var<storage, read_write> sums: array<atomic<u32>>;
 @group(2) @binding(2) var<storage, read_write> carries: array<atomic<u32>>;
@@ -67,8 +69,10 @@ fn survivor_count() -> u32 {
     return select(compaction.inner, compaction.outline, SPLAT_CLASS == OUTLINE_SPLATS);
 }
 
-fn survivor(t: u32) -> u32 {
-    return survivors[select(t, arrayLength(&survivors) - 1u - t, SPLAT_CLASS == OUTLINE_SPLATS)];
+// Survivor t: its node, and its placement (cull.wgsl's `keep`).
+fn survivor(t: u32) -> vec2<u32> {
+    let slot = select(t, arrayLength(&survivors) - 1u - t, SPLAT_CLASS == OUTLINE_SPLATS);
+    return vec2<u32>(survivors[slot], survivor_placements[min(slot, arrayLength(&survivor_placements) - 1u)]);
 }
 
 // The pixels whose centres lie in a placed box (NDC lo, hi): the first pixel, and the
@@ -92,8 +96,9 @@ fn raster(
     let t = (group.y * groups.x + group.x) * RASTER_WORKGROUP + lane;
     var box = vec4<i32>(0);
     if t < survivor_count() {
-        let node = survivor(t);
-        let placed = place_splat(node, false);
+        let kept = survivor(t);
+        let node = kept.x;
+        let placed = place_splat(node, kept.y, false);
         if placed.drawn {
             box = pixel_box(placed.lo, placed.hi);
         }

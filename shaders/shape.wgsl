@@ -38,8 +38,10 @@ struct ShapeFrame {
     gradient: vec3<f32>, // the normal field G = [[a, b], [b, c]] per major radius: a, b, c
 }
 
-fn shape_frame(packed: SplatShape, normal: vec3<f32>) -> ShapeFrame {
-    let axis = (frame.view * vec4<f32>(oct_decode(unpack2x16snorm(packed.axis)), 0.0)).xyz;
+// `normal`: the splat's, view space; `rotation`: its placement's (ViewDisk::rotation).
+fn shape_frame(packed: SplatShape, normal: vec3<f32>, rotation: vec4<f32>) -> ShapeFrame {
+    let model_axis = oct_decode(unpack2x16snorm(packed.axis));
+    let axis = (frame.view * vec4<f32>(rotate(rotation, model_axis), 0.0)).xyz;
     let u = major_axis(normal, axis);
     let ratio_a = unpack2x16float(packed.ratio_a);
     return ShapeFrame(u, cross(normal, u), ratio_a.x, vec3<f32>(ratio_a.y, unpack2x16float(packed.b_c)));

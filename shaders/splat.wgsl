@@ -15,6 +15,10 @@
 @group(1) @binding(2) var<storage, read> shapes: array<SplatShape>;
 // Each node's LiDAR attributes (one u32 of zero for a model without them).
 @group(1) @binding(3) var<storage, read> attributes: array<u32>;
+// Where the model is drawn, and each survivor's placement (one element for a model
+// drawn alone: every survivor's is 0; see cull.wgsl).
+@group(1) @binding(4) var<storage, read> placements: array<Placement>;
+@group(1) @binding(5) var<storage, read> survivor_placements: array<u32>;
 // Pass 1's depth, for pass 2 (`fs_attributes`); read as a float texture, as pass 3 does.
 @group(2) @binding(0) var visible_depth: texture_2d<f32>;
 
@@ -27,7 +31,7 @@ fn culled() -> SplatVarying {
 
 @vertex
 fn vs_splat(@builtin(vertex_index) corner: u32, @builtin(instance_index) index: u32) -> SplatVarying {
-    return splat_vertex(index, corner, true);
+    return splat_vertex(index, 0u, corner, true);
 }
 
 // The cull pass lists the survivors that `on_outline` keeps from the end of the list
@@ -35,12 +39,13 @@ fn vs_splat(@builtin(vertex_index) corner: u32, @builtin(instance_index) index: 
 @vertex
 fn vs_splat_compacted(@builtin(vertex_index) corner: u32, @builtin(instance_index) index: u32) -> SplatVarying {
     let slot = select(index, arrayLength(&survivors) - 1u - index, SPLAT_CLASS == OUTLINE_SPLATS);
-    return splat_vertex(survivors[slot], corner, false);
+    let placement = survivor_placements[min(slot, arrayLength(&survivor_placements) - 1u)];
+    return splat_vertex(survivors[slot], placement, corner, false);
 }
 
-// A corner of node `index`'s quad (its placed box, see `place_splat`).
-fn splat_vertex(index: u32, corner: u32, cull: bool) -> SplatVarying {
-    let placed = place_splat(index, cull);
+// A corner of node `index`'s quad at `placement` (its placed box, see `place_splat`).
+fn splat_vertex(index: u32, placement: u32, corner: u32, cull: bool) -> SplatVarying {
+    let placed = place_splat(index, placement, cull);
     if !placed.drawn {
         return culled();
     }

@@ -47,7 +47,8 @@ enum Command {
     /// splatting of its sequential point tree; prints splats drawn, prefix length and GPU
     /// time. `--mode mesh` draws the mesh itself as the reference.
     Render {
-        /// The model: a PLY, LAS or LAZ file, or an .spt file.
+        /// The model: a PLY, LAS or LAZ file, or an .spt file; or a scene of instances
+        /// (a .json file, docs/scenes.md).
         model: PathBuf,
         /// The PNG to write.
         #[arg(short, long)]
@@ -124,6 +125,13 @@ fn main() -> ExitCode {
                 Ok(false) => spt::apps::convert::run(&input, &output),
                 Err(e) => Err(e),
             }
+        }
+        Command::Render {
+            model,
+            output,
+            args,
+        } if spt::tree::instances::is_scene(&model) => {
+            spt::apps::render_scene::run(&model, &output, &args)
         }
         Command::Render {
             model,

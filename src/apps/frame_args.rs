@@ -7,6 +7,7 @@ use glam::{DVec3, Vec3};
 use crate::io::up::UpAxis;
 use crate::render::{Camera, Culling, Mode, OrbitAxes, PrefixCut, Raster, Settings};
 use crate::tree::TreeMeta;
+use crate::tree::chunks::Chunk;
 use crate::tree::scene::Scene;
 
 /// The options `spt render` (and the viewer's screenshots) take.
@@ -160,12 +161,17 @@ impl RenderArgs {
     }
 
     pub fn camera(&self, scene: &Scene) -> anyhow::Result<Camera> {
+        self.camera_for(scene.meta(), scene.index.chunks())
+    }
+
+    /// [`RenderArgs::camera`] of a model described by `meta`, framed on `chunks`.
+    pub fn camera_for(&self, meta: &TreeMeta, chunks: &[Chunk]) -> anyhow::Result<Camera> {
         let fov = self.fov.to_radians();
         if !(0.01..3.1).contains(&fov) {
             bail!("--fov must be between 1 and 177 degrees");
         }
         let aspect = self.size.0 as f64 / self.size.1 as f64;
-        let meta = &with_up(scene.meta(), self.up);
+        let meta = &with_up(meta, self.up);
         Ok(match (self.orbit, self.eye, self.target) {
             (Some([az, el, dist]), _, _) => Camera::orbit(meta, az, el, dist, fov),
             (None, Some(eye), Some(target)) => {
@@ -180,7 +186,7 @@ impl RenderArgs {
                     fov_y: fov,
                 }
             }
-            _ => Camera::framed(meta, scene.index.chunks(), fov, aspect),
+            _ => Camera::framed(meta, chunks, fov, aspect),
         })
     }
 }

@@ -8,6 +8,7 @@ pub mod frame_args;
 pub mod info;
 pub mod progress;
 pub mod render;
+pub mod render_scene;
 pub mod stats;
 pub mod text;
 pub mod view;

@@ -32,8 +32,19 @@ pub mod cull {
     pub const COMPACTION: Slot = slot(1, 2, "compaction");
     pub const RANGES: Slot = slot(1, 3, "ranges");
     pub const SHAPES: Slot = slot(1, 4, "shapes");
+    pub const PLACEMENTS: Slot = slot(1, 5, "placements");
+    pub const SURVIVOR_PLACEMENTS: Slot = slot(1, 6, "survivor_placements");
     #[cfg(test)]
-    pub const ALL: &[Slot] = &[super::FRAME, NODES, SURVIVORS, COMPACTION, RANGES, SHAPES];
+    pub const ALL: &[Slot] = &[
+        super::FRAME,
+        NODES,
+        SURVIVORS,
+        COMPACTION,
+        RANGES,
+        SHAPES,
+        PLACEMENTS,
+        SURVIVOR_PLACEMENTS,
+    ];
 }
 
 /// Groups 1 and 2 of the splat passes (`shaders/splat.wgsl`): one slice of the list
@@ -44,6 +55,8 @@ pub mod splat {
     pub const SURVIVORS: Slot = slot(1, 1, "survivors");
     pub const SHAPES: Slot = slot(1, 2, "shapes");
     pub const ATTRIBUTES: Slot = slot(1, 3, "attributes");
+    pub const PLACEMENTS: Slot = slot(1, 4, "placements");
+    pub const SURVIVOR_PLACEMENTS: Slot = slot(1, 5, "survivor_placements");
     pub const VISIBLE_DEPTH: Slot = slot(2, 0, "visible_depth");
     #[cfg(test)]
     pub const ALL: &[Slot] = &[
@@ -52,6 +65,8 @@ pub mod splat {
         SURVIVORS,
         SHAPES,
         ATTRIBUTES,
+        PLACEMENTS,
+        SURVIVOR_PLACEMENTS,
         VISIBLE_DEPTH,
     ];
 }
@@ -75,6 +90,8 @@ pub mod raster {
     pub use super::splat::{ATTRIBUTES, NODES, SHAPES, SURVIVORS};
     use super::{Slot, slot};
     pub const COMPACTION: Slot = slot(1, 4, "compaction");
+    pub const PLACEMENTS: Slot = slot(1, 5, "placements");
+    pub const SURVIVOR_PLACEMENTS: Slot = slot(1, 6, "survivor_placements");
     #[cfg(test)]
     pub const ALL: &[Slot] = &[
         super::FRAME,
@@ -83,6 +100,8 @@ pub mod raster {
         SHAPES,
         ATTRIBUTES,
         COMPACTION,
+        PLACEMENTS,
+        SURVIVOR_PLACEMENTS,
     ];
 }
 

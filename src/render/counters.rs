@@ -32,22 +32,23 @@ pub struct GpuCounters {
 
 /// Bytes of one frame's counters: the timestamps, then two u32 per slice (of the
 /// whole list, uploaded or not): its survivors on an outline and the others.
-fn counters_bytes(gpu_scene: &GpuScene) -> u64 {
-    STAMP_BYTES + 8 * gpu_scene.planned_slices().max(1) as u64
+fn counters_bytes(gpu_scenes: &[&GpuScene]) -> u64 {
+    let slices: usize = gpu_scenes.iter().map(|g| g.planned_slices()).sum();
+    STAMP_BYTES + 8 * slices.max(1) as u64
 }
 
 /// Records copies of the frame's counters into `into` (at least `counters_bytes`).
 pub(super) fn copy_counters(
     encoder: &mut wgpu::CommandEncoder,
     targets: &FrameTargets,
-    gpu_scene: &GpuScene,
+    gpu_scenes: &[&GpuScene],
     into: &wgpu::Buffer,
 ) {
     if let Some((_, resolve)) = &targets.queries {
         encoder.copy_buffer_to_buffer(resolve, 0, into, 0, STAMP_BYTES);
     }
-    // The resident slices in order, as the frame's `slices` counts them.
-    for (k, slice) in gpu_scene.resident().enumerate() {
+    // The resident slices in order, model after model, as the frame's `slices` counts them.
+    for (k, slice) in gpu_scenes.iter().flat_map(|g| g.resident()).enumerate() {
         // The indirect draws' instance counts: the survivors.
         for (j, at) in Compaction::SURVIVORS_AT.into_iter().enumerate() {
             let to = STAMP_BYTES + 4 * (2 * k + j) as u64;
@@ -103,11 +104,11 @@ pub(super) fn read_counters_now(
     gpu: &Gpu,
     mut encoder: wgpu::CommandEncoder,
     targets: &FrameTargets,
-    gpu_scene: &GpuScene,
+    gpu_scenes: &[&GpuScene],
     frame: &EncodedFrame,
 ) -> anyhow::Result<GpuCounters> {
-    let buffer = mappable_counters(gpu, counters_bytes(gpu_scene));
-    copy_counters(&mut encoder, targets, gpu_scene, &buffer);
+    let buffer = mappable_counters(gpu, counters_bytes(gpu_scenes));
+    copy_counters(&mut encoder, targets, gpu_scenes, &buffer);
     gpu.queue.submit([encoder.finish()]);
     let bytes = readback::read(&gpu.device, &buffer)?;
     Ok(parse_counters(gpu, &bytes, frame))
@@ -134,7 +135,7 @@ impl CounterReadback {
     pub fn new(gpu: &Gpu, gpu_scene: &GpuScene) -> CounterReadback {
         CounterReadback {
             free: (0..RING)
-                .map(|_| mappable_counters(gpu, counters_bytes(gpu_scene)))
+                .map(|_| mappable_counters(gpu, counters_bytes(&[gpu_scene])))
                 .collect(),
             recorded: None,
             in_flight: VecDeque::new(),
@@ -150,7 +151,7 @@ impl CounterReadback {
         frame: &EncodedFrame,
     ) {
         if let Some(buffer) = self.free.pop() {
-            copy_counters(encoder, targets, gpu_scene, &buffer);
+            copy_counters(encoder, targets, &[gpu_scene], &buffer);
             self.recorded = Some((buffer, frame.clone()));
         }
     }

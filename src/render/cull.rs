@@ -10,6 +10,7 @@ use bytemuck::{Pod, Zeroable};
 
 use super::bindings::{Slot, cull as slots};
 use super::gpu_scene::Share;
+use super::placement::Placement;
 use super::shaders::{WORKGROUP_SIZE, module};
 
 /// A slice's compaction record (`struct Compaction` in cull.wgsl): the arguments of the
@@ -37,27 +38,31 @@ pub(super) struct DrawIndirectArgs {
 }
 
 /// One range of a slice to test (`struct TestRange` in cull.wgsl): its first node
-/// (relative to the slice) and the running total of the nodes of the slice's ranges up
-/// to and including it. Thread i tests node `start + i − (end of the range before)`
-/// of the first range whose `end` exceeds i.
+/// (relative to the slice), the running total of the nodes of the slice's ranges up
+/// to and including it, and the placement its nodes are drawn at. Thread i tests node
+/// `start + i − (end of the range before)` of the first range whose `end` exceeds i.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
 pub(super) struct TestRange {
     pub start: u32,
     pub end: u32,
+    pub placement: u32,
 }
 
 impl TestRange {
-    /// The records of a share's ranges.
-    pub fn of(ranges: &[std::ops::Range<u32>]) -> Vec<TestRange> {
+    /// The records of a share's ranges, range k at `placements[k]` (all at placement 0
+    /// when `placements` is empty: a model drawn alone).
+    pub fn of(ranges: &[std::ops::Range<u32>], placements: &[u32]) -> Vec<TestRange> {
         let mut end = 0;
         ranges
             .iter()
-            .map(|r| {
+            .enumerate()
+            .map(|(k, r)| {
                 end += r.len() as u32;
                 TestRange {
                     start: r.start,
                     end,
+                    placement: placements.get(k).copied().unwrap_or(0),
                 }
             })
             .collect()
@@ -133,6 +138,8 @@ impl CullPass {
                 storage(slots::COMPACTION, false, size_of::<Compaction>() as u64),
                 storage(slots::RANGES, true, size_of::<TestRange>() as u64),
                 storage(slots::SHAPES, true, shape),
+                storage(slots::PLACEMENTS, true, size_of::<Placement>() as u64),
+                storage(slots::SURVIVOR_PLACEMENTS, false, size_of::<u32>() as u64),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -168,7 +175,7 @@ impl CullPass {
             let record = Compaction::reset(share.count, share.ranges.len() as u32, first);
             queue.write_buffer(&slice.compaction, 0, bytemuck::bytes_of(&record));
             if !share.ranges.is_empty() {
-                let ranges = TestRange::of(&share.ranges);
+                let ranges = TestRange::of(&share.ranges, &share.placements);
                 queue.write_buffer(&slice.ranges, 0, bytemuck::cast_slice(&ranges));
             }
         }
@@ -198,9 +205,13 @@ mod tests {
 
     #[test]
     fn test_ranges_carry_running_ends() {
-        let r = TestRange::of(&[3..5, 10..11, 20..24]);
+        let r = TestRange::of(&[3..5, 10..11, 20..24], &[]);
         let ends: Vec<u32> = r.iter().map(|t| t.end).collect();
         assert_eq!(ends, [2, 3, 7]);
         assert_eq!(r[2].start, 20);
+        assert!(r.iter().all(|t| t.placement == 0));
+        let placed = TestRange::of(&[0..4, 0..4], &[7, 9]);
+        let placed: Vec<(u32, u32)> = placed.iter().map(|t| (t.end, t.placement)).collect();
+        assert_eq!(placed, [(4, 7), (8, 9)]);
     }
 }

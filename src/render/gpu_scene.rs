@@ -5,6 +5,8 @@
 use std::ops::Range;
 use std::sync::atomic::AtomicBool;
 
+use super::upload::InstancedRoom;
+
 /// One slice of the list on the GPU, with what compute culling needs.
 pub(super) struct Slice {
     /// Its index in the scene's plan, and its first node (list index).
@@ -29,10 +31,12 @@ pub(super) struct Slice {
 }
 
 /// What one frame tests of a slice: its part of the frame's ranges, relative to the
-/// slice's first node, and the nodes in them.
+/// slice's first node, the placement of each (empty: all at placement 0, a model drawn
+/// alone), and the nodes in them.
 pub(super) struct Share<'a> {
     pub slice: &'a Slice,
     pub ranges: Vec<Range<u32>>,
+    pub placements: Vec<u32>,
     pub count: u32,
 }
 
@@ -58,6 +62,19 @@ pub struct GpuScene {
     /// Whether the last frame planned found its asked ε's ranges all resident: the
     /// next one searches at that ε first (`plan.rs`).
     pub(super) asked_fitted: AtomicBool,
+    /// Where the model is drawn this frame ([`super::placement::Placement`]s, written
+    /// before each frame): one for a model drawn alone, one per instance otherwise.
+    pub(super) placements: wgpu::Buffer,
+    /// Room per slice for a model drawn at many placements (None: drawn alone).
+    pub(super) room: Option<InstancedRoom>,
+}
+
+/// What each slice of a [`GpuScene`] binds besides its own buffers, and the room it
+/// makes: given to whoever uploads slices ([`GpuScene::home`]), on any thread.
+#[derive(Clone)]
+pub struct SliceHome {
+    pub(super) placements: wgpu::Buffer,
+    pub(super) room: Option<InstancedRoom>,
 }
 
 /// One slice uploaded, to be added with [`GpuScene::insert`].
@@ -79,7 +96,11 @@ impl SliceUpload {
 pub struct MeshUpload(pub(super) MeshBuffers);
 
 impl GpuScene {
-    pub(super) fn new(total: usize, slice_nodes: usize) -> GpuScene {
+    pub(super) fn new(
+        total: usize,
+        slice_nodes: usize,
+        (placements, room): (wgpu::Buffer, Option<InstancedRoom>),
+    ) -> GpuScene {
         let slice_nodes = slice_nodes.max(1);
         GpuScene {
             slices: (0..total.div_ceil(slice_nodes)).map(|_| None).collect(),
@@ -88,6 +109,16 @@ impl GpuScene {
             total,
             resident_bytes: 0,
             asked_fitted: AtomicBool::new(true),
+            placements,
+            room,
+        }
+    }
+
+    /// What its slices bind and make room for, to upload them.
+    pub fn home(&self) -> SliceHome {
+        SliceHome {
+            placements: self.placements.clone(),
+            room: self.room,
         }
     }
 
@@ -213,6 +244,7 @@ impl GpuScene {
                     slice,
                     count: local.iter().map(|r| r.len() as u32).sum(),
                     ranges: local,
+                    placements: Vec::new(),
                 }
             })
             .collect()

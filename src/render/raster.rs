@@ -26,6 +26,7 @@ use super::bindings::{Slot, accumulate, raster as slots, resolve as out};
 use super::cull::storage;
 use super::gbuffer::{COVERAGE, GBUFFER, GBuffer};
 use super::gpu_scene::Share;
+use super::placement::Placement;
 use super::settings::Mode;
 use super::shaders::{
     ColorSource, QuadReach, RASTER_WORKGROUP, RESOLVE_TILE, RasterPass, SplatClass, module,
@@ -42,7 +43,8 @@ type ByClass = [wgpu::ComputePipeline; 2];
 /// (a CPU adapter compiles each for a second or more).
 pub(super) struct ComputeRaster {
     device: wgpu::Device,
-    /// Group 1: a slice's nodes, survivors, shapes, attributes and compaction record.
+    /// Group 1: a slice's nodes, survivors, shapes, attributes and compaction record, its
+    /// model's placements and its survivors'.
     pub slice_layout: wgpu::BindGroupLayout,
     /// Group 2: the per-pixel buffers.
     accumulation_layout: wgpu::BindGroupLayout,
@@ -97,6 +99,8 @@ impl ComputeRaster {
                 storage(slots::SHAPES, true, size_of::<SplatShape>() as u64),
                 storage(slots::ATTRIBUTES, true, size_of::<PointAttributes>() as u64),
                 storage(slots::COMPACTION, true, compaction),
+                storage(slots::PLACEMENTS, true, size_of::<Placement>() as u64),
+                storage(slots::SURVIVOR_PLACEMENTS, true, 4),
             ],
         );
         let buffers: Vec<_> = accumulate::ALL.map(|s| storage(s, false, 4)).into();
@@ -220,7 +224,7 @@ impl ComputeRaster {
     }
 
     /// A slice's bind group 1 for the raster passes.
-    pub fn bind_slice(&self, buffers: [(Slot, &wgpu::Buffer); 5]) -> wgpu::BindGroup {
+    pub fn bind_slice(&self, buffers: [(Slot, &wgpu::Buffer); 7]) -> wgpu::BindGroup {
         let entries = buffers.map(|(slot, b)| wgpu::BindGroupEntry {
             binding: slot.binding,
             resource: b.as_entire_binding(),

@@ -24,8 +24,9 @@ use super::cull::CullPass;
 use super::frame::{FrameUniform, frame_layout, srgb_to_linear};
 use super::gbuffer::{GBuffer, Writes, store};
 use super::gpu::Gpu;
-use super::gpu_scene::{GpuScene, MeshUpload, SliceUpload};
+use super::gpu_scene::{GpuScene, MeshUpload, SliceHome, SliceUpload};
 use super::mesh::MeshPass;
+use super::placement::Placement;
 use super::plan::{EncodedFrame, plan};
 use super::raster::ComputeRaster;
 use super::readback;
@@ -157,24 +158,49 @@ impl Renderer {
         let uniform = FrameUniform::new(scene.meta(), camera, settings, targets.size, frame.eps);
         let queue = &self.gpu.queue;
         queue.write_buffer(&targets.frame_buffer, 0, bytemuck::bytes_of(&uniform));
+        let meta = scene.meta();
+        let alone = Placement::alone(meta.origin.into(), camera.eye, meta.error_scale);
+        queue.write_buffer(&gpu_scene.placements, 0, bytemuck::bytes_of(&alone));
         let shares = gpu_scene.shares(&frame.ranges);
+        let mesh = gpu_scene.mesh.as_ref();
+        self.encode_passes(
+            encoder,
+            targets,
+            &shares,
+            settings,
+            (compute, rasterized, mesh),
+        );
+        Ok(frame)
+    }
+
+    /// Records the passes of a frame planned into `shares`: culling (`compute`), the
+    /// splat passes in compute (`rasterized`) or through the raster pipeline (or the
+    /// `mesh`, in mesh mode), shading, and the timestamps' resolve.
+    pub(super) fn encode_passes(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &FrameTargets,
+        shares: &[super::gpu_scene::Share],
+        settings: &Settings,
+        (compute, rasterized, mesh): (bool, bool, Option<&super::gpu_scene::MeshBuffers>),
+    ) {
         let start = targets.compute_timestamps(Some(stamp::START), None);
         if compute {
+            let queue = &self.gpu.queue;
             self.cull
-                .encode(queue, encoder, &targets.frame_bind, &shares, start);
+                .encode(queue, encoder, &targets.frame_bind, shares, start);
         }
         if rasterized {
             let (accumulation, gbuffer) = self.accumulation(targets);
             self.raster
-                .encode(encoder, targets, accumulation, &shares, settings.mode);
+                .encode(encoder, targets, accumulation, shares, settings.mode);
             self.shading.encode(encoder, targets, gbuffer);
         } else {
-            self.encode_hardware(encoder, targets, &shares, settings, gpu_scene);
+            self.encode_hardware(encoder, targets, shares, settings, mesh);
         }
         if let Some((set, resolve)) = &targets.queries {
             encoder.resolve_query_set(set, 0..stamp::COUNT, resolve, 0);
         }
-        Ok(frame)
     }
 
     /// The way `asked` draws on this adapter: [`Raster::Auto`] is compute
@@ -209,7 +235,7 @@ impl Renderer {
     /// where they ask for it and the adapter cannot (no storage textures of the
     /// G-buffer's formats, or per-pixel buffers larger than it binds); [`Raster::Auto`]
     /// then draws through the raster pipeline.
-    fn rasterized(&self, settings: &Settings, size: (u32, u32)) -> anyhow::Result<bool> {
+    pub(super) fn rasterized(&self, settings: &Settings, size: (u32, u32)) -> anyhow::Result<bool> {
         let chosen = self.raster(settings.raster) == Raster::Compute && settings.mode != Mode::Mesh;
         if !chosen {
             return Ok(false);
@@ -253,7 +279,7 @@ impl Renderer {
         targets: &FrameTargets,
         shares: &[super::gpu_scene::Share],
         settings: &Settings,
-        gpu_scene: &GpuScene,
+        mesh: Option<&super::gpu_scene::MeshBuffers>,
     ) {
         let compute = settings.culling == Culling::Compute && settings.mode != Mode::Mesh;
         let g = &targets.gbuffer;
@@ -264,7 +290,7 @@ impl Renderer {
         let clear_start = (!compute).then_some(stamp::START);
         let clear_stamps = targets.timestamps(clear_start, clear_end);
         g.pass(encoder, "clear", Writes::All, true, clear_stamps);
-        match (settings.mode, &gpu_scene.mesh) {
+        match (settings.mode, mesh) {
             (Mode::Mesh, Some(mesh)) => {
                 let stamps = targets.timestamps(None, Some(stamp::ATTRIBUTES_END));
                 self.mesh
@@ -310,10 +336,11 @@ impl Renderer {
         let nodes = scene.nodes();
         report.step(Step::Upload, nodes.len() as u64);
         let mut gpu_scene = self.empty_gpu_scene(scene, None);
+        let home = gpu_scene.home();
         for k in 0..gpu_scene.planned_slices() {
             let range = gpu_scene.slice_range(k);
             report.advance(range.len() as u64);
-            gpu_scene.insert(self.upload_slice(scene, k, range));
+            gpu_scene.insert(self.upload_slice(scene, &home, k, range));
         }
         if let Some(mesh) = self.upload_mesh(scene) {
             gpu_scene.set_mesh(mesh);
@@ -325,14 +352,16 @@ impl Renderer {
     /// `budget` (bytes) or, without one, in the largest slices a binding holds.
     pub fn empty_gpu_scene(&self, scene: &Scene, budget: Option<u64>) -> GpuScene {
         let total = scene.nodes().len();
-        upload::empty_gpu_scene(&self.gpu, total, budget, scene.meta().has_attributes)
+        upload::empty_gpu_scene(&self.gpu, total, budget, scene.meta().has_attributes, None)
     }
 
     /// Uploads slice `k` of a scene's list, the node `range` of the plan of
-    /// [`Renderer::empty_gpu_scene`] ([`GpuScene::slice_range`]).
+    /// [`Renderer::empty_gpu_scene`] ([`GpuScene::slice_range`]), into `home`
+    /// ([`GpuScene::home`]).
     pub fn upload_slice(
         &self,
         scene: &Scene,
+        home: &SliceHome,
         k: usize,
         range: std::ops::Range<usize>,
     ) -> SliceUpload {
@@ -348,6 +377,7 @@ impl Renderer {
             (&self.splats, &self.cull, &self.raster),
             (k, range.start),
             slice,
+            (&home.placements, home.room),
             max_ranges,
         )
     }
@@ -385,24 +415,7 @@ impl Renderer {
         let device = &self.gpu.device;
         let mut encoder = device.create_command_encoder(&Default::default());
         let frame = self.encode(&mut encoder, targets, scene, gpu_scene, camera, settings)?;
-        // Read back: the output, pass 3's covered mask, and the colour and normal sums
-        // (their weights and view distances give the depth).
-        let g = &targets.gbuffer;
-        let out_buffer = readback::copy_texture(device, &mut encoder, &targets.output, 4);
-        let covered_buffer = readback::copy_texture(device, &mut encoder, &targets.covered, 1);
-        let weight_buffer = readback::copy_texture(device, &mut encoder, &g.color_sum, 8);
-        let normal_buffer = readback::copy_texture(device, &mut encoder, &g.normal_sum, 8);
-        let counters = read_counters_now(&self.gpu, encoder, targets, gpu_scene, &frame)?;
-        let (width, height) = targets.size;
-        let rgba = readback::unpad_rgba8(&readback::read(device, &out_buffer)?, width, height);
-        let covered = readback::mask(&readback::read(device, &covered_buffer)?, width, height);
-        let weights = readback::read(device, &weight_buffer)?;
-        let depth = readback::depth(
-            &weights,
-            &readback::read(device, &normal_buffer)?,
-            width,
-            height,
-        );
+        let (image, counters) = self.read_frame(encoder, targets, &[gpu_scene], &frame)?;
         let meta = scene.meta();
         let nodes = scene.nodes();
         let selected = frame
@@ -412,13 +425,7 @@ impl Renderer {
             .filter(|r| is_drawn(r, meta.error_scale, frame.lod_eye, frame.eps))
             .count();
         Ok((
-            Image {
-                width,
-                height,
-                rgba,
-                covered,
-                depth,
-            },
+            image,
             FrameStats {
                 tested: frame.tested,
                 chunks: scene.index.chunks().len(),
@@ -433,6 +440,39 @@ impl Renderer {
                 plan_ms: frame.plan_ms,
             },
         ))
+    }
+
+    /// Submits `encoder` (a frame recorded into `targets`) and reads the frame back:
+    /// the output, pass 3's covered mask, the depth (from the colour and normal sums'
+    /// weights and view distances) and the counters of `gpu_scenes`' slices.
+    pub(super) fn read_frame(
+        &self,
+        mut encoder: wgpu::CommandEncoder,
+        targets: &FrameTargets,
+        gpu_scenes: &[&GpuScene],
+        frame: &EncodedFrame,
+    ) -> anyhow::Result<(Image, super::GpuCounters)> {
+        let device = &self.gpu.device;
+        let g = &targets.gbuffer;
+        let out_buffer = readback::copy_texture(device, &mut encoder, &targets.output, 4);
+        let covered_buffer = readback::copy_texture(device, &mut encoder, &targets.covered, 1);
+        let weight_buffer = readback::copy_texture(device, &mut encoder, &g.color_sum, 8);
+        let normal_buffer = readback::copy_texture(device, &mut encoder, &g.normal_sum, 8);
+        let counters = read_counters_now(&self.gpu, encoder, targets, gpu_scenes, frame)?;
+        let (width, height) = targets.size;
+        let rgba = readback::unpad_rgba8(&readback::read(device, &out_buffer)?, width, height);
+        let covered = readback::mask(&readback::read(device, &covered_buffer)?, width, height);
+        let weights = readback::read(device, &weight_buffer)?;
+        let normals = readback::read(device, &normal_buffer)?;
+        let depth = readback::depth(&weights, &normals, width, height);
+        let image = Image {
+            width,
+            height,
+            rgba,
+            covered,
+            depth,
+        };
+        Ok((image, counters))
     }
 
     /// Reads back the shaded pixels last drawn into `targets` (RGBA8, sRGB), with

@@ -23,6 +23,7 @@ use super::cull::Compaction;
 use super::fullscreen::fragment_texture;
 use super::gbuffer::{ADD, GBuffer, Writes, color_targets, depth_state, target};
 use super::gpu_scene::Share;
+use super::placement::Placement;
 use super::settings::Mode;
 use super::shaders::{ColorSource, QuadReach, SplatClass, module};
 use super::targets::{FrameTargets, stamp};
@@ -48,9 +49,10 @@ pub(super) struct SplatPipelines {
 
 /// Layouts of bind groups 1 and 2 and the pipelines of both culling strategies.
 pub(super) struct SplatPasses {
-    /// The slice's nodes (binding 0) and shapes (2), for vertex culling.
+    /// The slice's nodes (binding 0), shapes (2), attributes (3) and its model's
+    /// placements (4), for vertex culling.
     pub nodes_layout: wgpu::BindGroupLayout,
-    /// The slice's nodes (0), survivors (1) and shapes (2), for compute culling.
+    /// The same with the survivors (1) and their placements (5), for compute culling.
     pub compacted_layout: wgpu::BindGroupLayout,
     /// Pass 1's depth as a texture, for pass 2 (group 2; see `fs_attributes`).
     depth_layout: wgpu::BindGroupLayout,
@@ -224,12 +226,14 @@ impl SplatPasses {
                 entries,
             })
         };
+        let placement = size_of::<Placement>() as u64;
         let nodes_layout = bind_layout(
             "nodes",
             &[
                 vertex_storage(slots::NODES, node),
                 vertex_storage(slots::SHAPES, shape),
                 vertex_storage(slots::ATTRIBUTES, attribute),
+                vertex_storage(slots::PLACEMENTS, placement),
             ],
         );
         let compacted_layout = bind_layout(
@@ -239,6 +243,8 @@ impl SplatPasses {
                 vertex_storage(slots::SURVIVORS, size_of::<u32>() as u64),
                 vertex_storage(slots::SHAPES, shape),
                 vertex_storage(slots::ATTRIBUTES, attribute),
+                vertex_storage(slots::PLACEMENTS, placement),
+                vertex_storage(slots::SURVIVOR_PLACEMENTS, size_of::<u32>() as u64),
             ],
         );
         let depth_layout = bind_layout(

@@ -22,6 +22,7 @@ impl Renderer {
             range.len(),
             has_attributes,
             upload::max_ranges(scene, &range),
+            gpu.room,
         )
     }
 
@@ -42,7 +43,7 @@ impl Renderer {
             mib(budget),
             mib(first)
         );
-        gpu.insert(self.upload_slice(scene, 0, gpu.slice_range(0)));
+        gpu.insert(self.upload_slice(scene, &gpu.home(), 0, gpu.slice_range(0)));
         residency.arrived(0, first);
         Ok((gpu, residency))
     }
@@ -69,7 +70,7 @@ impl Renderer {
                 return;
             }
             for k in decision.fetch {
-                let slice = self.upload_slice(scene, k, gpu.slice_range(k));
+                let slice = self.upload_slice(scene, &gpu.home(), k, gpu.slice_range(k));
                 residency.arrived(k, slice.bytes());
                 gpu.insert(slice);
             }

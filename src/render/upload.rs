@@ -10,6 +10,7 @@ use super::bindings::{self as slots, Slot, splat};
 use super::cull::{Compaction, CullPass, TestRange};
 use super::gpu::Gpu;
 use super::gpu_scene::{GpuScene, Slice, SliceUpload};
+use super::placement::Placement;
 use super::raster::ComputeRaster;
 use super::shaders::WORKGROUP_SIZE;
 use super::splats::SplatPasses;
@@ -49,26 +50,50 @@ fn node_bytes(has_attributes: bool) -> u64 {
 }
 
 /// Bytes of the buffers [`upload_slice`] makes for `count` nodes with room for
-/// `max_ranges` test ranges.
-pub(super) fn slice_bytes(count: usize, has_attributes: bool, max_ranges: usize) -> u64 {
+/// `max_ranges` test ranges, drawn alone (`room`: None) or at many placements.
+pub(super) fn slice_bytes(
+    count: usize,
+    has_attributes: bool,
+    max_ranges: usize,
+    room: Option<InstancedRoom>,
+) -> u64 {
     let none = if has_attributes {
         0
     } else {
         std::mem::size_of::<PointAttributes>()
     };
+    // Alone: one survivor index a node (in node_bytes) and one shared placement index.
+    let survivors = match room {
+        None => std::mem::size_of::<u32>() as u64,
+        Some(r) => {
+            (r.survivors * 2 * std::mem::size_of::<u32>()) as u64
+                - (count * std::mem::size_of::<u32>()) as u64
+        }
+    };
     count as u64 * node_bytes(has_attributes)
+        + survivors
         + (none + std::mem::size_of::<Compaction>()) as u64
         + (std::mem::size_of::<TestRange>() * max_ranges.max(1)) as u64
 }
 
+/// What a model drawn at many placements holds room for in each slice: survivors (each
+/// with its placement index) and test ranges a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct InstancedRoom {
+    pub survivors: usize,
+    pub ranges: usize,
+}
+
 /// A scene of `total` nodes with nothing uploaded yet, planned in slices of the most
 /// nodes a binding holds, or under a GPU memory budget of `budget` bytes in slices of
-/// about 1/64 of what it holds.
+/// about 1/64 of what it holds; drawn alone (`room` None) or at up to `room.0`
+/// placements a frame, each slice with `room.1`.
 pub(super) fn empty_gpu_scene(
     gpu: &Gpu,
     total: usize,
     budget: Option<u64>,
     has_attributes: bool,
+    room: Option<(usize, InstancedRoom)>,
 ) -> GpuScene {
     let most = max_slice_nodes(gpu);
     let slice_nodes = match budget {
@@ -78,7 +103,13 @@ pub(super) fn empty_gpu_scene(
             fit.clamp(MIN_BUDGET_SLICE_NODES.min(most), most)
         }
     };
-    GpuScene::new(total, slice_nodes)
+    let placements = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("placements"),
+        size: (std::mem::size_of::<Placement>() * room.map_or(1, |r| r.0.max(1))) as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    GpuScene::new(total, slice_nodes, (placements, room.map(|r| r.1)))
 }
 
 /// A bind group of `layout` with each (binding, buffer) of `buffers`.
@@ -103,13 +134,15 @@ fn bind(
 
 /// Uploads slice `index` of the list, whose first node is `first`: its node records,
 /// their shapes and LiDAR attributes (empty for a model without: one zero is bound in
-/// their place), bound for both culling strategies, with room for `max_ranges` test
-/// ranges.
+/// their place), bound for both culling strategies with the model's `placements`, with
+/// room for `max_ranges` test ranges and a survivor list: one survivor a node for a
+/// model drawn alone (`room` None; its survivors all share placement 0), or `room`'s.
 pub(super) fn upload_slice(
     device: &wgpu::Device,
     (splats, cull, raster): (&SplatPasses, &CullPass, &ComputeRaster),
     (index, first): (usize, usize),
     (chunk, chunk_shapes, chunk_attributes): (&[NodeRecord], &[SplatShape], &[PointAttributes]),
+    (placements, room): (&wgpu::Buffer, Option<InstancedRoom>),
     max_ranges: usize,
 ) -> SliceUpload {
     assert_eq!(chunk.len(), chunk_shapes.len());
@@ -132,12 +165,17 @@ pub(super) fn upload_slice(
             chunk_attributes
         }),
     );
-    let survivors = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("survivors"),
-        size: (std::mem::size_of::<u32>() * chunk.len()) as u64,
-        usage: wgpu::BufferUsages::STORAGE,
-        mapped_at_creation: false,
-    });
+    let indices = |label, count: usize| {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: (std::mem::size_of::<u32>() * count.max(1)) as u64,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        })
+    };
+    let max_ranges = room.map_or(max_ranges, |r| r.ranges);
+    let survivors = indices("survivors", room.map_or(chunk.len(), |r| r.survivors));
+    let survivor_placements = indices("survivor placements", room.map_or(1, |r| r.survivors));
     let compaction = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("compaction"),
         size: std::mem::size_of::<Compaction>() as u64,
@@ -157,7 +195,7 @@ pub(super) fn upload_slice(
         index,
         first,
         count: chunk.len() as u32,
-        bytes: slice_bytes(chunk.len(), !chunk_attributes.is_empty(), max_ranges),
+        bytes: slice_bytes(chunk.len(), !chunk_attributes.is_empty(), max_ranges, room),
         direct: bind(
             device,
             &splats.nodes_layout,
@@ -165,6 +203,7 @@ pub(super) fn upload_slice(
                 (splat::NODES, &nodes),
                 (splat::SHAPES, &shapes),
                 (splat::ATTRIBUTES, &attributes),
+                (splat::PLACEMENTS, placements),
             ],
         ),
         cull: bind(
@@ -176,6 +215,8 @@ pub(super) fn upload_slice(
                 (slots::cull::COMPACTION, &compaction),
                 (slots::cull::RANGES, &ranges),
                 (slots::cull::SHAPES, &shapes),
+                (slots::cull::PLACEMENTS, placements),
+                (slots::cull::SURVIVOR_PLACEMENTS, &survivor_placements),
             ],
         ),
         compacted: bind(
@@ -186,6 +227,8 @@ pub(super) fn upload_slice(
                 (splat::SURVIVORS, &survivors),
                 (splat::SHAPES, &shapes),
                 (splat::ATTRIBUTES, &attributes),
+                (splat::PLACEMENTS, placements),
+                (splat::SURVIVOR_PLACEMENTS, &survivor_placements),
             ],
         ),
         rasterized: raster.bind_slice([
@@ -194,6 +237,8 @@ pub(super) fn upload_slice(
             (slots::raster::SHAPES, &shapes),
             (slots::raster::ATTRIBUTES, &attributes),
             (slots::raster::COMPACTION, &compaction),
+            (slots::raster::PLACEMENTS, placements),
+            (slots::raster::SURVIVOR_PLACEMENTS, &survivor_placements),
         ]),
         compaction,
         ranges,

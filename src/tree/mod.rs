@@ -13,6 +13,7 @@ pub(crate) mod attributes;
 pub mod chunks;
 pub mod errors;
 pub(crate) mod hierarchy;
+pub mod instances;
 pub mod out_of_core;
 pub(crate) mod parent_shape;
 pub mod record;

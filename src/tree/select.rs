@@ -536,6 +536,35 @@ impl PrefixIndex {
         Prefixes { eps, list }
     }
 
+    /// The prefixes of every chunk seen from `d` away (or farther), without a cone: for
+    /// an eye at least `d` from each chunk's box (an instance seen from afar, `d` its
+    /// distance to the model's bounding sphere) they hold every node the exact test
+    /// draws, since each chunk's own d_min ≥ d and the prefix only grows as d shrinks.
+    pub fn prefixes_at(&self, d: f64, eps: f64) -> Prefixes {
+        let mut list = Vec::new();
+        for (p, page) in self.pages.iter().enumerate() {
+            if self.page_too_fine(page, d, eps) {
+                continue;
+            }
+            for c in self.page_chunks(p) {
+                if self.first_beyond(c, d, eps) {
+                    continue;
+                }
+                let bound = self.prefix_bound(c, d, eps);
+                if bound > 0 {
+                    let start = self.chunks[c].start as usize;
+                    list.push(Prefix {
+                        chunk: c,
+                        start,
+                        d_min: d,
+                        bound,
+                    });
+                }
+            }
+        }
+        Prefixes { eps, list }
+    }
+
     /// Chunk c's [`Prefix`], when the view may need any of it.
     fn prefix_of(&self, c: usize, eye: DVec3, eps: f64, cone: Option<&ViewCone>) -> Option<Prefix> {
         let chunk = &self.chunks[c];

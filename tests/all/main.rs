@@ -11,6 +11,7 @@ mod cloud_quality;
 mod docs;
 mod file_quirks;
 mod hostile_inputs;
+mod instances;
 mod layers;
 mod mesh_sides;
 mod out_of_core;

@@ -103,6 +103,7 @@ fn load(
     let scene = Arc::new(Scene::open_reporting(path, report)?);
     let total = scene.nodes().len();
     let planned = renderer.empty_gpu_scene(&scene, None);
+    let home = planned.home();
     let ranges: Vec<_> = (0..planned.planned_slices())
         .map(|k| planned.slice_range(k))
         .collect();
@@ -110,7 +111,7 @@ fn load(
     report.step(Step::Upload, total as u64);
     for (k, range) in ranges.into_iter().enumerate() {
         report.advance(range.len() as u64);
-        let slice = renderer.upload_slice(&scene, k, range);
+        let slice = renderer.upload_slice(&scene, &home, k, range);
         // The first slice goes with the scene, so that the first frame has something.
         let message = match gpu_scene.take() {
             Some(mut g) => {

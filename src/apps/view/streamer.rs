@@ -9,7 +9,7 @@ use std::sync::{Arc, mpsc};
 use std::thread::JoinHandle;
 
 use crate::render::residency::Residency;
-use crate::render::{GpuScene, Renderer, SliceUpload};
+use crate::render::{GpuScene, Renderer, SliceHome, SliceUpload};
 use crate::tree::scene::Scene;
 
 /// Uploads asked and not arrived at most: enough to keep the uploading thread busy,
@@ -28,10 +28,11 @@ pub struct Streamer {
 }
 
 impl Streamer {
-    /// Starts the uploading thread for `scene`, whose list `residency` mirrors; `wake`
-    /// after each upload (the window redraws).
+    /// Starts the uploading thread for `scene`, whose list `residency` mirrors, its
+    /// slices made for `home` ([`crate::render::GpuScene::home`]); `wake` after each
+    /// upload (the window redraws).
     pub fn start(
-        scene: Arc<Scene>,
+        (scene, home): (Arc<Scene>, SliceHome),
         renderer: Arc<Renderer>,
         residency: Residency,
         wake: impl Fn() + Send + 'static,
@@ -43,7 +44,7 @@ impl Streamer {
             .spawn(move || {
                 for (k, range) in asked {
                     if deliver
-                        .send(renderer.upload_slice(&scene, k, range))
+                        .send(renderer.upload_slice(&scene, &home, k, range))
                         .is_err()
                     {
                         return;

@@ -181,7 +181,8 @@ impl Viewer {
     ) -> anyhow::Result<()> {
         if let Some(m) = &mut self.model {
             let renderer = self.renderer.clone();
-            m.streamer = Some(Streamer::start(m.scene.clone(), renderer, residency, wake)?);
+            let target = (m.scene.clone(), m.gpu_scene.home());
+            m.streamer = Some(Streamer::start(target, renderer, residency, wake)?);
         }
         Ok(())
     }

@@ -13,6 +13,7 @@ pub(crate) mod fields;
 mod format;
 pub(crate) mod header;
 pub mod stream;
+pub mod table;
 pub(crate) mod write;
 
 use std::path::Path;

@@ -1,0 +1,102 @@
+//! `spt render SCENE.json -o out.png`: one frame of a scene of instances
+//! (docs/scenes.md), headless; prints the instances drawn, the splats, the GPU and CPU
+//! times, and the memory the scene holds.
+
+use std::path::Path;
+
+use anyhow::Context;
+
+use crate::apps::frame_args::RenderArgs;
+use crate::apps::stats::Summary;
+use crate::apps::text::count;
+use crate::render::{Gpu, Renderer};
+use crate::tree::instances::InstancedScene;
+use crate::tree::report::Silent;
+use crate::tree::select::error_per_distance;
+
+pub fn run(path: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> {
+    if args.gpu_budget().is_some() {
+        anyhow::bail!("--gpu-memory streams one model; a scene's models are uploaded whole");
+    }
+    let scene = InstancedScene::open(path, &Silent)?;
+    let camera = args.camera_for(&scene.meta, &[scene.frame_chunk()])?;
+    let gpu = Gpu::new(args.backend.as_deref())?;
+    println!("adapter   {}", gpu.describe());
+    let renderer = Renderer::new(gpu);
+    let settings = args.settings();
+    let uploaded = renderer.upload_instanced(&scene);
+    let (mut gpu_ms, mut plan_ms, mut wall_ms) = (Vec::new(), Vec::new(), Vec::new());
+    let mut last = None;
+    for _ in 0..args.frames {
+        let start = std::time::Instant::now();
+        let frame = renderer
+            .render_instanced(&scene, &uploaded, &camera, &settings, args.size)
+            .with_context(|| format!("rendering {}", path.display()))?;
+        wall_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        plan_ms.push(frame.1.plan_ms);
+        gpu_ms.extend(frame.1.gpu_ms);
+        last = Some(frame);
+    }
+    let (image, stats, visible) = last.expect("at least one frame");
+    crate::io::png::write_png(output, image.width, image.height, &image.rgba)?;
+    let models: usize = scene.models.iter().map(|m| m.nodes().len()).sum();
+    println!(
+        "scene     {} models ({} nodes), {} instances in {} groups",
+        scene.models.len(),
+        count(models as u64),
+        count(scene.instances.len() as u64),
+        count(scene.groups.len() as u64)
+    );
+    println!(
+        "instances {} drawn (in view, with nodes to test)",
+        count(visible as u64)
+    );
+    if stats.coarsened {
+        let px = stats.eps / error_per_distance(1.0, camera.fov_y, args.size.1);
+        println!("lod       coarser than asked: ε = {px:.3} px (the survivor lists' room)");
+    }
+    println!(
+        "splats    {} drawn; the GPU tested {} nodes in {} ranges",
+        count(stats.gpu_drawn.unwrap_or(0)),
+        count(stats.tested as u64),
+        count(stats.chunks_tested as u64),
+    );
+    println!("raster    {}", renderer.raster(settings.raster).name());
+    let median = |v: &mut Vec<f64>| Summary::of(v).map_or(0.0, |s| s.median);
+    match Summary::of(&mut gpu_ms) {
+        Some(s) => println!("gpu time  {:.3} ms (median of {})", s.median, s.count),
+        None => println!("gpu time  not measured (the adapter has no timestamp queries)"),
+    }
+    println!(
+        "cpu plan  {:.3} ms per frame (median): instances in view, their prefixes",
+        median(&mut plan_ms)
+    );
+    println!(
+        "wall time {:.3} ms per frame (median, read-back included)",
+        median(&mut wall_ms)
+    );
+    print_memory(&scene, &uploaded);
+    println!("wrote     {}", output.display());
+    Ok(())
+}
+
+/// The scene's memory: what its models hold, and what each instance adds.
+fn print_memory(scene: &InstancedScene, gpu: &crate::render::GpuInstances) {
+    let mib = |b: u64| b as f64 / (1 << 20) as f64;
+    let m = gpu.memory();
+    println!(
+        "memory    GPU: models {:.1} MiB, survivor room {:.1} MiB, instances {} B each \
+         ({:.1} MiB)",
+        mib(m.models),
+        mib(m.survivor_room),
+        m.per_instance,
+        mib(m.per_instance * scene.instances.len() as u64),
+    );
+    println!(
+        "          CPU: instances {} B each ({:.1} MiB: transform and model {} B, groups {:.1} B)",
+        scene.bytes_per_instance(),
+        mib(scene.bytes_per_instance() * scene.instances.len() as u64),
+        std::mem::size_of::<crate::tree::instances::Instance>(),
+        scene.groups.bytes() as f64 / scene.instances.len().max(1) as f64,
+    );
+}
