@@ -43,6 +43,11 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Places instances of models over a base surface (a mesh, or a terrain cloud's
+    /// triangulation) at a density per unit area, with random yaw and scale, and writes
+    /// a scene file (the base drawn once, the instances over it) and its instance file
+    /// (docs/scenes.md). `spt render`, `view`, `info` and `bench` take the scene.
+    Scatter(Box<spt::apps::scatter::ScatterArgs>),
     /// Renders one frame of a model (PLY, LAS, LAZ or .spt) to PNG, headless, by three-pass EWA
     /// splatting of its sequential point tree; prints splats drawn, prefix length and GPU
     /// time. `--mode mesh` draws the mesh itself as the reference.
@@ -112,6 +117,7 @@ fn main() -> ExitCode {
         Command::View(args) => spt::apps::view::run(*args),
         Command::Bench(args) => spt::apps::bench::run(&args),
         Command::Info { file, json } => spt::apps::info::run(&file, json),
+        Command::Scatter(args) => spt::apps::scatter::run(&args),
         Command::Convert {
             input,
             output,

@@ -9,6 +9,7 @@ pub mod info;
 pub mod progress;
 pub mod render;
 pub mod render_scene;
+pub mod scatter;
 pub mod stats;
 pub mod text;
 pub mod view;

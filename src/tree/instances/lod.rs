@@ -2,37 +2,50 @@
 //! GPU, found in the model's own units ([`super::Similarity`]: the same ε, the eye
 //! mapped into the model).
 //!
-//! An instance whose eye lies outside its model's bounding sphere (nearly every
+//! An instance whose eye lies well outside its model's bounding sphere (nearly every
 //! instance of a large scene) takes every chunk's prefix at one distance: d, the eye's
-//! distance to the sphere, rounded down to 1/16 of an octave. Every chunk's box lies
-//! in the sphere, so its own distance is at least d, and a prefix at a smaller
-//! distance holds the one at a larger (the argument of `PrefixIndex::prefixes_at`):
-//! the ranges hold every node the exact test draws. They depend on d and ε alone, so a
-//! model keeps them per rounded distance ([`ModelLod`]), and a frame of 10⁵ instances
-//! searches a few dozen times. An instance whose eye is within its sphere searches
-//! chunk by chunk, culled by the view cone mapped into the model.
+//! distance to the sphere in model units, rounded down to 1/16 of an octave. Every
+//! chunk's box lies in the sphere, so its own distance is at least d, and a prefix at a
+//! smaller distance holds the one at a larger (the argument of
+//! `PrefixIndex::prefixes_at`): the ranges hold every node the exact test draws. They
+//! depend on d and ε alone, so a model keeps them per rounded distance ([`ModelLod`]),
+//! and a frame of 10⁵ instances searches a few dozen times. An instance whose eye is
+//! near or within its sphere searches chunk by chunk, culled by the view cone mapped
+//! into the model ([`ModelLod::near`]), as a model drawn alone does.
 
-use std::collections::HashMap;
 use std::ops::Range;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, MutexGuard};
 
 use glam::DVec3;
 
 use crate::tree::scene::Scene;
 use crate::tree::select::ViewCone;
 
-/// Ranges by rounded distance (its step), for one ε.
-type Kept = (f64, HashMap<i32, Arc<[Range<usize>]>>);
-
 /// Steps of the rounded distance per octave.
 const STEPS_PER_OCTAVE: f64 = 16.0;
+/// Rounded distances kept: 2⁻¹²⁸ to 2¹²⁸ sphere radii.
+const STEPS: i32 = 128 * STEPS_PER_OCTAVE as i32;
 
-/// One model's ranges by rounded distance, for the ε they were found at.
+/// Tables kept for other ε than the current one.
+const KEPT_EPS: usize = 8;
+
+/// Ranges by rounded distance (step + STEPS), for one ε.
+type Table = Vec<Option<Arc<[Range<usize>]>>>;
+
+/// A model's ranges by rounded distance, for the ε they were found at, and the
+/// tables of the last few other ε.
+pub struct Kept {
+    eps: f64,
+    by_step: Table,
+    others: Vec<(f64, Table)>,
+}
+
+/// One model's ranges by rounded distance.
 pub struct ModelLod {
     /// The model's bounding sphere, relative to its origin.
     centre: DVec3,
-    radius: f64,
-    cache: Mutex<Kept>,
+    pub radius: f64,
+    kept: Mutex<Kept>,
 }
 
 impl ModelLod {
@@ -42,46 +55,69 @@ impl ModelLod {
         ModelLod {
             centre: centre - DVec3::from(meta.origin),
             radius,
-            cache: Mutex::new((f64::NAN, HashMap::new())),
+            kept: Mutex::new(Kept {
+                eps: f64::NAN,
+                by_step: vec![None; 2 * STEPS as usize + 1],
+                others: Vec::new(),
+            }),
         }
     }
 
-    /// The ranges of `model`'s list an instance hands over with its eye at `eye`
-    /// (model units, relative to the model's origin) at `eps`; `cone` (in the same
-    /// units) culls chunks when the eye is within the model's sphere.
-    pub fn ranges(
-        &self,
-        model: &Scene,
-        eye: DVec3,
-        cone: &ViewCone,
-        eps: f64,
-    ) -> Arc<[Range<usize>]> {
-        let d = (eye - self.centre).length() - self.radius;
-        if d <= 0.0 || eps <= 0.0 {
-            let index = &model.index;
-            let prefixes = index.prefixes(eye, eps, Some(cone));
-            return index.refined(&prefixes, model.nodes(), |_| true).into();
+    /// The kept ranges for ε = `eps` (the tables of the last few ε are kept: a frame
+    /// that coarsens tries several).
+    fn lock(&self, eps: f64) -> MutexGuard<'_, Kept> {
+        let mut kept = self.kept.lock().unwrap_or_else(|e| e.into_inner());
+        if kept.eps != eps {
+            let found = kept.others.iter().position(|(e, _)| *e == eps);
+            let table = match found {
+                Some(k) => kept.others.swap_remove(k).1,
+                None => vec![None; 2 * STEPS as usize + 1],
+            };
+            let old = (kept.eps, std::mem::replace(&mut kept.by_step, table));
+            kept.eps = eps;
+            if old.0.is_finite() {
+                kept.others.push(old);
+            }
+            if kept.others.len() > KEPT_EPS {
+                kept.others.remove(0);
+            }
         }
-        let step = (d / self.radius).log2() * STEPS_PER_OCTAVE;
-        let key = step.floor().clamp(-4096.0, 4096.0) as i32;
-        let rounded = self.radius * (key as f64 / STEPS_PER_OCTAVE).exp2();
-        let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
-        if cache.0 != eps {
-            *cache = (eps, HashMap::new());
-        }
-        cache
-            .1
-            .entry(key)
-            .or_insert_with(|| {
-                let index = &model.index;
-                let prefixes = index.prefixes_at(rounded.min(d), eps);
-                index.refined(&prefixes, model.nodes(), |_| true).into()
-            })
-            .clone()
+        kept
     }
 
-    /// Rounded distances kept (for the memory report).
-    pub fn kept(&self) -> usize {
-        self.cache.lock().map_or(0, |c| c.1.len())
+    /// The ranges at `eps` of an instance whose eye is `d` model units outside the
+    /// sphere (d > 0, ε > 0): kept, or searched (without the lock held) and kept.
+    pub fn far(&self, model: &Scene, d: f64, eps: f64) -> Arc<[Range<usize>]> {
+        let step = ((d / self.radius).log2() * STEPS_PER_OCTAVE).floor();
+        let step = step.clamp(-STEPS as f64, STEPS as f64) as i32;
+        let slot = (step + STEPS) as usize;
+        if let Some(found) = &self.lock(eps).by_step[slot] {
+            return found.clone();
+        }
+        let rounded = self.radius * (step as f64 / STEPS_PER_OCTAVE).exp2();
+        let index = &model.index;
+        let prefixes = index.prefixes_at(rounded.min(d), eps);
+        let found: Arc<[Range<usize>]> = index.refined(&prefixes, model.nodes(), |_| true).into();
+        self.lock(eps).by_step[slot] = Some(found.clone());
+        found
+    }
+
+    /// The ranges of an instance whose eye is `eye` (model units, relative to the
+    /// origin), within or near its sphere, chunks culled by `cone` (the same units).
+    pub fn near(&self, model: &Scene, eye: DVec3, cone: &ViewCone, eps: f64) -> Vec<Range<usize>> {
+        let index = &model.index;
+        let prefixes = index.prefixes(eye, eps, Some(cone));
+        index.refined(&prefixes, model.nodes(), |_| true)
+    }
+
+    /// The eye's distance to the sphere, model units, from its world distance to the
+    /// sphere's centre under scale `scale`.
+    pub fn gap(&self, world_distance: f64, scale: f64) -> f64 {
+        world_distance / scale - self.radius
+    }
+
+    /// The sphere's centre, relative to the model's origin.
+    pub fn centre(&self) -> DVec3 {
+        self.centre
     }
 }

@@ -13,6 +13,7 @@
 pub mod file;
 pub mod groups;
 pub mod lod;
+pub mod scatter;
 pub mod similarity;
 pub mod table;
 
