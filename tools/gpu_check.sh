@@ -9,13 +9,16 @@
 #
 #   tools/gpu_check.sh                 # 1920×1080, 20 frames: the default model, the
 #                                      # Lucy-size generated model (made and converted
-#                                      # into data/large/ once), the LiDAR tile
+#                                      # into data/large/ once), the LiDAR tile, and the
+#                                      # forest scene (10⁵ trees of 10⁶ samples on the
+#                                      # tile, tools/gen_forest.rs, made once)
 #   tools/gpu_check.sh --quick         # 320×240, 3 frames, the default model and the
 #                                      # tile: a check that both paths run (CI)
-#   SPT=path/spt GEN_MODEL=path/gen_model SPT_DATA=path tools/gpu_check.sh
+#   SPT=path/spt GEN_MODEL=path/gen_model GEN_FOREST=path/gen_forest SPT_DATA=path \
+#     tools/gpu_check.sh
 #                                      # prebuilt binaries: no cargo needed
 #
-# Without SPT it builds both binaries with cargo. FRAMES and SIZE override the frame
+# Without SPT it builds the binaries with cargo. FRAMES and SIZE override the frame
 # count and size. Fails when a render fails, or when the two paths draw different
 # numbers of splats.
 set -euo pipefail
@@ -24,16 +27,17 @@ quick=0
 for arg in "$@"; do
   case $arg in
     --quick) quick=1 ;;
-    -h | --help) sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h | --help) sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "gpu_check.sh: unknown option $arg (use --quick or --help)" >&2; exit 2 ;;
   esac
 done
 data=${SPT_DATA:-../shared/data}
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
 if [ -z "${SPT:-}" ]; then
-  cargo build --release --quiet --bin spt --example gen_model
+  cargo build --release --quiet --bin spt --example gen_model --example gen_forest
   SPT=./target/release/spt
   GEN_MODEL=./target/release/examples/gen_model
+  GEN_FOREST=./target/release/examples/gen_forest
 fi
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
@@ -56,9 +60,15 @@ else
     [ -f data/large/lucy_knot.ply ] || "$GEN_MODEL" --preset lucy -o data/large/lucy_knot.ply > /dev/null
     "$SPT" convert data/large/lucy_knot.ply "$lucy" > /dev/null
   fi
+  forest=data/large/forest/forest.json
+  if [ ! -f "$forest" ] && [ -f "$data/terrain_utm.ply" ]; then
+    "$GEN_FOREST" --out data/large/forest --terrain "$data/terrain_utm.ply" > /dev/null
+  fi
   views=(
     "data/torus_knot.ply|"
     "data/torus_knot.ply|--mode points"
+    "$forest|"
+    "$forest|--eye 512300,5403300,380 --target 512700,5403700,300"
     "$lucy|"
     "$lucy|--orbit 30,20,1.3"
     "$lucy|--orbit 30,20,1.3 --mode points"

@@ -106,7 +106,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
 
 /// Prints the frames' GPU time (in all and per pass, where the adapter measures it),
 /// the GPU's splat rate for `selected` splats, and the wall time.
-fn print_times(
+pub(crate) fn print_times(
     gpu_ms: &mut Vec<f64>,
     passes_ms: [Vec<f64>; 3],
     wall_ms: &mut Vec<f64>,

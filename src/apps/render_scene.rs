@@ -7,6 +7,7 @@ use std::path::Path;
 use anyhow::Context;
 
 use crate::apps::frame_args::RenderArgs;
+use crate::apps::render::print_times;
 use crate::apps::stats::Summary;
 use crate::apps::text::count;
 use crate::render::{Gpu, Renderer};
@@ -26,6 +27,7 @@ pub fn run(path: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> 
     let settings = args.settings();
     let uploaded = renderer.upload_instanced(&scene);
     let (mut gpu_ms, mut plan_ms, mut wall_ms) = (Vec::new(), Vec::new(), Vec::new());
+    let mut passes_ms: [Vec<f64>; 3] = Default::default();
     let mut last = None;
     for _ in 0..args.frames {
         let start = std::time::Instant::now();
@@ -35,6 +37,12 @@ pub fn run(path: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> 
         wall_ms.push(start.elapsed().as_secs_f64() * 1e3);
         plan_ms.push(frame.1.plan_ms);
         gpu_ms.extend(frame.1.gpu_ms);
+        for (all, ms) in passes_ms
+            .iter_mut()
+            .zip(frame.1.passes_ms.into_iter().flatten())
+        {
+            all.push(ms);
+        }
         last = Some(frame);
     }
     let (image, stats, visible) = last.expect("at least one frame");
@@ -55,26 +63,19 @@ pub fn run(path: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> 
         let px = stats.eps / error_per_distance(1.0, camera.fov_y, args.size.1);
         println!("lod       coarser than asked: ε = {px:.3} px (the survivor lists' room)");
     }
+    let drawn = stats.gpu_drawn.unwrap_or(0);
     println!(
-        "splats    {} drawn; the GPU tested {} nodes in {} ranges",
-        count(stats.gpu_drawn.unwrap_or(0)),
+        "culled    {} splats survived the compute culling of {} nodes in {} ranges; {} of them \
+         on an outline",
+        count(drawn),
         count(stats.tested as u64),
         count(stats.chunks_tested as u64),
+        count(stats.gpu_outline.unwrap_or(0)),
     );
     println!("raster    {}", renderer.raster(settings.raster).name());
-    let median = |v: &mut Vec<f64>| Summary::of(v).map_or(0.0, |s| s.median);
-    match Summary::of(&mut gpu_ms) {
-        Some(s) => println!("gpu time  {:.3} ms (median of {})", s.median, s.count),
-        None => println!("gpu time  not measured (the adapter has no timestamp queries)"),
-    }
-    println!(
-        "cpu plan  {:.3} ms per frame (median): instances in view, their prefixes",
-        median(&mut plan_ms)
-    );
-    println!(
-        "wall time {:.3} ms per frame (median, read-back included)",
-        median(&mut wall_ms)
-    );
+    print_times(&mut gpu_ms, passes_ms, &mut wall_ms, drawn as usize);
+    let plan = Summary::of(&mut plan_ms).map_or(0.0, |s| s.median);
+    println!("cpu plan  {plan:.3} ms per frame (median): instances in view, their prefixes");
     print_memory(&scene, &uploaded);
     println!("wrote     {}", output.display());
     Ok(())
