@@ -31,7 +31,7 @@ use super::renderer::{FrameStats, Image, Renderer};
 use super::settings::{Culling, Mode, Settings};
 use super::upload::{self, InstancedRoom};
 use crate::tree::instances::InstancedScene;
-use crate::tree::instances::lod::ModelLod;
+use crate::tree::instances::lod::{ModelLod, NearBy};
 use crate::tree::select::{ViewCone, error_per_distance};
 
 /// An instance takes its ranges by its distance alone ([`ModelLod::far`]) from this many
@@ -402,6 +402,7 @@ fn plan_group(
     group: Range<usize>,
     out: &mut Planned,
 ) {
+    let mut near_by: Vec<NearBy> = (0..scene.models.len()).map(|_| NearBy::default()).collect();
     for instance in &scene.instances[group] {
         let m = instance.model as usize;
         let (model, lod) = (&scene.models[m], &gpu.lods[m]);
@@ -416,7 +417,7 @@ fn plan_group(
         let gap = (centre - view.eye).length() - radius;
         let d = lod.gap((centre - view.lod_eye).length(), to_world.scale);
         let found = match d > FAR_RADII * lod.radius && view.eps > 0.0 {
-            true => lod.far(model, d, view.eps),
+            true => lod.far(model, d, view.eps, &mut near_by[m]),
             false => {
                 let eye = to_world.eye_to_model(view.lod_eye) - origin;
                 let cone = shifted(&to_world.cone_to_model(view.cone), origin);

@@ -40,6 +40,11 @@ pub struct Kept {
     others: Vec<(f64, Table)>,
 }
 
+/// The ranges a caller found for a few rounded distances of one model (slot, ranges):
+/// instances of a spatial group lie at about the same distance.
+#[derive(Default)]
+pub struct NearBy(Vec<(usize, Arc<[Range<usize>]>)>);
+
 /// One model's ranges by rounded distance.
 pub struct ModelLod {
     /// The model's bounding sphere, relative to its origin.
@@ -86,17 +91,36 @@ impl ModelLod {
     }
 
     /// The ranges at `eps` of an instance whose eye is `d` model units outside the
-    /// sphere (d > 0, ε > 0): kept, or searched (without the lock held) and kept.
-    pub fn far(&self, model: &Scene, d: f64, eps: f64) -> Arc<[Range<usize>]> {
+    /// sphere (d > 0, ε > 0): from `near_by` (what the caller found for instances near
+    /// this one: a few rounded distances, without locking), else kept, else searched
+    /// (without the lock held) and kept.
+    pub fn far(
+        &self,
+        model: &Scene,
+        d: f64,
+        eps: f64,
+        near_by: &mut NearBy,
+    ) -> Arc<[Range<usize>]> {
         let step = ((d / self.radius).log2() * STEPS_PER_OCTAVE).floor();
         let step = step.clamp(-STEPS as f64, STEPS as f64) as i32;
         let slot = (step + STEPS) as usize;
+        if let Some((_, found)) = near_by.0.iter().find(|(s, _)| *s == slot) {
+            return found.clone();
+        }
+        let found = self.far_kept(model, slot, eps);
+        near_by.0.push((slot, found.clone()));
+        found
+    }
+
+    /// The ranges of rounded distance `slot` (step + STEPS): kept, or searched and kept.
+    fn far_kept(&self, model: &Scene, slot: usize, eps: f64) -> Arc<[Range<usize>]> {
         if let Some(found) = &self.lock(eps).by_step[slot] {
             return found.clone();
         }
+        let step = slot as i32 - STEPS;
         let rounded = self.radius * (step as f64 / STEPS_PER_OCTAVE).exp2();
         let index = &model.index;
-        let prefixes = index.prefixes_at(rounded.min(d), eps);
+        let prefixes = index.prefixes_at(rounded, eps);
         let found: Arc<[Range<usize>]> = index.refined(&prefixes, model.nodes(), |_| true).into();
         self.lock(eps).by_step[slot] = Some(found.clone());
         found
