@@ -1,5 +1,5 @@
-//! A mutation fuzzer for spt's readers (PLY, LAS, LAZ and `.spt`), on the stable
-//! toolchain.
+//! A mutation fuzzer for spt's readers (PLY, LAS, LAZ, `.spt`, scene files and instance
+//! files), on the stable toolchain.
 //!
 //! ```text
 //! cargo run --release --example fuzz -- --seconds 60
@@ -80,8 +80,8 @@ struct Args {
 struct Tally {
     executions: u64,
     /// Per reader (PLY, .spt): inputs accepted and refused.
-    accepted: [u64; 4],
-    refused: [u64; 4],
+    accepted: [u64; 6],
+    refused: [u64; 6],
     panics: u64,
     violations: u64,
     slow: u64,
@@ -193,6 +193,7 @@ fn main() {
         std::process::exit(replay(path));
     }
     std::fs::create_dir_all(&args.out).expect("create the output folder");
+    seeds::write_scene_files(&args.out);
     let work = tempfile::tempdir_in(std::env::temp_dir()).expect("a temporary folder");
     let seeds: Vec<Seed> = seeds::all(work.path());
     static STARTED: AtomicU64 = AtomicU64::new(u64::MAX);
@@ -226,7 +227,11 @@ fn main() {
         let n = tally.executions;
         let note = |what: &str| format!("{what} (mutant of {}, {} bytes)", seed.name, bytes.len());
         let samples = match result {
-            Ok(Outcome::Accepted { samples }) if seed.kind != Kind::Spt => Some(samples),
+            Ok(Outcome::Accepted { samples })
+                if matches!(seed.kind, Kind::Ply | Kind::Las | Kind::Laz) =>
+            {
+                Some(samples)
+            }
             _ => None,
         };
         match result {
@@ -288,7 +293,7 @@ fn main() {
             report(&tally, origin.elapsed(), false);
         }
     }
-    for kind in [Kind::Ply, Kind::Spt, Kind::Las, Kind::Laz] {
+    for kind in Kind::ALL {
         let _ = std::fs::remove_file(args.out.join(format!("current.{}", kind.extension())));
     }
     report(&tally, origin.elapsed(), true);

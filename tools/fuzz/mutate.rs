@@ -352,8 +352,8 @@ pub fn mutate(rng: &mut Rng, seed: &Seed, seeds: &[Seed]) -> Vec<u8> {
     let count = if rng.chance(70) { 1 } else { 2 + rng.below(3) };
     for _ in 0..count {
         match (seed.kind, rng.below(10)) {
-            (Kind::Ply, 0..=2) => header_once(rng, &mut b),
-            (Kind::Ply, 3..=4) => token_once(rng, &mut b),
+            (Kind::Ply | Kind::Instances, 0..=2) => header_once(rng, &mut b),
+            (Kind::Ply | Kind::Instances | Kind::Scene, 3..=4) => token_once(rng, &mut b),
             (Kind::Spt, 0..=5) => spt_once(rng, &mut b),
             _ => bytes_once(rng, &mut b, seeds),
         }

@@ -4,10 +4,13 @@
 
 use std::path::Path;
 
+use glam::{DQuat, DVec3};
 use spt::io::ply::{Encoding, PlyLayout, PolyMesh, read_ply, write_ply};
 use spt::io::scalar::Scalar;
 use spt::surfel::leaf_surfels;
 use spt::tree::build_sequential_list;
+use spt::tree::instances::Instance;
+use spt::tree::instances::table::write_instances;
 use spt::tree::spt_file::write_to;
 
 /// Which reader an input is for.
@@ -17,6 +20,10 @@ pub enum Kind {
     Spt = 1,
     Las = 2,
     Laz = 3,
+    /// A scene file (JSON), naming `seed.instances` beside it.
+    Scene = 4,
+    /// An instance PLY (one vertex per instance).
+    Instances = 5,
 }
 
 impl Kind {
@@ -26,8 +33,19 @@ impl Kind {
             Kind::Spt => "spt",
             Kind::Las => "las",
             Kind::Laz => "laz",
+            Kind::Scene => "json",
+            Kind::Instances => "instances",
         }
     }
+
+    pub const ALL: [Kind; 6] = [
+        Kind::Ply,
+        Kind::Spt,
+        Kind::Las,
+        Kind::Laz,
+        Kind::Scene,
+        Kind::Instances,
+    ];
 
     /// The kind of a saved input, by its extension (PLY when it has none known).
     pub fn of(path: &Path) -> Kind {
@@ -35,12 +53,14 @@ impl Kind {
             Some("spt") => Kind::Spt,
             Some("las") => Kind::Las,
             Some("laz") => Kind::Laz,
+            Some("json") => Kind::Scene,
+            Some("instances") => Kind::Instances,
             _ => Kind::Ply,
         }
     }
 
     /// Names for the report, in `Kind as usize` order.
-    pub const NAMES: [&'static str; 4] = ["PLY", ".spt", "LAS", "LAZ"];
+    pub const NAMES: [&'static str; 6] = ["PLY", ".spt", "LAS", "LAZ", "scene", "instances"];
 }
 
 pub struct Seed {
@@ -330,5 +350,58 @@ pub fn all(dir: &Path) -> Vec<Seed> {
         });
     }
     seeds.extend(las_seeds());
+    seeds.extend(scene_seeds());
     seeds
+}
+
+/// The instance file every scene seed names (written beside the inputs, as
+/// `seed.instances`, by [`write_scene_files`]): three instances of two models.
+fn instances_seed() -> Vec<u8> {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let path = dir.path().join("seed.instances");
+    let instances: Vec<Instance> = (0..3)
+        .map(|k| {
+            let q = DQuat::from_rotation_z(k as f64);
+            Instance::checked(k % 2, DVec3::new(k as f64, 2.0, 3.0), q, 1.0 + k as f64, 2)
+                .expect("a valid instance")
+        })
+        .collect();
+    write_instances(&path, &instances).expect("write the instances");
+    std::fs::read(&path).expect("read them back")
+}
+
+/// Scene files and instance files.
+fn scene_seeds() -> Vec<Seed> {
+    let scenes = [
+        r#"{"models": ["a.ply", "b.spt"], "instances": [{"model": 0}, {"model": 1, "translation": [512000.5, 5403000.25, 200], "yaw": 30, "scale": 1.5}, {"file": "seed.instances"}]}"#,
+        r#"{"models": ["a.ply"], "instances": [{"model": 0, "rotation": [0, 0, 0.7071, 0.7071]}]}"#,
+    ];
+    let ascii = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n\
+                 property float z\nproperty float yaw\nproperty uchar model\nend_header\n\
+                 1 2 3 0.5 0\n4 5 6 1.5 1\n";
+    let mut seeds: Vec<Seed> = scenes
+        .iter()
+        .enumerate()
+        .map(|(k, text)| Seed {
+            name: format!("scene_{k}"),
+            kind: Kind::Scene,
+            bytes: text.as_bytes().to_vec(),
+        })
+        .collect();
+    seeds.push(Seed {
+        name: "instances_le".into(),
+        kind: Kind::Instances,
+        bytes: instances_seed(),
+    });
+    seeds.push(Seed {
+        name: "instances_ascii".into(),
+        kind: Kind::Instances,
+        bytes: ascii.as_bytes().to_vec(),
+    });
+    seeds
+}
+
+/// Writes the instance file the scene seeds name into `dir`, where inputs are run.
+pub fn write_scene_files(dir: &Path) {
+    std::fs::write(dir.join("seed.instances"), instances_seed()).expect("write seed.instances");
 }

@@ -26,6 +26,8 @@ use spt::io::Geometry;
 use spt::io::las::read_las;
 use spt::io::ply::{PlyStream, read_ply};
 use spt::surfel::leaf_surfels;
+use spt::tree::instances::table::read_instances;
+use spt::tree::instances::{Instance, read_scene};
 use spt::tree::out_of_core::{Options, Progress, build_file};
 use spt::tree::select::PrefixIndex;
 use spt::tree::spt_file::{SptFile, write_to};
@@ -162,8 +164,41 @@ pub fn run(kind: Kind, path: &Path) -> Outcome {
         Kind::Ply => ply(path),
         Kind::Spt => spt(path),
         Kind::Las | Kind::Laz => las(path),
+        Kind::Scene => scene(path),
+        Kind::Instances => instances(path),
     };
     result.unwrap_or_else(|o| o)
+}
+
+/// A scene file: read (its instance files too); every instance in range, finite, of
+/// positive scale and unit rotation.
+fn scene(path: &Path) -> Result<Outcome, Outcome> {
+    let scene = read_scene(path).map_err(|_| Outcome::Refused)?;
+    check_instances(&scene.instances, scene.models.len())?;
+    Ok(Outcome::Accepted { samples: 0 })
+}
+
+/// An instance file, for a scene of two models: as [`scene`].
+fn instances(path: &Path) -> Result<Outcome, Outcome> {
+    let mut out = Vec::new();
+    read_instances(path, 2, &mut out).map_err(|_| Outcome::Refused)?;
+    check_instances(&out, 2)?;
+    Ok(Outcome::Accepted { samples: 0 })
+}
+
+fn check_instances(instances: &[Instance], models: usize) -> Result<(), Outcome> {
+    for (k, i) in instances.iter().enumerate() {
+        let s = i.similarity();
+        let fine = (i.model as usize) < models
+            && s.translation.is_finite()
+            && s.scale.is_finite()
+            && s.scale > 0.0
+            && (s.rotation.length() - 1.0).abs() < 1e-6;
+        if !fine {
+            return Err(Outcome::Violation(format!("instance {k} accepted: {i:?}")));
+        }
+    }
+    Ok(())
 }
 
 /// An accepted PLY, LAS or LAZ input built out of core in jobs of 64 points: it builds,

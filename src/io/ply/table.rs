@@ -26,6 +26,10 @@ pub fn read_table(
     columns: &[Column],
     mut row: impl FnMut(u64, &[Option<f64>]) -> Result<(), String>,
 ) -> Result<(), PlyError> {
+    let regular = std::fs::metadata(path).map(|m| m.is_file());
+    if !regular.map_err(|e| Problem::file(e.to_string()).in_file(path))? {
+        return Err(Problem::file("not a regular file").in_file(path));
+    }
     let bytes = std::fs::read(path).map_err(|e| Problem::file(e.to_string()).in_file(path))?;
     let at_row = |i: u64, message: String| Problem::row(element, i, message).in_file(path);
     let header = parse_header(&bytes).map_err(|p| p.in_file(path))?;
@@ -48,8 +52,11 @@ pub fn read_table(
                 .map_err(|_| Problem::file("the ASCII payload is not text").in_file(path))?;
             let mut lines = text.lines().filter(|l| !l.trim().is_empty());
             let before: u64 = header.elements[..index].iter().map(|e| e.count).sum();
+            // The rows of the elements before, as far as the file holds them.
             for _ in 0..before {
-                lines.next();
+                if lines.next().is_none() {
+                    break;
+                }
             }
             for i in 0..target.count {
                 let Some(line) = lines.next() else {
