@@ -34,7 +34,8 @@ enum Command {
     /// what was dropped and why, leaf surfels (count, radii), load time and throughput.
     /// LAS/LAZ: version, point format, counts by return and by class, intensity range,
     /// scale, offset, CRS, and the same bounds, surfels and timing.
-    /// .spt: nodes, depth, bounds, errors, and whether its checksum holds.
+    /// .spt: nodes, depth, bounds, errors, and whether its checksum holds. A scene
+    /// (.json): its models, instances, box and memory per instance.
     Info {
         /// A PLY file (ASCII or binary, mesh or point cloud), a LAS or LAZ file, or an
         /// .spt file.

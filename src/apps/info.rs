@@ -623,6 +623,9 @@ impl SptInfo {
 /// Runs `spt info` on a model file (PLY, LAS, LAZ) or an `.spt` file: prints the report as text or JSON. A
 /// corrupt `.spt` is reported, then the command fails.
 pub fn run(path: &Path, json: bool) -> anyhow::Result<()> {
+    if crate::tree::instances::is_scene(path) {
+        return crate::apps::info_scene::run(path, json);
+    }
     if is_spt(path) {
         let info = SptInfo::gather(path)?;
         if json {

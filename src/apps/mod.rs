@@ -6,6 +6,7 @@ pub mod convert;
 pub mod convert_large;
 pub mod frame_args;
 pub mod info;
+pub mod info_scene;
 pub mod progress;
 pub mod render;
 pub mod render_scene;
