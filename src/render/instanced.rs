@@ -40,9 +40,10 @@ use crate::tree::select::{ViewCone, error_per_distance};
 /// prefixes would. Nearer, its chunks are searched one by one.
 const FAR_RADII: f64 = 4.0;
 
-/// Survivors a slice holds room for at least: a 1920×1080 frame's pixels four times
-/// over (64 MiB: a node and a placement index each).
-const MIN_SURVIVOR_ROOM: usize = 1 << 23;
+/// Survivors a slice holds room for at least: a 1920×1080 frame's pixels eight times
+/// over (128 MiB: a node and a placement index each). A forest seen across at ε = 1 px
+/// asks for more (every leaf within a hundred metres is a pixel): such frames coarsen.
+const MIN_SURVIVOR_ROOM: usize = 1 << 24;
 
 /// Instances a frame may hand over chunk by chunk (near ones) before their ranges are
 /// joined: the test ranges' room is two per instance and this many per chunk.
