@@ -28,6 +28,7 @@ use super::gpu_scene::{GpuScene, Share};
 use super::placement::Placement;
 use super::plan::EncodedFrame;
 use super::renderer::{FrameStats, Image, Renderer};
+use super::targets::FrameTargets;
 use super::settings::{Culling, Mode, Settings};
 use super::upload::{self, InstancedRoom};
 use crate::tree::instances::InstancedScene;
@@ -89,6 +90,15 @@ impl GpuInstances {
             per_instance,
         }
     }
+}
+
+/// A frame of a scene as recorded: the frame's plan (the GPU's counters read as a
+/// model's), the instances drawn, and the test ranges.
+#[derive(Debug, Clone)]
+pub struct InstancedFrame {
+    pub frame: EncodedFrame,
+    pub visible: usize,
+    pub ranges: usize,
 }
 
 /// What the CPU decided for one frame of a scene: per model, the placements of its
@@ -155,10 +165,44 @@ impl Renderer {
         settings: &Settings,
         size: (u32, u32),
     ) -> anyhow::Result<(Image, FrameStats, usize)> {
+        let targets = self.targets(size)?;
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let drawn = self.encode_instanced(&mut encoder, &targets, (scene, gpu), camera, settings)?;
+        let all: Vec<&GpuScene> = gpu.models.iter().collect();
+        let frame = &drawn.frame;
+        let (image, counters) = self.read_frame(encoder, &targets, &all, frame)?;
+        let stats = FrameStats {
+            tested: frame.tested,
+            chunks: scene.models.iter().map(|m| m.index.chunks().len()).sum(),
+            chunks_tested: drawn.ranges,
+            selected: counters.drawn.unwrap_or(0) as usize,
+            gpu_ms: counters.gpu_ms,
+            passes_ms: counters.passes_ms,
+            gpu_drawn: counters.drawn,
+            gpu_outline: counters.outline,
+            eps: frame.eps,
+            coarsened: frame.coarsened,
+            plan_ms: frame.plan_ms,
+        };
+        Ok((image, stats, drawn.visible))
+    }
+
+    /// Records one frame of `scene` into `encoder`, drawing into `targets.output`; the
+    /// uniform, placements and compaction records are written through the queue (they
+    /// take effect at the next submit). Compute culling always runs (the survivors
+    /// carry their placements).
+    pub fn encode_instanced(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &FrameTargets,
+        (scene, gpu): (&InstancedScene, &GpuInstances),
+        camera: &Camera,
+        settings: &Settings,
+    ) -> anyhow::Result<InstancedFrame> {
         if settings.mode == Mode::Mesh {
             anyhow::bail!("mesh mode draws one model's triangles; a scene draws splats");
         }
-        let targets = self.targets(size)?;
+        let size = targets.size;
         let settings = &Settings {
             culling: Culling::Compute,
             ..*settings
@@ -166,7 +210,6 @@ impl Renderer {
         let rasterized = self.rasterized(settings, size)?;
         let started = std::time::Instant::now();
         let planned = self.plan_instances(scene, gpu, camera, settings, size);
-        let plan_ms = started.elapsed().as_secs_f64() * 1e3;
         let mut uniform = FrameUniform::new(&scene.meta, camera, settings, size, planned.eps);
         // The scene's box may span a country: the near plane comes from the instances
         // in view instead (half the distance to the nearest one's sphere).
@@ -183,18 +226,11 @@ impl Renderer {
             }
             shares.extend(placed_shares(g, &planned.ranges[m]));
         }
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        self.encode_passes(
-            &mut encoder,
-            &targets,
-            &shares,
-            settings,
-            (true, rasterized, None),
-        );
-        let tested: usize = shares.iter().map(|s| s.count as usize).sum();
+        let plan_ms = started.elapsed().as_secs_f64() * 1e3;
+        self.encode_passes(encoder, targets, &shares, settings, (true, rasterized, None));
         let frame = EncodedFrame {
             ranges: Vec::new(),
-            tested,
+            tested: shares.iter().map(|s| s.count as usize).sum(),
             compute: true,
             eps: planned.eps,
             coarsened: planned.coarsened,
@@ -203,22 +239,11 @@ impl Renderer {
             lod_eye: DVec3::ZERO,
             plan_ms,
         };
-        let all: Vec<&GpuScene> = gpu.models.iter().collect();
-        let (image, counters) = self.read_frame(encoder, &targets, &all, &frame)?;
-        let stats = FrameStats {
-            tested,
-            chunks: scene.models.iter().map(|m| m.index.chunks().len()).sum(),
-            chunks_tested: planned.ranges.iter().map(Vec::len).sum(),
-            selected: counters.drawn.unwrap_or(0) as usize,
-            gpu_ms: counters.gpu_ms,
-            passes_ms: counters.passes_ms,
-            gpu_drawn: counters.drawn,
-            gpu_outline: counters.outline,
-            eps: planned.eps,
-            coarsened: planned.coarsened,
-            plan_ms,
-        };
-        Ok((image, stats, planned.visible))
+        Ok(InstancedFrame {
+            frame,
+            visible: planned.visible,
+            ranges: planned.ranges.iter().map(Vec::len).sum(),
+        })
     }
 
     /// Plans a frame of `scene`: ε from the settings, raised by quarter octaves until

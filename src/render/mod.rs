@@ -47,7 +47,7 @@ pub use frame::{linear_to_srgb, srgb_to_linear};
 pub use fullscreen::{fragment_texture, fullscreen_pipeline};
 pub use gpu::Gpu;
 pub use gpu_scene::{GpuScene, MeshUpload, SliceHome, SliceUpload};
-pub use instanced::{GpuInstances, SceneMemory};
+pub use instanced::{GpuInstances, InstancedFrame, SceneMemory};
 pub use plan::EncodedFrame;
 pub use renderer::{FrameStats, Image, Renderer};
 pub use settings::{Culling, Mode, PrefixCut, Raster, Settings};
