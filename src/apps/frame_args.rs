@@ -157,7 +157,12 @@ impl RenderArgs {
 
     /// The orbit axes of `scene`'s model, about `--up` when given.
     pub fn axes(&self, scene: &Scene) -> OrbitAxes {
-        OrbitAxes::of(&with_up(scene.meta(), self.up))
+        self.axes_of(scene.meta())
+    }
+
+    /// [`RenderArgs::axes`] of a model (or scene) described by `meta`.
+    pub fn axes_of(&self, meta: &TreeMeta) -> OrbitAxes {
+        OrbitAxes::of(&with_up(meta, self.up))
     }
 
     pub fn camera(&self, scene: &Scene) -> anyhow::Result<Camera> {

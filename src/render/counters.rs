@@ -132,11 +132,20 @@ type Mapping = (AtomicBool, AtomicBool);
 const RING: usize = 4;
 
 impl CounterReadback {
-    pub fn new(gpu: &Gpu, gpu_scene: &GpuScene) -> CounterReadback {
+    /// The ring for frames of `gpu_scenes` (one model's list, or a scene's models).
+    pub fn new(gpu: &Gpu, gpu_scenes: &[&GpuScene]) -> CounterReadback {
         CounterReadback {
             free: (0..RING)
-                .map(|_| mappable_counters(gpu, counters_bytes(&[gpu_scene])))
+                .map(|_| mappable_counters(gpu, counters_bytes(gpu_scenes)))
                 .collect(),
+            ..CounterReadback::empty()
+        }
+    }
+
+    /// A ring without buffers: no frame is measured.
+    pub fn empty() -> CounterReadback {
+        CounterReadback {
+            free: Vec::new(),
             recorded: None,
             in_flight: VecDeque::new(),
         }
@@ -147,11 +156,11 @@ impl CounterReadback {
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &FrameTargets,
-        gpu_scene: &GpuScene,
+        gpu_scenes: &[&GpuScene],
         frame: &EncodedFrame,
     ) {
         if let Some(buffer) = self.free.pop() {
-            copy_counters(encoder, targets, &[gpu_scene], &buffer);
+            copy_counters(encoder, targets, gpu_scenes, &buffer);
             self.recorded = Some((buffer, frame.clone()));
         }
     }

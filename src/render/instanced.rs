@@ -28,8 +28,8 @@ use super::gpu_scene::{GpuScene, Share};
 use super::placement::Placement;
 use super::plan::EncodedFrame;
 use super::renderer::{FrameStats, Image, Renderer};
-use super::targets::FrameTargets;
 use super::settings::{Culling, Mode, Settings};
+use super::targets::FrameTargets;
 use super::upload::{self, InstancedRoom};
 use crate::tree::instances::InstancedScene;
 use crate::tree::instances::lod::{ModelLod, NearBy};
@@ -167,7 +167,8 @@ impl Renderer {
     ) -> anyhow::Result<(Image, FrameStats, usize)> {
         let targets = self.targets(size)?;
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        let drawn = self.encode_instanced(&mut encoder, &targets, (scene, gpu), camera, settings)?;
+        let drawn =
+            self.encode_instanced(&mut encoder, &targets, (scene, gpu), camera, settings)?;
         let all: Vec<&GpuScene> = gpu.models.iter().collect();
         let frame = &drawn.frame;
         let (image, counters) = self.read_frame(encoder, &targets, &all, frame)?;
@@ -227,7 +228,13 @@ impl Renderer {
             shares.extend(placed_shares(g, &planned.ranges[m]));
         }
         let plan_ms = started.elapsed().as_secs_f64() * 1e3;
-        self.encode_passes(encoder, targets, &shares, settings, (true, rasterized, None));
+        self.encode_passes(
+            encoder,
+            targets,
+            &shares,
+            settings,
+            (true, rasterized, None),
+        );
         let frame = EncodedFrame {
             ranges: Vec::new(),
             tested: shares.iter().map(|s| s.count as usize).sum(),

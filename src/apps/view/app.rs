@@ -223,6 +223,32 @@ impl App {
                             .map_or_else(String::new, |n| n.to_string_lossy().to_string())
                     ));
                 }
+                Ok(Loaded::Instances(scene, gpu)) => {
+                    let (width, height) = w.presenter.window_size();
+                    let mut camera_args = self.args.render.clone();
+                    camera_args.size = (width.max(1), height.max(1));
+                    let camera = match camera_args.camera_for(&scene.meta, &[scene.frame_chunk()]) {
+                        Ok(c) => c,
+                        Err(e) => {
+                            self.message = Some((format!("{e:#}"), true));
+                            continue;
+                        }
+                    };
+                    eprintln!(
+                        "scene     {} open in {seconds:.2} s ({} instances of {} models)",
+                        path.display(),
+                        count(scene.instances.len() as u64),
+                        scene.models.len()
+                    );
+                    let axes = camera_args.axes_of(&scene.meta);
+                    w.viewer
+                        .install_scene(path.clone(), scene, gpu, (&camera, axes));
+                    w.window.set_title(&format!(
+                        "spt: {}",
+                        path.file_name()
+                            .map_or_else(String::new, |n| n.to_string_lossy().to_string())
+                    ));
+                }
                 Ok(Loaded::Streamed(residency)) => {
                     let proxy = self.proxy.clone();
                     let wake = move || {
@@ -433,7 +459,7 @@ impl App {
             println!(
                 "splats    {} drawn of {} nodes, {} tested",
                 stats.gpu.drawn.map_or("–".into(), count),
-                count(m.scene.nodes().len() as u64),
+                count(m.node_count()),
                 count(stats.frame.as_ref().map_or(0, |f| f.tested) as u64)
             );
         }
@@ -458,7 +484,7 @@ impl App {
                 self.args.target_ms.unwrap_or_default()
             );
         }
-        if let Some(s) = w.viewer.model.as_ref().and_then(|m| m.streamer.as_ref()) {
+        if let Some(s) = w.viewer.model.as_ref().and_then(|m| m.streamer()) {
             println!("gpu memory {}", s.residency.memory_line());
         }
         println!("wrote     {}", path.display());

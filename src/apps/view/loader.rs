@@ -9,7 +9,8 @@ use std::thread::JoinHandle;
 use std::time::Instant;
 
 use crate::render::residency::Residency;
-use crate::render::{GpuScene, MeshUpload, Renderer, SliceUpload};
+use crate::render::{GpuInstances, GpuScene, MeshUpload, Renderer, SliceUpload};
+use crate::tree::instances::{InstancedScene, is_scene};
 use crate::tree::report::{Report, Step};
 use crate::tree::scene::Scene;
 
@@ -72,6 +73,8 @@ impl Progress {
 /// message on.
 pub enum Loaded {
     Scene(Arc<Scene>, GpuScene),
+    /// A scene of instances, its models on the GPU.
+    Instances(Arc<InstancedScene>, GpuInstances),
     Streamed(Residency),
     Slice(SliceUpload),
     Mesh(MeshUpload),
@@ -97,6 +100,19 @@ fn load(
     report: &Progress,
     send: &dyn Fn(Loaded) -> bool,
 ) -> anyhow::Result<()> {
+    if is_scene(path) {
+        if budget.is_some() {
+            anyhow::bail!("--gpu-memory streams one model; a scene's models are uploaded whole");
+        }
+        let scene = InstancedScene::open(path, report)?;
+        let total = scene.models.iter().map(|m| m.nodes().len() as u64).sum();
+        report.step(Step::Upload, total);
+        let gpu = renderer.upload_instanced(&scene);
+        report.advance(total);
+        send(Loaded::Instances(Arc::new(scene), gpu));
+        send(Loaded::Done);
+        return Ok(());
+    }
     if let Some(budget) = budget {
         return load_streamed(path, (renderer, budget), report, send);
     }
@@ -264,6 +280,12 @@ impl Loading {
                 Loaded::Scene(s, g) => scene = Some((s, g)),
                 Loaded::Slice(slice) => scene.as_mut().expect("scene first").1.insert(slice),
                 Loaded::Streamed(_) => {}
+                Loaded::Instances(..) => {
+                    anyhow::bail!(
+                        "{}: a scene of instances, not one model",
+                        self.path.display()
+                    )
+                }
                 Loaded::Mesh(mesh) => scene.as_mut().expect("scene first").1.set_mesh(mesh),
                 Loaded::Done => break,
             }

@@ -192,8 +192,8 @@ fn up_row(ui: &mut egui::Ui, viewer: &Viewer, commands: &mut Vec<Command>) {
 
 fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
     let m = viewer.model.as_ref();
-    let has_mesh = m.is_some_and(|m| m.gpu_scene.mesh_triangles() > 0);
-    let has_attributes = m.is_some_and(|m| m.scene.meta().has_attributes);
+    let has_mesh = m.is_some_and(|m| m.mesh_triangles() > 0);
+    let has_attributes = m.is_some_and(|m| m.meta().has_attributes);
     let compute_raster = viewer.renderer.gpu.compute_raster;
     let s = &mut viewer.settings;
     let lidar = |mode| matches!(mode, Mode::Classification | Mode::Intensity | Mode::Returns);
@@ -210,7 +210,7 @@ fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
         ui.add(egui::Slider::new(&mut s.edl_strength, 0.0..=10.0).text("EDL strength"));
         ui.add(egui::Slider::new(&mut s.edl_radius_px, 0.5..=8.0).text("EDL radius (px)"));
     }
-    super::legend::show(ui, s.mode, m.map(|m| (m.scene.meta(), m.camera.axes.up)));
+    super::legend::show(ui, s.mode, m.map(|m| (m.meta(), m.camera.axes.up)));
     ui.checkbox(&mut s.ewa, "EWA prefilter (X)");
     ui.checkbox(&mut s.cull_back_faces, "Back-face culling");
     ui.horizontal(|ui| {
@@ -271,7 +271,7 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
         row("CPU", ms(Some(st.cpu_ms)));
         row("GPU", ms(st.gpu.gpu_ms));
         if let Some(m) = &viewer.model {
-            let total = m.scene.nodes().len() as u64;
+            let total = m.node_count();
             row(
                 "splats drawn",
                 match st.gpu.drawn {
@@ -283,21 +283,25 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
                     None => format!("– / {}", count(total)),
                 },
             );
-            if let Some(f) = &st.frame {
+            let instances = m.instances();
+            if let Some((all, drawn, _)) = instances {
                 row(
-                    "tested",
-                    format!(
-                        "{} in {} chunks",
-                        count(f.tested as u64),
-                        count(f.ranges.len() as u64)
-                    ),
+                    "instances",
+                    format!("{} drawn / {}", count(drawn as u64), count(all as u64)),
                 );
+            }
+            if let Some(f) = &st.frame {
+                let ranges = match instances {
+                    Some((_, _, ranges)) => format!("{} ranges", count(ranges as u64)),
+                    None => format!("{} chunks", count(f.ranges.len() as u64)),
+                };
+                row("tested", format!("{} in {ranges}", count(f.tested as u64)));
                 row("plan", format!("{:.2} ms CPU", f.plan_ms));
                 if f.coarsened {
                     row("", "coarser until uploaded".into());
                 }
             }
-            if let Some(s) = &m.streamer {
+            if let Some(s) = m.streamer() {
                 let r = &s.residency;
                 row(
                     "GPU memory",
@@ -309,7 +313,7 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
                     ),
                 );
             }
-            let meta = m.scene.meta();
+            let meta = m.meta();
             row(
                 "model",
                 format!("{} leaves, depth {}", count(meta.leaf_count), meta.depth),

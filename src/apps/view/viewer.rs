@@ -14,30 +14,116 @@ use super::input::{Button, Command, Input, Move};
 pub use super::pacing::ERROR_PX_RANGE;
 use super::pacing::Pacer;
 use super::streamer::Streamer;
+use crate::render::GpuInstances;
 use crate::render::camera::bounding_sphere;
 use crate::render::residency::Residency;
 use crate::render::{
     Camera, CounterReadback, EncodedFrame, FrameTargets, GpuCounters, GpuScene, MeshUpload, Mode,
     OrbitAxes, Renderer, Settings, SliceUpload,
 };
+use crate::tree::TreeMeta;
+use crate::tree::chunks::Chunk;
+use crate::tree::instances::InstancedScene;
 use crate::tree::scene::Scene;
 
-/// A model ready to draw.
+/// What the viewer draws: one model's list, or a scene of instances.
+pub enum Content {
+    One {
+        scene: Arc<Scene>,
+        /// The list on the GPU: a prefix of it while the model uploads.
+        gpu_scene: GpuScene,
+        /// Under a GPU memory budget: what streams the list's slices in and out.
+        streamer: Option<Streamer>,
+    },
+    Many {
+        scene: Arc<InstancedScene>,
+        gpu: GpuInstances,
+        /// The scene's box as one chunk, to frame it.
+        frame: [Chunk; 1],
+        /// Instances the last frame drew, and the test ranges they handed over.
+        visible: usize,
+        ranges: usize,
+    },
+}
+
+impl Content {
+    /// The GPU lists whose counters a frame reads.
+    fn gpu_scenes(&self) -> Vec<&GpuScene> {
+        match self {
+            Content::One { gpu_scene, .. } => vec![gpu_scene],
+            Content::Many { gpu, .. } => gpu.models.iter().collect(),
+        }
+    }
+}
+
+/// A model (or a scene) ready to draw.
 pub struct Model {
     pub path: PathBuf,
-    pub scene: Arc<Scene>,
-    /// The list on the GPU: a prefix of it while the model uploads.
-    pub gpu_scene: GpuScene,
+    pub content: Content,
     /// Seconds from the request to open it to all of it on the GPU (None while uploading).
     pub load_seconds: Option<f64>,
     counters: CounterReadback,
-    /// Under a GPU memory budget: what streams the list's slices in and out.
-    pub streamer: Option<Streamer>,
     pub camera: OrbitCamera,
     home: OrbitCamera,
 }
 
 impl Model {
+    /// What the model (or the whole scene) is, as one model's header would say.
+    pub fn meta(&self) -> &TreeMeta {
+        match &self.content {
+            Content::One { scene, .. } => scene.meta(),
+            Content::Many { scene, .. } => &scene.meta,
+        }
+    }
+
+    /// The chunks a camera is framed on.
+    pub fn chunks(&self) -> &[Chunk] {
+        match &self.content {
+            Content::One { scene, .. } => scene.index.chunks(),
+            Content::Many { frame, .. } => frame,
+        }
+    }
+
+    /// Nodes of the model, or of all the scene's models.
+    pub fn node_count(&self) -> u64 {
+        match &self.content {
+            Content::One { scene, .. } => scene.nodes().len() as u64,
+            Content::Many { scene, .. } => {
+                scene.models.iter().map(|m| m.nodes().len() as u64).sum()
+            }
+        }
+    }
+
+    /// Triangles of the mesh reference (0 without one, and for a scene).
+    pub fn mesh_triangles(&self) -> u32 {
+        match &self.content {
+            Content::One { gpu_scene, .. } => gpu_scene.mesh_triangles(),
+            Content::Many { .. } => 0,
+        }
+    }
+
+    /// What streams the list under a GPU memory budget.
+    pub fn streamer(&self) -> Option<&Streamer> {
+        match &self.content {
+            Content::One { streamer, .. } => streamer.as_ref(),
+            Content::Many { .. } => None,
+        }
+    }
+
+    /// A scene's instances: in all, drawn by the last frame, and the test ranges they
+    /// handed over.
+    pub fn instances(&self) -> Option<(usize, usize, usize)> {
+        match &self.content {
+            Content::One { .. } => None,
+            Content::Many {
+                scene,
+                visible,
+                ranges,
+                ..
+            } => Some((scene.instances.len(), *visible, *ranges)),
+        }
+    }
+
     /// The axis the model stands on; `None` for a sensor frame seen as its sensor saw it.
     pub fn up(&self) -> Option<UpAxis> {
         UpAxis::ALL
@@ -129,27 +215,60 @@ impl Viewer {
         gpu_scene: GpuScene,
         (camera, axes): (&Camera, OrbitAxes),
     ) {
-        let radius = bounding_sphere(scene.meta()).1;
-        let orbit = OrbitCamera::from_camera(camera, axes, radius);
-        let counters = CounterReadback::new(&self.renderer.gpu, &gpu_scene);
-        if self.settings.mode == Mode::Mesh && gpu_scene.mesh_triangles() == 0 {
+        let content = Content::One {
+            scene,
+            gpu_scene,
+            streamer: None,
+        };
+        self.install_content(path, content, (camera, axes));
+    }
+
+    /// Makes the scene of instances `scene` the model shown, as [`Viewer::install`].
+    pub fn install_scene(
+        &mut self,
+        path: PathBuf,
+        scene: Arc<InstancedScene>,
+        gpu: GpuInstances,
+        view: (&Camera, OrbitAxes),
+    ) {
+        let frame = [scene.frame_chunk()];
+        let content = Content::Many {
+            scene,
+            gpu,
+            frame,
+            visible: 0,
+            ranges: 0,
+        };
+        self.install_content(path, content, view);
+    }
+
+    fn install_content(
+        &mut self,
+        path: PathBuf,
+        content: Content,
+        (camera, axes): (&Camera, OrbitAxes),
+    ) {
+        let mut model = Model {
+            path,
+            content,
+            load_seconds: None,
+            counters: CounterReadback::empty(),
+            camera: OrbitCamera::from_camera(camera, axes, 1.0),
+            home: OrbitCamera::from_camera(camera, axes, 1.0),
+        };
+        let radius = bounding_sphere(model.meta()).1;
+        model.camera = OrbitCamera::from_camera(camera, axes, radius);
+        model.home = model.camera;
+        model.counters = CounterReadback::new(&self.renderer.gpu, &model.content.gpu_scenes());
+        if self.settings.mode == Mode::Mesh && model.mesh_triangles() == 0 {
             self.settings.mode = Mode::Shaded;
         }
         if self.auto_mode {
-            self.settings.mode = default_mode(scene.meta());
+            self.settings.mode = default_mode(model.meta());
         }
         self.settings.lod_eye = None;
         self.stats = Stats::default();
-        self.model = Some(Model {
-            path,
-            scene,
-            gpu_scene,
-            load_seconds: None,
-            counters,
-            streamer: None,
-            camera: orbit,
-            home: orbit,
-        });
+        self.model = Some(model);
     }
 
     /// Turns the model to stand on `up`: the orbit turns about it, and the model is
@@ -157,18 +276,22 @@ impl Viewer {
     pub fn set_up(&mut self, up: UpAxis, viewport: (u32, u32)) {
         let Some(m) = &mut self.model else { return };
         let axes = OrbitAxes::about(up);
-        let meta = m.scene.meta();
+        let meta = m.meta();
         let aspect = viewport.0 as f64 / viewport.1.max(1) as f64;
-        let framed =
-            Camera::framed_about(axes, meta, m.scene.index.chunks(), m.camera.fov_y, aspect);
-        m.camera = OrbitCamera::from_camera(&framed, axes, bounding_sphere(meta).1);
+        let framed = Camera::framed_about(axes, meta, m.chunks(), m.camera.fov_y, aspect);
+        let radius = bounding_sphere(meta).1;
+        m.camera = OrbitCamera::from_camera(&framed, axes, radius);
         m.home = m.camera;
     }
 
     /// The next slice of the model's list, uploaded.
     pub fn add_slice(&mut self, slice: SliceUpload) {
-        if let Some(m) = &mut self.model {
-            m.gpu_scene.insert(slice);
+        if let Some(Model {
+            content: Content::One { gpu_scene, .. },
+            ..
+        }) = &mut self.model
+        {
+            gpu_scene.insert(slice);
         }
     }
 
@@ -179,10 +302,19 @@ impl Viewer {
         residency: Residency,
         wake: impl Fn() + Send + 'static,
     ) -> anyhow::Result<()> {
-        if let Some(m) = &mut self.model {
+        if let Some(Model {
+            content:
+                Content::One {
+                    scene,
+                    gpu_scene,
+                    streamer,
+                },
+            ..
+        }) = &mut self.model
+        {
             let renderer = self.renderer.clone();
-            let target = (m.scene.clone(), m.gpu_scene.home());
-            m.streamer = Some(Streamer::start(target, renderer, residency, wake)?);
+            let target = (scene.clone(), gpu_scene.home());
+            *streamer = Some(Streamer::start(target, renderer, residency, wake)?);
         }
         Ok(())
     }
@@ -192,13 +324,17 @@ impl Viewer {
     pub fn is_streaming_settled(&self) -> bool {
         self.model
             .as_ref()
-            .and_then(|m| m.streamer.as_ref())
+            .and_then(Model::streamer)
             .is_none_or(Streamer::is_settled)
     }
 
     pub fn add_mesh(&mut self, mesh: MeshUpload) {
-        if let Some(m) = &mut self.model {
-            m.gpu_scene.set_mesh(mesh);
+        if let Some(Model {
+            content: Content::One { gpu_scene, .. },
+            ..
+        }) = &mut self.model
+        {
+            gpu_scene.set_mesh(mesh);
         }
     }
 
@@ -268,8 +404,8 @@ impl Viewer {
             Command::TogglePanel => self.show_panel = !self.show_panel,
             Command::NextMode => {
                 let m = self.model.as_ref();
-                let has_mesh = m.is_some_and(|m| m.gpu_scene.mesh_triangles() > 0);
-                let has_attributes = m.is_some_and(|m| m.scene.meta().has_attributes);
+                let has_mesh = m.is_some_and(|m| m.mesh_triangles() > 0);
+                let has_attributes = m.is_some_and(|m| m.meta().has_attributes);
                 s.mode = next_mode(s.mode, has_mesh, has_attributes);
             }
             Command::ToggleFreeze => self.set_frozen(self.settings.lod_eye.is_none()),
@@ -285,8 +421,8 @@ impl Viewer {
                     let aspect = viewport.0 as f64 / viewport.1.max(1) as f64;
                     let framed = Camera::framed_from(
                         m.camera.axes,
-                        m.scene.meta(),
-                        m.scene.index.chunks(),
+                        m.meta(),
+                        m.chunks(),
                         [m.camera.azimuth_deg, m.camera.elevation_deg],
                         m.camera.fov_y,
                         aspect,
@@ -377,24 +513,16 @@ impl Viewer {
         self.stats.frame_error_px = settings.error_px;
         match &mut self.model {
             Some(m) => {
-                if let Some(s) = &mut m.streamer {
-                    s.receive(&mut m.gpu_scene);
-                }
                 let camera = m.camera.camera();
-                let frame = self.renderer.encode(
+                let frame = encode_content(
+                    &self.renderer,
                     encoder,
                     targets,
-                    &m.scene,
-                    &m.gpu_scene,
-                    &camera,
-                    &settings,
+                    &mut m.content,
+                    (&camera, &settings),
                 )?;
-                m.counters.record(encoder, targets, &m.gpu_scene, &frame);
-                if let Some(s) = &mut m.streamer {
-                    // Slices evicted here stay alive until the recorded frame is done.
-                    let scene = (&*self.renderer, &*m.scene);
-                    s.after_frame(scene, &mut m.gpu_scene, &frame.wanted_slices);
-                }
+                m.counters
+                    .record(encoder, targets, &m.content.gpu_scenes(), &frame);
                 self.stats.frame = Some(frame);
             }
             None => self
@@ -475,6 +603,47 @@ impl Viewer {
 }
 
 /// Whether `input` moves the camera (and so starts the pacer's moving frames).
+/// Records a frame of `content` seen by `camera` with `settings`: one model (its
+/// streamed slices received first, and after the frame those it wants asked for), or a
+/// scene of instances.
+fn encode_content(
+    renderer: &Renderer,
+    encoder: &mut wgpu::CommandEncoder,
+    targets: &FrameTargets,
+    content: &mut Content,
+    (camera, settings): (&Camera, &Settings),
+) -> anyhow::Result<EncodedFrame> {
+    match content {
+        Content::One {
+            scene,
+            gpu_scene,
+            streamer,
+        } => {
+            if let Some(s) = streamer.as_mut() {
+                s.receive(gpu_scene);
+            }
+            let frame = renderer.encode(encoder, targets, scene, gpu_scene, camera, settings)?;
+            if let Some(s) = streamer.as_mut() {
+                // Slices evicted here stay alive until the recorded frame is done.
+                s.after_frame((renderer, scene), gpu_scene, &frame.wanted_slices);
+            }
+            Ok(frame)
+        }
+        Content::Many {
+            scene,
+            gpu,
+            visible,
+            ranges,
+            ..
+        } => {
+            let drawn =
+                renderer.encode_instanced(encoder, targets, (scene, gpu), camera, settings)?;
+            (*visible, *ranges) = (drawn.visible, drawn.ranges);
+            Ok(drawn.frame)
+        }
+    }
+}
+
 fn moves_camera(input: &Input) -> bool {
     match input {
         Input::Drag { button, .. } => *button != Button::Right,

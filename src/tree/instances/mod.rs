@@ -211,6 +211,7 @@ fn scene_meta(models: &[Scene], instances: &[Instance]) -> TreeMeta {
     meta.oriented_normals = models.iter().all(|m| m.meta().oriented_normals);
     meta.two_sided = models.iter().any(|m| m.meta().two_sided);
     meta.has_attributes = models.iter().any(|m| m.meta().has_attributes);
+    meta.has_colors = models.iter().any(|m| m.meta().has_colors);
     if models
         .iter()
         .any(|m| m.meta().normals_turned != first.normals_turned)
