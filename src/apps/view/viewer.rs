@@ -33,7 +33,7 @@ pub enum Content {
         /// The list on the GPU: a prefix of it while the model uploads.
         gpu_scene: GpuScene,
         /// Under a GPU memory budget: what streams the list's slices in and out.
-        streamer: Option<Streamer>,
+        streamer: Option<Box<Streamer>>,
     },
     Many {
         scene: Arc<InstancedScene>,
@@ -105,7 +105,7 @@ impl Model {
     /// What streams the list under a GPU memory budget.
     pub fn streamer(&self) -> Option<&Streamer> {
         match &self.content {
-            Content::One { streamer, .. } => streamer.as_ref(),
+            Content::One { streamer, .. } => streamer.as_deref(),
             Content::Many { .. } => None,
         }
     }
@@ -314,7 +314,7 @@ impl Viewer {
         {
             let renderer = self.renderer.clone();
             let target = (scene.clone(), gpu_scene.home());
-            *streamer = Some(Streamer::start(target, renderer, residency, wake)?);
+            *streamer = Some(Box::new(Streamer::start(target, renderer, residency, wake)?));
         }
         Ok(())
     }
