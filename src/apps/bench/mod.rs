@@ -12,6 +12,7 @@ mod plan;
 mod plot;
 mod random_subset;
 mod report;
+mod scene;
 
 use crate::apps::frame_args::with_up;
 use crate::io::up::UpAxis;
@@ -39,7 +40,8 @@ const STABILITY_SAMPLES: u32 = 120;
 /// The options of `spt bench`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct BenchArgs {
-    /// The model: a PLY file (mesh or point cloud), a LAS or LAZ file, or an .spt file.
+    /// The model: a PLY file (mesh or point cloud), a LAS or LAZ file, or an .spt file;
+    /// or a scene of instances (a .json file: docs/scenes.md).
     pub model: PathBuf,
     /// Folder for results.csv, summary.md and speed_vs_error.png (made if missing).
     #[arg(long)]
@@ -282,6 +284,9 @@ fn frame_progress(args: &BenchArgs, paths: &[(String, Vec<Camera>)]) -> Progress
 }
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    if crate::tree::instances::is_scene(&args.model) {
+        return scene::run(args);
+    }
     let mut args = effective_args(args)?;
     let scene = Scene::open(&args.model)?;
     std::fs::create_dir_all(&args.out)

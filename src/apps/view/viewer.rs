@@ -314,7 +314,9 @@ impl Viewer {
         {
             let renderer = self.renderer.clone();
             let target = (scene.clone(), gpu_scene.home());
-            *streamer = Some(Box::new(Streamer::start(target, renderer, residency, wake)?));
+            *streamer = Some(Box::new(Streamer::start(
+                target, renderer, residency, wake,
+            )?));
         }
         Ok(())
     }
