@@ -5,8 +5,6 @@
 use std::ops::Range;
 use std::sync::atomic::AtomicBool;
 
-use super::upload::InstancedRoom;
-
 /// One slice of the list on the GPU, with what compute culling needs.
 pub(super) struct Slice {
     /// Its index in the scene's plan, and its first node (list index).
@@ -67,6 +65,14 @@ pub struct GpuScene {
     pub(super) placements: wgpu::Buffer,
     /// Room per slice for a model drawn at many placements (None: drawn alone).
     pub(super) room: Option<InstancedRoom>,
+}
+
+/// What a model drawn at many placements holds room for in each slice: survivors (each
+/// with its placement index) and test ranges a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct InstancedRoom {
+    pub survivors: usize,
+    pub ranges: usize,
 }
 
 /// What each slice of a [`GpuScene`] binds besides its own buffers, and the room it

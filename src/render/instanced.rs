@@ -24,13 +24,13 @@ use glam::DVec3;
 
 use super::camera::Camera;
 use super::frame::FrameUniform;
-use super::gpu_scene::{GpuScene, Share};
+use super::gpu_scene::{GpuScene, InstancedRoom, Share};
 use super::placement::Placement;
 use super::plan::EncodedFrame;
 use super::renderer::{FrameStats, Image, Renderer};
 use super::settings::{Culling, Mode, Settings};
 use super::targets::FrameTargets;
-use super::upload::{self, InstancedRoom};
+use super::upload;
 use crate::tree::instances::InstancedScene;
 use crate::tree::instances::lod::{ModelLod, NearBy};
 use crate::tree::select::{ViewCone, error_per_distance};

@@ -9,7 +9,7 @@ use wgpu::util::DeviceExt;
 use super::bindings::{self as slots, Slot, splat};
 use super::cull::{Compaction, CullPass, TestRange};
 use super::gpu::Gpu;
-use super::gpu_scene::{GpuScene, Slice, SliceUpload};
+use super::gpu_scene::{GpuScene, InstancedRoom, Slice, SliceUpload};
 use super::placement::Placement;
 use super::raster::ComputeRaster;
 use super::shaders::WORKGROUP_SIZE;
@@ -76,14 +76,6 @@ pub(super) fn slice_bytes(
         + (std::mem::size_of::<TestRange>() * max_ranges.max(1)) as u64
 }
 
-/// What a model drawn at many placements holds room for in each slice: survivors (each
-/// with its placement index) and test ranges a frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct InstancedRoom {
-    pub survivors: usize,
-    pub ranges: usize,
-}
-
 /// A scene of `total` nodes with nothing uploaded yet, planned in slices of the most
 /// nodes a binding holds, or under a GPU memory budget of `budget` bytes in slices of
 /// about 1/64 of what it holds; drawn alone (`room` None) or at up to `room.0`
@@ -132,6 +124,84 @@ fn bind(
     })
 }
 
+/// The buffers of one slice: its nodes, shapes and attributes, its survivor list (and
+/// their placements), compaction record and test ranges.
+struct SliceBuffers {
+    nodes: wgpu::Buffer,
+    shapes: wgpu::Buffer,
+    attributes: wgpu::Buffer,
+    survivors: wgpu::Buffer,
+    survivor_placements: wgpu::Buffer,
+    compaction: wgpu::Buffer,
+    ranges: wgpu::Buffer,
+}
+
+impl SliceBuffers {
+    /// Made for the nodes, shapes and attributes of a slice, with room for `max_ranges`
+    /// test ranges and [`upload_slice`]'s survivor list.
+    fn new(
+        device: &wgpu::Device,
+        (chunk, chunk_shapes, chunk_attributes): (&[NodeRecord], &[SplatShape], &[PointAttributes]),
+        room: Option<InstancedRoom>,
+        max_ranges: usize,
+    ) -> SliceBuffers {
+        assert_eq!(chunk.len(), chunk_shapes.len());
+        assert!(chunk_attributes.is_empty() || chunk_attributes.len() == chunk.len());
+        let storage = |label, contents| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let nodes = storage("nodes", bytemuck::cast_slice(chunk));
+        let shapes = storage("shapes", bytemuck::cast_slice(chunk_shapes));
+        let none = [PointAttributes::default()];
+        let attributes = storage(
+            "attributes",
+            bytemuck::cast_slice(if chunk_attributes.is_empty() {
+                &none
+            } else {
+                chunk_attributes
+            }),
+        );
+        let indices = |label, count: usize| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (std::mem::size_of::<u32>() * count.max(1)) as u64,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        };
+        let survivors = indices("survivors", room.map_or(chunk.len(), |r| r.survivors));
+        let survivor_placements = indices("survivor placements", room.map_or(1, |r| r.survivors));
+        let compaction = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("compaction"),
+            size: std::mem::size_of::<Compaction>() as u64,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::INDIRECT
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let ranges = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("test ranges"),
+            size: (std::mem::size_of::<TestRange>() * max_ranges.max(1)) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        SliceBuffers {
+            nodes,
+            shapes,
+            attributes,
+            survivors,
+            survivor_placements,
+            compaction,
+            ranges,
+        }
+    }
+}
+
 /// Uploads slice `index` of the list, whose first node is `first`: its node records,
 /// their shapes and LiDAR attributes (empty for a model without: one zero is bound in
 /// their place), bound for both culling strategies with the model's `placements`, with
@@ -145,52 +215,21 @@ pub(super) fn upload_slice(
     (placements, room): (&wgpu::Buffer, Option<InstancedRoom>),
     max_ranges: usize,
 ) -> SliceUpload {
-    assert_eq!(chunk.len(), chunk_shapes.len());
-    assert!(chunk_attributes.is_empty() || chunk_attributes.len() == chunk.len());
-    let storage = |label, contents| {
-        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents,
-            usage: wgpu::BufferUsages::STORAGE,
-        })
-    };
-    let nodes = storage("nodes", bytemuck::cast_slice(chunk));
-    let shapes = storage("shapes", bytemuck::cast_slice(chunk_shapes));
-    let none = [PointAttributes::default()];
-    let attributes = storage(
-        "attributes",
-        bytemuck::cast_slice(if chunk_attributes.is_empty() {
-            &none
-        } else {
-            chunk_attributes
-        }),
-    );
-    let indices = |label, count: usize| {
-        device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: (std::mem::size_of::<u32>() * count.max(1)) as u64,
-            usage: wgpu::BufferUsages::STORAGE,
-            mapped_at_creation: false,
-        })
-    };
     let max_ranges = room.map_or(max_ranges, |r| r.ranges);
-    let survivors = indices("survivors", room.map_or(chunk.len(), |r| r.survivors));
-    let survivor_placements = indices("survivor placements", room.map_or(1, |r| r.survivors));
-    let compaction = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("compaction"),
-        size: std::mem::size_of::<Compaction>() as u64,
-        usage: wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::INDIRECT
-            | wgpu::BufferUsages::COPY_DST
-            | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let ranges = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("test ranges"),
-        size: (std::mem::size_of::<TestRange>() * max_ranges.max(1)) as u64,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
+    let SliceBuffers {
+        nodes,
+        shapes,
+        attributes,
+        survivors,
+        survivor_placements,
+        compaction,
+        ranges,
+    } = SliceBuffers::new(
+        device,
+        (chunk, chunk_shapes, chunk_attributes),
+        room,
+        max_ranges,
+    );
     SliceUpload(Slice {
         index,
         first,

@@ -19,10 +19,13 @@ use super::pacing::Pacer;
 use super::panel::{self, PanelStatus};
 use super::present::{Presented, Presenter};
 use super::viewer::Viewer;
+use crate::apps::frame_args::RenderArgs;
 use crate::apps::stats::Summary;
 use crate::apps::text::count;
 use crate::io::png::write_png;
-use crate::render::{Gpu, Renderer};
+use crate::render::{Gpu, GpuInstances, GpuScene, Renderer};
+use crate::tree::instances::InstancedScene;
+use crate::tree::scene::Scene;
 
 /// Sent to the event loop from other threads: something finished, redraw.
 #[derive(Debug, Clone, Copy)]
@@ -36,6 +39,67 @@ struct Windowed {
     egui_renderer: egui_wgpu::Renderer,
     viewer: Viewer,
     adapter: String,
+}
+
+impl Windowed {
+    /// Shows a model opened from `path` in `seconds`, framed as `args` ask.
+    fn install_model(
+        &mut self,
+        args: &RenderArgs,
+        (path, seconds): (PathBuf, f64),
+        scene: Arc<Scene>,
+        gpu_scene: GpuScene,
+    ) -> anyhow::Result<()> {
+        let args = self.window_args(args);
+        let camera = args.camera(&scene)?;
+        eprintln!(
+            "model     {} open in {seconds:.2} s ({} nodes)",
+            path.display(),
+            count(scene.nodes().len() as u64),
+        );
+        let axes = args.axes(&scene);
+        self.set_title(&path);
+        self.viewer.install(path, scene, gpu_scene, (&camera, axes));
+        Ok(())
+    }
+
+    /// Shows a scene of instances opened from `path` in `seconds`, as
+    /// [`Windowed::install_model`].
+    fn install_scene(
+        &mut self,
+        args: &RenderArgs,
+        (path, seconds): (PathBuf, f64),
+        scene: Arc<InstancedScene>,
+        gpu: GpuInstances,
+    ) -> anyhow::Result<()> {
+        let args = self.window_args(args);
+        let camera = args.camera_for(&scene.meta, &[scene.frame_chunk()])?;
+        eprintln!(
+            "scene     {} open in {seconds:.2} s ({} instances of {} models)",
+            path.display(),
+            count(scene.instances.len() as u64),
+            scene.models.len()
+        );
+        let axes = args.axes_of(&scene.meta);
+        self.set_title(&path);
+        self.viewer.install_scene(path, scene, gpu, (&camera, axes));
+        Ok(())
+    }
+
+    /// `args` with the window's size.
+    fn window_args(&self, args: &RenderArgs) -> RenderArgs {
+        let (width, height) = self.presenter.window_size();
+        let mut args = args.clone();
+        args.size = (width.max(1), height.max(1));
+        args
+    }
+
+    fn set_title(&self, path: &Path) {
+        let name = path
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().to_string());
+        self.window.set_title(&format!("spt: {name}"));
+    }
 }
 
 /// The scripted `--screenshot` run: frames drawn with the model so far, and their times.
@@ -199,55 +263,16 @@ impl App {
         for message in messages {
             match message {
                 Ok(Loaded::Scene(scene, gpu_scene)) => {
-                    let (width, height) = w.presenter.window_size();
-                    let mut camera_args = self.args.render.clone();
-                    camera_args.size = (width.max(1), height.max(1));
-                    let camera = match camera_args.camera(&scene) {
-                        Ok(c) => c,
-                        Err(e) => {
-                            self.message = Some((format!("{e:#}"), true));
-                            continue;
-                        }
-                    };
-                    eprintln!(
-                        "model     {} open in {seconds:.2} s ({} nodes)",
-                        path.display(),
-                        count(scene.nodes().len() as u64),
-                    );
-                    let axes = camera_args.axes(&scene);
-                    w.viewer
-                        .install(path.clone(), scene, gpu_scene, (&camera, axes));
-                    w.window.set_title(&format!(
-                        "spt: {}",
-                        path.file_name()
-                            .map_or_else(String::new, |n| n.to_string_lossy().to_string())
-                    ));
+                    let opened = (path.clone(), seconds);
+                    if let Err(e) = w.install_model(&self.args.render, opened, scene, gpu_scene) {
+                        self.message = Some((format!("{e:#}"), true));
+                    }
                 }
                 Ok(Loaded::Instances(scene, gpu)) => {
-                    let (width, height) = w.presenter.window_size();
-                    let mut camera_args = self.args.render.clone();
-                    camera_args.size = (width.max(1), height.max(1));
-                    let camera = match camera_args.camera_for(&scene.meta, &[scene.frame_chunk()]) {
-                        Ok(c) => c,
-                        Err(e) => {
-                            self.message = Some((format!("{e:#}"), true));
-                            continue;
-                        }
-                    };
-                    eprintln!(
-                        "scene     {} open in {seconds:.2} s ({} instances of {} models)",
-                        path.display(),
-                        count(scene.instances.len() as u64),
-                        scene.models.len()
-                    );
-                    let axes = camera_args.axes_of(&scene.meta);
-                    w.viewer
-                        .install_scene(path.clone(), scene, gpu, (&camera, axes));
-                    w.window.set_title(&format!(
-                        "spt: {}",
-                        path.file_name()
-                            .map_or_else(String::new, |n| n.to_string_lossy().to_string())
-                    ));
+                    let opened = (path.clone(), seconds);
+                    if let Err(e) = w.install_scene(&self.args.render, opened, scene, gpu) {
+                        self.message = Some((format!("{e:#}"), true));
+                    }
                 }
                 Ok(Loaded::Streamed(residency)) => {
                     let proxy = self.proxy.clone();
