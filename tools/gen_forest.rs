@@ -19,6 +19,7 @@ use clap::Parser;
 use glam::DVec3;
 
 use spt::io::ply::{Encoding, FaceList, PlyLayout, PolyMesh, write_ply};
+use spt::tree::instances::scatter::SplitMix;
 
 #[derive(Parser)]
 #[command(about = "Writes a procedural tree and a forest scene of it over a terrain")]
@@ -40,16 +41,12 @@ struct Args {
     seed: u64,
 }
 
-/// Uniform numbers in [0, 1) (splitmix64).
-struct Rng(u64);
+/// Uniform numbers in a range.
+struct Rng(SplitMix);
 
 impl Rng {
     fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        self.0.uniform()
     }
 
     fn range(&mut self, lo: f64, hi: f64) -> f64 {
@@ -175,7 +172,7 @@ fn main() -> anyhow::Result<()> {
         None => Path::new(&std::env::var("SPT_DATA").unwrap_or_else(|_| "../shared/data".into()))
             .join("terrain_utm.ply"),
     };
-    let mut rng = Rng(args.seed);
+    let mut rng = Rng(SplitMix(args.seed));
     let mesh = tree(args.leaves, &mut rng);
     let tree_ply = args.out.join("tree.ply");
     write_ply(

@@ -39,8 +39,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
             uploaded
         }
     };
-    let (mut gpu_ms, mut wall_ms, mut plan_ms) = (Vec::new(), Vec::new(), Vec::new());
-    let mut passes_ms: [Vec<f64>; 3] = Default::default();
+    let mut times = FrameTimes::default();
     let mut last = None;
     for _ in 0..args.frames {
         let start = std::time::Instant::now();
@@ -54,15 +53,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
                 args.size.1,
             )
             .with_context(|| format!("rendering {}", model.display()))?;
-        wall_ms.push(start.elapsed().as_secs_f64() * 1e3);
-        plan_ms.push(frame.1.plan_ms);
-        gpu_ms.extend(frame.1.gpu_ms);
-        for (all, ms) in passes_ms
-            .iter_mut()
-            .zip(frame.1.passes_ms.into_iter().flatten())
-        {
-            all.push(ms);
-        }
+        times.add(&frame.1, start);
         last = Some(frame);
     }
     let (image, stats) = last.expect("at least one frame");
@@ -94,8 +85,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
         );
     }
     println!("raster    {}", renderer.raster(settings.raster).name());
-    print_times(&mut gpu_ms, passes_ms, &mut wall_ms, stats.selected);
-    let plan = Summary::of(&mut plan_ms).map_or(0.0, |s| s.median);
+    let plan = times.print(stats.selected);
     let cut = renderer.prefix_cut(settings.prefix_cut).name();
     println!(
         "cpu plan  {plan:.3} ms per frame (median): chunks in view, their prefixes cut at the {cut}"
@@ -104,9 +94,47 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     Ok(())
 }
 
+/// The times of the frames `spt render` draws: GPU (in all and per pass, where the
+/// adapter measures them), wall, and the CPU's plan.
+#[derive(Default)]
+pub(crate) struct FrameTimes {
+    gpu_ms: Vec<f64>,
+    passes_ms: [Vec<f64>; 3],
+    wall_ms: Vec<f64>,
+    plan_ms: Vec<f64>,
+}
+
+impl FrameTimes {
+    /// A frame's statistics, the frame having started at `start`.
+    pub fn add(&mut self, stats: &crate::render::FrameStats, start: std::time::Instant) {
+        self.wall_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        self.plan_ms.push(stats.plan_ms);
+        self.gpu_ms.extend(stats.gpu_ms);
+        for (all, ms) in self
+            .passes_ms
+            .iter_mut()
+            .zip(stats.passes_ms.into_iter().flatten())
+        {
+            all.push(ms);
+        }
+    }
+
+    /// Prints the times ([`print_times`], for `selected` splats); returns the median
+    /// CPU plan, ms.
+    pub fn print(mut self, selected: usize) -> f64 {
+        print_times(
+            &mut self.gpu_ms,
+            self.passes_ms,
+            &mut self.wall_ms,
+            selected,
+        );
+        Summary::of(&mut self.plan_ms).map_or(0.0, |s| s.median)
+    }
+}
+
 /// Prints the frames' GPU time (in all and per pass, where the adapter measures it),
 /// the GPU's splat rate for `selected` splats, and the wall time.
-pub(crate) fn print_times(
+fn print_times(
     gpu_ms: &mut Vec<f64>,
     passes_ms: [Vec<f64>; 3],
     wall_ms: &mut Vec<f64>,

@@ -7,8 +7,7 @@ use std::path::Path;
 use anyhow::Context;
 
 use crate::apps::frame_args::RenderArgs;
-use crate::apps::render::print_times;
-use crate::apps::stats::Summary;
+use crate::apps::render::FrameTimes;
 use crate::apps::text::count;
 use crate::render::{Gpu, Renderer};
 use crate::tree::instances::InstancedScene;
@@ -26,23 +25,14 @@ pub fn run(path: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> 
     let renderer = Renderer::new(gpu);
     let settings = args.settings();
     let uploaded = renderer.upload_instanced(&scene);
-    let (mut gpu_ms, mut plan_ms, mut wall_ms) = (Vec::new(), Vec::new(), Vec::new());
-    let mut passes_ms: [Vec<f64>; 3] = Default::default();
+    let mut times = FrameTimes::default();
     let mut last = None;
     for _ in 0..args.frames {
         let start = std::time::Instant::now();
         let frame = renderer
             .render_instanced(&scene, &uploaded, &camera, &settings, args.size)
             .with_context(|| format!("rendering {}", path.display()))?;
-        wall_ms.push(start.elapsed().as_secs_f64() * 1e3);
-        plan_ms.push(frame.1.plan_ms);
-        gpu_ms.extend(frame.1.gpu_ms);
-        for (all, ms) in passes_ms
-            .iter_mut()
-            .zip(frame.1.passes_ms.into_iter().flatten())
-        {
-            all.push(ms);
-        }
+        times.add(&frame.1, start);
         last = Some(frame);
     }
     let (image, stats, visible) = last.expect("at least one frame");
@@ -73,8 +63,7 @@ pub fn run(path: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> 
         count(stats.gpu_outline.unwrap_or(0)),
     );
     println!("raster    {}", renderer.raster(settings.raster).name());
-    print_times(&mut gpu_ms, passes_ms, &mut wall_ms, drawn as usize);
-    let plan = Summary::of(&mut plan_ms).map_or(0.0, |s| s.median);
+    let plan = times.print(drawn as usize);
     println!("cpu plan  {plan:.3} ms per frame (median): instances in view, their prefixes");
     print_memory(&scene, &uploaded);
     println!("wrote     {}", output.display());

@@ -98,11 +98,12 @@ pub fn scatter(
         .collect()
 }
 
-/// splitmix64, as uniform numbers in [0, 1).
-struct SplitMix(u64);
+/// splitmix64, as uniform numbers in [0, 1): small, and the same sequence on every
+/// machine (the scene generator in `tools/` draws its trees with it too).
+pub struct SplitMix(pub u64);
 
 impl SplitMix {
-    fn uniform(&mut self) -> f64 {
+    pub fn uniform(&mut self) -> f64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
