@@ -290,6 +290,16 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
                     format!("{} drawn / {}", count(drawn as u64), count(all as u64)),
                 );
             }
+            if let Some((gpu, cpu)) = m.scene_memory() {
+                let models = format!("{:.0} MiB models", mib(gpu.models));
+                let room = format!("{:.0} MiB survivors", mib(gpu.survivor_room));
+                let each = format!("{} B an instance", gpu.per_instance);
+                row("GPU memory", format!("{models} + {room} + {each}"));
+                row(
+                    "CPU memory",
+                    format!("{cpu} B an instance beyond the models"),
+                );
+            }
             if let Some(f) = &st.frame {
                 let ranges = match instances {
                     Some((_, _, ranges)) => format!("{} ranges", count(ranges as u64)),

@@ -14,13 +14,13 @@ use super::input::{Button, Command, Input, Move};
 pub use super::pacing::ERROR_PX_RANGE;
 use super::pacing::Pacer;
 use super::streamer::Streamer;
-use crate::render::GpuInstances;
 use crate::render::camera::bounding_sphere;
 use crate::render::residency::Residency;
 use crate::render::{
     Camera, CounterReadback, EncodedFrame, FrameTargets, GpuCounters, GpuScene, MeshUpload, Mode,
     OrbitAxes, Renderer, Settings, SliceUpload,
 };
+use crate::render::{GpuInstances, SceneMemory};
 use crate::tree::TreeMeta;
 use crate::tree::chunks::Chunk;
 use crate::tree::instances::InstancedScene;
@@ -107,6 +107,15 @@ impl Model {
         match &self.content {
             Content::One { streamer, .. } => streamer.as_deref(),
             Content::Many { .. } => None,
+        }
+    }
+
+    /// A scene's memory: the GPU's by what it is for, and the CPU bytes an instance
+    /// costs.
+    pub fn scene_memory(&self) -> Option<(SceneMemory, u64)> {
+        match &self.content {
+            Content::One { .. } => None,
+            Content::Many { scene, gpu, .. } => Some((gpu.memory(), scene.bytes_per_instance())),
         }
     }
 
