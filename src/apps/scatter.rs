@@ -37,10 +37,10 @@ pub struct ScatterArgs {
     #[arg(long, value_name = "FILE")]
     pub draw_base: Option<PathBuf>,
     /// Yaw range about z, degrees: MIN,MAX.
-    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [0.0, 360.0])]
+    #[arg(long, value_delimiter = ',', default_values_t = [0.0, 360.0])]
     pub yaw: Vec<f64>,
     /// Scale range: MIN,MAX.
-    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [0.8, 1.2])]
+    #[arg(long, value_delimiter = ',', default_values_t = [0.8, 1.2])]
     pub scale: Vec<f64>,
     /// Leave out ground steeper than this, degrees from level.
     #[arg(long, default_value_t = 35.0)]
@@ -80,8 +80,11 @@ pub fn run(args: &ScatterArgs) -> anyhow::Result<()> {
 
 /// The spread the arguments ask for, checked.
 fn spread(args: &ScatterArgs) -> anyhow::Result<Spread> {
-    let pair = |v: &[f64]| [v[0], v[1]];
-    let (yaw, scale) = (pair(&args.yaw), pair(&args.scale));
+    let pair = |v: &[f64], what: &str| match v {
+        [a, b] => Ok([*a, *b]),
+        _ => Err(anyhow::anyhow!("{what} takes two numbers, MIN,MAX")),
+    };
+    let (yaw, scale) = (pair(&args.yaw, "--yaw")?, pair(&args.scale, "--scale")?);
     if !(args.density.is_finite() && args.density > 0.0) {
         bail!("--density must be positive");
     }

@@ -197,3 +197,49 @@ fn a_scene_of_instances_draws_as_the_transformed_copies_do() {
 fn covered(image: &Image) -> usize {
     image.covered.iter().filter(|c| **c).count()
 }
+
+/// `spt scatter` over the default model's triangles writes a scene that `spt info` and
+/// `spt render` read: the asked count, on the base, repeatable by its seed.
+#[test]
+fn a_scattered_scene_opens_and_draws() {
+    let dir = common::temp_dir();
+    let knot = common::default_model();
+    let scene = dir.path().join("knots.json");
+    let scatter = |seed: &str| {
+        let (code, out, err) = common::run_spt(&[
+            "scatter".as_ref(),
+            knot.as_os_str(),
+            knot.as_os_str(),
+            "-o".as_ref(),
+            scene.as_os_str(),
+            "--count".as_ref(),
+            "40".as_ref(),
+            "--scale".as_ref(),
+            "0.02,0.05".as_ref(),
+            "--max-slope".as_ref(),
+            "90".as_ref(),
+            "--seed".as_ref(),
+            seed.as_ref(),
+        ]);
+        assert_eq!(code, Some(0), "{out}{err}");
+        std::fs::read(dir.path().join("knots.instances.ply")).unwrap()
+    };
+    let first = scatter("3");
+    assert_eq!(first, scatter("3"), "the same seed, the same instances");
+    assert_ne!(first, scatter("4"), "another seed, other instances");
+    let (code, out, err) = common::run_spt(&["info".as_ref(), scene.as_os_str()]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(out.contains("40 instances"), "{out}");
+    let png = dir.path().join("knots.png");
+    let (code, out, err) = common::run_spt(&[
+        "render".as_ref(),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        png.as_os_str(),
+        "--size".as_ref(),
+        "96x64".as_ref(),
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(out.contains("instances 41 drawn"), "{out}");
+    assert!(png.exists());
+}
