@@ -11,6 +11,8 @@
 //!             └─► raster (the same in compute) ─► resolve ─┘
 //!          frame (uniform) · gbuffer · accumulation · targets · gpu_scene (upload)
 //!          counters · residency (which slices stay under a GPU budget) · streamed
+//!          placement (where a model is drawn) · instanced, instance_plan (scenes of
+//!          instances: many placements a frame)
 //! ```
 //!
 //! [`Renderer`] composes them.
@@ -25,6 +27,7 @@ mod fullscreen;
 mod gbuffer;
 pub(crate) mod gpu;
 mod gpu_scene;
+mod instance_plan;
 mod instanced;
 mod mesh;
 mod placement;

@@ -1,0 +1,301 @@
+//! The CPU's plan of a frame of a scene ([`super::instanced`]): the instances the view
+//! may see, each one's placement and its model's ranges at ε
+//! ([`crate::tree::instances::lod`]), ε raised where the ranges would overfill the
+//! models' room.
+
+use std::ops::Range;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::camera::Camera;
+use super::gpu_scene::GpuScene;
+use super::placement::Placement;
+use super::settings::Settings;
+use crate::tree::instances::InstancedScene;
+use crate::tree::instances::lod::{ModelLod, NearBy};
+use crate::tree::select::{ViewCone, error_per_distance};
+
+/// An instance takes its ranges by its distance alone ([`ModelLod::far`]) from this many
+/// of its sphere's radii away: its chunks' own distances then differ from the sphere's
+/// by at most a factor 1.5, so it hands over few more nodes than its chunks'
+/// prefixes would. Nearer, its chunks are searched one by one.
+const FAR_RADII: f64 = 4.0;
+
+/// What the CPU decided for one frame of a scene: per model, the placements of its
+/// visible instances and the ranges they hand over.
+pub(super) struct Planned {
+    pub placements: Vec<Vec<Placement>>,
+    /// Per model: ranges and each one's placement index.
+    pub ranges: Vec<Vec<(Range<usize>, u32)>>,
+    pub visible: usize,
+    pub eps: f64,
+    pub coarsened: bool,
+    /// The near plane: half the distance from the eye to the nearest visible
+    /// instance's sphere, or 10⁻⁴ of its radius when the eye is inside it.
+    pub near: f64,
+    /// Nodes handed over, and the share of the visible groups planned (less than 1
+    /// when the plan stopped: far too many nodes to test).
+    tested: usize,
+    planned_share: f64,
+}
+
+/// Plans a frame of `scene`: ε from the settings, raised by quarter octaves until
+/// every slice's ranges test no more nodes than its survivor list holds; ranges
+/// beyond a slice's room are joined across their smallest gaps first (the GPU
+/// then tests the nodes between them too, and rejects them).
+pub(super) fn plan(
+    (scene, models, lods): (&InstancedScene, &[GpuScene], &[ModelLod]),
+    camera: &Camera,
+    settings: &Settings,
+    (width, height): (u32, u32),
+) -> Planned {
+    let asked = match settings.lod {
+        true => error_per_distance(settings.error_px, camera.fov_y, height),
+        false => 0.0,
+    };
+    let aspect = width as f64 / height.max(1) as f64;
+    let origin = DVec3::from(scene.meta.origin);
+    let wide = shifted(&camera.view_cone(&scene.meta, aspect), -origin);
+    let (right, up, forward) = (wide.right, wide.up, wide.forward);
+    // Culling keeps what lies in front of the eye at all; the near plane is set
+    // from what it kept.
+    let cone = ViewCone::new(
+        camera.eye,
+        [right, up, forward],
+        wide.tan_half_fov,
+        f64::MIN_POSITIVE,
+    );
+    let lod_eye = settings.lod_eye.unwrap_or(camera.eye);
+    let mut eps = asked;
+    loop {
+        let view = View {
+            eye: camera.eye,
+            lod_eye,
+            cone: &cone,
+            eps,
+        };
+        let mut planned = plan_at((scene, models, lods), &view);
+        for (g, ranges) in models.iter().zip(&mut planned.ranges) {
+            if let Some(room) = g.room {
+                merge_to(
+                    ranges,
+                    room.ranges.saturating_sub(g.planned_slices()).max(1),
+                );
+            }
+        }
+        let over = (models.iter().zip(&planned.ranges))
+            .map(|(g, r)| overflow(g, r))
+            .fold(0.0, f64::max)
+            / planned.planned_share.max(1e-3);
+        let floor = error_per_distance(1.0, camera.fov_y, height) * 1e-3;
+        if over <= 1.0 || eps > 1.0 {
+            let near = if planned.near.is_finite() {
+                planned.near
+            } else {
+                1.0
+            };
+            return Planned {
+                coarsened: eps != asked,
+                near,
+                ..planned
+            };
+        }
+        // The nodes tested fall about as 1/ε² (a cut of a surface seen from afar).
+        eps = (eps * over.sqrt().clamp(2f64.powf(0.25), 4.0)).max(floor);
+    }
+}
+
+/// Widest gap joined: a block of the prefix search.
+const MAX_JOINED_GAP: usize = 64;
+
+/// Joins ranges of the same placement across their smallest gaps (at most
+/// [`MAX_JOINED_GAP`] nodes) until at most `target` remain, or as few as such gaps
+/// allow (a placement's ranges are ascending and consecutive in the list).
+fn merge_to(ranges: &mut Vec<(Range<usize>, u32)>, target: usize) {
+    if ranges.len() <= target {
+        return;
+    }
+    let mut gaps: Vec<usize> = ranges
+        .windows(2)
+        .filter(|w| w[0].1 == w[1].1)
+        .map(|w| w[1].0.start - w[0].0.end)
+        .collect();
+    let joins = (ranges.len() - target).min(gaps.len());
+    if joins == 0 {
+        return;
+    }
+    let (_, &mut widest, _) = gaps.select_nth_unstable(joins - 1);
+    // Gaps wider than a block of the prefix search are not worth testing: the frame
+    // coarsens instead (`overflow` counts the ranges left over the room).
+    let widest = widest.min(MAX_JOINED_GAP);
+    let mut out: Vec<(Range<usize>, u32)> = Vec::with_capacity(target);
+    for (r, p) in ranges.drain(..) {
+        match out.last_mut() {
+            Some((last, q)) if *q == p && r.start - last.end <= widest => last.end = r.end,
+            _ => out.push((r, p)),
+        }
+    }
+    *ranges = out;
+}
+
+/// How far `ranges` (of one model) overfill its slices' room: the fullest slice's nodes
+/// to test over the survivors it holds, or the ranges over their room, whichever is
+/// larger (at most 1: they fit).
+fn overflow(g: &GpuScene, ranges: &[(Range<usize>, u32)]) -> f64 {
+    let Some(room) = g.room else { return 0.0 };
+    let too_many =
+        ranges.len() as f64 / room.ranges.saturating_sub(g.planned_slices()).max(1) as f64;
+    let mut tested = vec![0usize; g.planned_slices()];
+    for (r, _) in ranges {
+        for k in g.slices_of(r) {
+            let s = g.slice_range(k);
+            tested[k] += r.end.min(s.end) - r.start.max(s.start);
+        }
+    }
+    (tested.iter().map(|&t| t as f64 / room.survivors as f64)).fold(too_many, f64::max)
+}
+
+/// What the frame's plan reads: the eyes (the camera's, and the one the level of
+/// detail is chosen for), the view cone (world units) and ε.
+struct View<'a> {
+    eye: DVec3,
+    lod_eye: DVec3,
+    cone: &'a ViewCone,
+    eps: f64,
+}
+
+/// The visible instances' placements and ranges at `view.eps`: groups in parallel,
+/// each batch's placement indices renumbered as the batches are joined.
+fn plan_at(
+    (scene, models, lods): (&InstancedScene, &[GpuScene], &[ModelLod]),
+    view: &View,
+) -> Planned {
+    let groups: Vec<Range<usize>> = scene
+        .groups
+        .visible(view.cone, scene.instances.len())
+        .collect();
+    let count = scene.models.len();
+    // A plan that tests more than HOPELESS rooms' worth stops: the frame will coarsen
+    // by about the ratio, which the groups planned so far tell well enough.
+    let room = models
+        .iter()
+        .filter_map(|g| g.room)
+        .map(|r| r.survivors)
+        .min();
+    let limit = room.map_or(usize::MAX, |r| HOPELESS * r);
+    let tested = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let parts: Vec<Planned> = groups
+        .par_chunks(16)
+        .map(|batch| {
+            let mut part = Planned::empty(count, view.eps);
+            for group in batch {
+                if tested.load(Ordering::Relaxed) > limit {
+                    break;
+                }
+                let before = part.tested;
+                plan_group((scene, lods), view, group.clone(), &mut part);
+                tested.fetch_add(part.tested - before, Ordering::Relaxed);
+                done.fetch_add(1, Ordering::Relaxed);
+            }
+            part
+        })
+        .collect();
+    let mut all = Planned::empty(count, view.eps);
+    for part in parts {
+        all.join(part);
+    }
+    all.planned_share = done.into_inner() as f64 / groups.len().max(1) as f64;
+    all
+}
+
+/// Rooms' worth of nodes to test after which a plan stops.
+const HOPELESS: usize = 1;
+
+/// Adds the instances of `group` that `view` sees to `out`.
+fn plan_group(
+    (scene, lods): (&InstancedScene, &[ModelLod]),
+    view: &View,
+    group: Range<usize>,
+    out: &mut Planned,
+) {
+    let mut near_by: Vec<NearBy> = (0..scene.models.len()).map(|_| NearBy::default()).collect();
+    for instance in &scene.instances[group] {
+        let m = instance.model as usize;
+        let (model, lod) = (&scene.models[m], &lods[m]);
+        let meta = model.meta();
+        let origin = DVec3::from(meta.origin);
+        let to_world = instance.similarity();
+        let centre = to_world.apply(origin + lod.centre());
+        let radius = lod.radius * to_world.scale;
+        if !view.cone.sees_sphere(centre, radius) {
+            continue;
+        }
+        let gap = (centre - view.eye).length() - radius;
+        let d = lod.gap((centre - view.lod_eye).length(), to_world.scale);
+        let found = match d > FAR_RADII * lod.radius && view.eps > 0.0 {
+            true => lod.far(model, d, view.eps, &mut near_by[m]),
+            false => {
+                let eye = to_world.eye_to_model(view.lod_eye) - origin;
+                let cone = shifted(&to_world.cone_to_model(view.cone), origin);
+                lod.near(model, eye, &cone, view.eps).into()
+            }
+        };
+        if found.is_empty() {
+            continue;
+        }
+        out.near = out
+            .near
+            .min(if gap > 0.0 { 0.5 * gap } else { 1e-4 * radius });
+        let index = out.placements[m].len() as u32;
+        out.placements[m].push(Placement::new(
+            &to_world,
+            origin,
+            view.eye,
+            meta.error_scale,
+        ));
+        out.ranges[m].extend(found.iter().map(|r| (r.clone(), index)));
+        out.tested += found.iter().map(|r| r.len()).sum::<usize>();
+        out.visible += 1;
+    }
+}
+
+impl Planned {
+    fn empty(models: usize, eps: f64) -> Planned {
+        Planned {
+            placements: vec![Vec::new(); models],
+            ranges: vec![Vec::new(); models],
+            visible: 0,
+            eps,
+            coarsened: false,
+            near: f64::INFINITY,
+            tested: 0,
+            planned_share: 1.0,
+        }
+    }
+
+    /// Appends `part`, its placement indices moved past this one's.
+    fn join(&mut self, part: Planned) {
+        for (m, (placements, ranges)) in part.placements.into_iter().zip(part.ranges).enumerate() {
+            let offset = self.placements[m].len() as u32;
+            self.placements[m].extend(placements);
+            self.ranges[m].extend(ranges.into_iter().map(|(r, p)| (r, p + offset)));
+        }
+        self.visible += part.visible;
+        self.tested += part.tested;
+        self.near = self.near.min(part.near);
+    }
+}
+
+/// `cone` with its apex moved by −`origin` (into coordinates relative to a model's
+/// origin).
+fn shifted(cone: &ViewCone, origin: DVec3) -> ViewCone {
+    ViewCone::new(
+        cone.eye - origin,
+        [cone.right, cone.up, cone.forward],
+        cone.tan_half_fov,
+        cone.near,
+    )
+}
