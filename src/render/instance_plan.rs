@@ -39,21 +39,38 @@ pub(super) struct Planned {
     /// when the plan stopped: far too many nodes to test).
     tested: usize,
     planned_share: f64,
+    /// The ε the settings asked for, and how full the fullest room is (at most 1).
+    pub asked: f64,
+    pub fill: f64,
 }
 
 /// Plans a frame of `scene`: ε from the settings, raised by quarter octaves until
 /// every slice's ranges test no more nodes than its survivor list holds; ranges
 /// beyond a slice's room are joined across their smallest gaps first (the GPU
 /// then tests the nodes between them too, and rejects them).
+///
+/// `last`: the ε asked and drawn of the frame before, and how full its room was. Where
+/// that frame asked the same ε and had to coarsen, the search starts where it drew (a
+/// view changes little from frame to frame) instead of at the asked ε, whose plan would
+/// overfill again; a quarter octave finer where the room was filled less than a step's
+/// worth (the nodes tested grow about as 1/ε²), so that frames refine as the view
+/// allows.
 pub(super) fn plan(
     (scene, models, lods): (&InstancedScene, &[GpuScene], &[ModelLod]),
-    camera: &Camera,
-    settings: &Settings,
+    (camera, settings): (&Camera, &Settings),
     (width, height): (u32, u32),
+    last: Option<(f64, f64, f64)>,
 ) -> Planned {
     let asked = match settings.lod {
         true => error_per_distance(settings.error_px, camera.fov_y, height),
         false => 0.0,
+    };
+    let start = match last {
+        Some((last_asked, drawn, fill)) if last_asked == asked && drawn > asked => {
+            let finer = fill * QUARTER_OCTAVE * QUARTER_OCTAVE < 1.0;
+            (if finer { drawn / QUARTER_OCTAVE } else { drawn }).max(asked)
+        }
+        _ => asked,
     };
     let aspect = width as f64 / height.max(1) as f64;
     let origin = DVec3::from(scene.meta.origin);
@@ -68,7 +85,7 @@ pub(super) fn plan(
         f64::MIN_POSITIVE,
     );
     let lod_eye = settings.lod_eye.unwrap_or(camera.eye);
-    let mut eps = asked;
+    let mut eps = start;
     loop {
         let view = View {
             eye: camera.eye,
@@ -99,13 +116,18 @@ pub(super) fn plan(
             return Planned {
                 coarsened: eps != asked,
                 near,
+                asked,
+                fill: over,
                 ..planned
             };
         }
         // The nodes tested fall about as 1/ε² (a cut of a surface seen from afar).
-        eps = (eps * over.sqrt().clamp(2f64.powf(0.25), 4.0)).max(floor);
+        eps = (eps * over.sqrt().clamp(QUARTER_OCTAVE, 4.0)).max(floor);
     }
 }
+
+/// 2^¼: the least step of ε.
+const QUARTER_OCTAVE: f64 = 1.189_207_115_002_721;
 
 /// Widest gap joined: a block of the prefix search.
 const MAX_JOINED_GAP: usize = 64;
@@ -273,6 +295,8 @@ impl Planned {
             near: f64::INFINITY,
             tested: 0,
             planned_share: 1.0,
+            asked: eps,
+            fill: 0.0,
         }
     }
 

@@ -15,6 +15,7 @@
 //! coarser cut, never a holed one).
 
 use std::ops::Range;
+use std::sync::Mutex;
 
 use glam::DVec3;
 
@@ -44,6 +45,9 @@ const NEAR_INSTANCES: usize = 16;
 pub struct GpuInstances {
     pub models: Vec<GpuScene>,
     lods: Vec<ModelLod>,
+    /// The ε asked and drawn of the last frame planned, and how full its room was
+    /// (`instance_plan::plan`).
+    last: Mutex<Option<(f64, f64, f64)>>,
 }
 
 /// A scene's GPU memory: its models' lists, their survivor room, and what each
@@ -124,7 +128,11 @@ impl Renderer {
             })
             .collect();
         let lods = scene.models.iter().map(ModelLod::new).collect();
-        GpuInstances { models, lods }
+        GpuInstances {
+            models,
+            lods,
+            last: Mutex::new(None),
+        }
     }
 
     /// Renders one frame of `scene` and reads it back, with its statistics (`selected`:
@@ -182,7 +190,15 @@ impl Renderer {
         };
         let rasterized = self.rasterized(settings, size)?;
         let started = std::time::Instant::now();
-        let planned = plan((scene, &gpu.models, &gpu.lods), camera, settings, size);
+        let mut last = gpu.last.lock().unwrap_or_else(|e| e.into_inner());
+        let planned = plan(
+            (scene, &gpu.models, &gpu.lods),
+            (camera, settings),
+            size,
+            *last,
+        );
+        *last = Some((planned.asked, planned.eps, planned.fill));
+        drop(last);
         let mut uniform = FrameUniform::new(&scene.meta, camera, settings, size, planned.eps);
         // The scene's box may span a country: the near plane comes from the instances
         // in view instead (half the distance to the nearest one's sphere).
