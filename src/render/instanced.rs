@@ -152,19 +152,9 @@ impl Renderer {
         let all: Vec<&GpuScene> = gpu.models.iter().collect();
         let frame = &drawn.frame;
         let (image, counters) = self.read_frame(encoder, &targets, &all, frame)?;
-        let stats = FrameStats {
-            tested: frame.tested,
-            chunks: scene.models.iter().map(|m| m.index.chunks().len()).sum(),
-            chunks_tested: drawn.ranges,
-            selected: counters.drawn.unwrap_or(0) as usize,
-            gpu_ms: counters.gpu_ms,
-            passes_ms: counters.passes_ms,
-            gpu_drawn: counters.drawn,
-            gpu_outline: counters.outline,
-            eps: frame.eps,
-            coarsened: frame.coarsened,
-            plan_ms: frame.plan_ms,
-        };
+        let chunks = scene.models.iter().map(|m| m.index.chunks().len()).sum();
+        let selected = counters.drawn.unwrap_or(0) as usize;
+        let stats = FrameStats::of(frame, &counters, (chunks, drawn.ranges), selected);
         Ok((image, stats, drawn.visible))
     }
 

@@ -84,6 +84,31 @@ pub struct FrameStats {
     pub plan_ms: f64,
 }
 
+impl FrameStats {
+    /// The statistics of `frame` with its GPU `counters`: `(chunks, chunks_tested)` of
+    /// the model (or the scene's models and test ranges), `selected` splats.
+    pub(super) fn of(
+        frame: &EncodedFrame,
+        counters: &super::GpuCounters,
+        (chunks, chunks_tested): (usize, usize),
+        selected: usize,
+    ) -> FrameStats {
+        FrameStats {
+            tested: frame.tested,
+            chunks,
+            chunks_tested,
+            selected,
+            gpu_ms: counters.gpu_ms,
+            passes_ms: counters.passes_ms,
+            gpu_drawn: counters.drawn,
+            gpu_outline: counters.outline,
+            eps: frame.eps,
+            coarsened: frame.coarsened,
+            plan_ms: frame.plan_ms,
+        }
+    }
+}
+
 pub struct Renderer {
     pub gpu: Gpu,
     /// Bind group 0 of every pass: the frame uniform.
@@ -424,22 +449,8 @@ impl Renderer {
             .flat_map(|r| nodes[r.clone()].par_iter())
             .filter(|r| is_drawn(r, meta.error_scale, frame.lod_eye, frame.eps))
             .count();
-        Ok((
-            image,
-            FrameStats {
-                tested: frame.tested,
-                chunks: scene.index.chunks().len(),
-                chunks_tested: frame.ranges.len(),
-                selected,
-                gpu_ms: counters.gpu_ms,
-                passes_ms: counters.passes_ms,
-                gpu_drawn: counters.drawn,
-                gpu_outline: counters.outline,
-                eps: frame.eps,
-                coarsened: frame.coarsened,
-                plan_ms: frame.plan_ms,
-            },
-        ))
+        let chunks = (scene.index.chunks().len(), frame.ranges.len());
+        Ok((image, FrameStats::of(&frame, &counters, chunks, selected)))
     }
 
     /// Submits `encoder` (a frame recorded into `targets`) and reads the frame back:
