@@ -183,7 +183,8 @@ struct Placement {
     rotation: vec2<u32>,
     // The model's error scale times `scale`: stored errors to world units.
     error_scale: f32,
-    pad: u32,
+    // A far instance placed by the GPU: its model's table slot (place.wgsl); else 0.
+    slot: u32,
 }
 
 fn placement_rotation(p: Placement) -> vec4<f32> {

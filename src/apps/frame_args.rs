@@ -60,6 +60,10 @@ pub struct RenderArgs {
     /// Without level of detail: every leaf.
     #[arg(long)]
     pub no_lod: bool,
+    /// A scene: plan every instance on the CPU, including the far ones the GPU
+    /// otherwise places itself (docs/scenes.md).
+    #[arg(long)]
+    pub cpu_instances: bool,
     /// Skip splats whose normal faces away (oriented models).
     #[arg(long)]
     pub cull_back_faces: bool,
@@ -151,6 +155,7 @@ impl RenderArgs {
             prefix_cut: self.prefix_cut,
             edl_strength: self.edl_strength.clamp(0.0, 100.0),
             edl_radius_px: self.edl_radius.clamp(0.5, 16.0),
+            far_on_gpu: !self.cpu_instances,
             ..Settings::default()
         }
     }

@@ -47,6 +47,40 @@ pub mod cull {
     ];
 }
 
+/// Group 2 of the culling of far instances (`cull_far` in `shaders/cull.wgsl`): a
+/// model's table at the frame's ε and its placed far instances (`render/far.rs`).
+pub mod far {
+    use super::{Slot, slot};
+    pub const ENTRIES: Slot = slot(2, 0, "far_entries");
+    pub const RANGES: Slot = slot(2, 1, "far_ranges");
+    pub const COUNTERS: Slot = slot(2, 2, "far");
+    /// Group 3 of the two settling steps: the indirect dispatches.
+    pub const ARGS: Slot = slot(3, 0, "far_args");
+    #[cfg(test)]
+    pub const ALL: &[Slot] = &[ENTRIES, RANGES, COUNTERS, ARGS];
+}
+
+/// Group 1 of the placing of far instances (`shaders/place.wgsl`).
+pub mod place {
+    use super::{Slot, slot};
+    pub const PARAMS: Slot = slot(1, 0, "params");
+    pub const INSTANCES: Slot = slot(1, 1, "instances");
+    pub const GROUPS: Slot = slot(1, 2, "far_groups");
+    pub const ENTRIES: Slot = slot(1, 3, "entries");
+    pub const PLACED: Slot = slot(1, 4, "placed");
+    pub const COUNTERS: Slot = slot(1, 5, "counters");
+    #[cfg(test)]
+    pub const ALL: &[Slot] = &[
+        super::FRAME,
+        PARAMS,
+        INSTANCES,
+        GROUPS,
+        ENTRIES,
+        PLACED,
+        COUNTERS,
+    ];
+}
+
 /// Groups 1 and 2 of the splat passes (`shaders/splat.wgsl`): one slice of the list
 /// (survivors only after compute culling), and pass 1's depth for pass 2.
 pub mod splat {
@@ -139,7 +173,8 @@ pub mod present {
 /// Every pipeline module and the slots it may declare (in groups of slots).
 #[cfg(test)]
 pub const MODULES: &[(&str, &[&[Slot]])] = &[
-    ("cull", &[cull::ALL]),
+    ("cull", &[cull::ALL, far::ALL]),
+    ("place", &[place::ALL]),
     ("splat", &[splat::ALL]),
     ("raster", &[raster::ALL, &accumulate::ALL]),
     ("resolve", &[resolve::ALL, &accumulate::ALL]),
@@ -187,10 +222,11 @@ mod tests {
     #[test]
     fn a_moved_or_unknown_binding_is_caught() {
         let cull = crate::render::shaders::compose("cull");
+        let slots = [cull::ALL, far::ALL].concat();
         let moved = cull.replace("@group(1) @binding(4)", "@group(1) @binding(5)");
-        assert_eq!(mismatches("cull", &moved, cull::ALL).len(), 1);
+        assert_eq!(mismatches("cull", &moved, &slots).len(), 1);
         let renamed = cull.replace("var<storage, read> ranges", "var<storage, read> spans");
         let renamed = renamed.replace("ranges[", "spans[");
-        assert_eq!(mismatches("cull", &renamed, cull::ALL).len(), 1);
+        assert_eq!(mismatches("cull", &renamed, &slots).len(), 1);
     }
 }

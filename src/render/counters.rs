@@ -8,6 +8,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::cull::Compaction;
+use super::far::{FarCounters, FarCounts};
 use super::gpu::Gpu;
 use super::gpu_scene::GpuScene;
 use super::plan::EncodedFrame;
@@ -28,13 +29,17 @@ pub struct GpuCounters {
     /// Of those, the splats on an outline (`on_outline`), which pass 2 draws with the
     /// coverage samples and the prefilter's band.
     pub outline: Option<u64>,
+    /// A scene's far instances placed by the GPU, all models together.
+    pub far: Option<FarCounts>,
 }
 
 /// Bytes of one frame's counters: the timestamps, then two u32 per slice (of the
-/// whole list, uploaded or not): its survivors on an outline and the others.
+/// whole list, uploaded or not): its survivors on an outline and the others; then the
+/// far instances' counters of each model the GPU places them for.
 fn counters_bytes(gpu_scenes: &[&GpuScene]) -> u64 {
     let slices: usize = gpu_scenes.iter().map(|g| g.planned_slices()).sum();
-    STAMP_BYTES + 8 * slices.max(1) as u64
+    let far = gpu_scenes.iter().filter(|g| g.far_counters.is_some()).count() as u64;
+    STAMP_BYTES + 8 * slices.max(1) as u64 + far * FarCounters::READ_BYTES
 }
 
 /// Records copies of the frame's counters into `into` (at least `counters_bytes`).
@@ -54,6 +59,12 @@ pub(super) fn copy_counters(
             let to = STAMP_BYTES + 4 * (2 * k + j) as u64;
             encoder.copy_buffer_to_buffer(&slice.compaction, at, into, to, 4);
         }
+    }
+    let slices: usize = gpu_scenes.iter().map(|g| g.planned_slices()).sum();
+    let far = gpu_scenes.iter().filter_map(|g| g.far_counters.as_ref());
+    for (j, counters) in far.enumerate() {
+        let to = STAMP_BYTES + 8 * slices.max(1) as u64 + j as u64 * FarCounters::READ_BYTES;
+        encoder.copy_buffer_to_buffer(counters, 0, into, to, FarCounters::READ_BYTES);
     }
 }
 
@@ -81,11 +92,20 @@ pub(super) fn parse_counters(gpu: &Gpu, bytes: &[u8], frame: &EncodedFrame) -> G
     };
     let drawn = frame.compute.then(|| survivors().sum());
     let outline = frame.compute.then(|| survivors().step_by(2).sum());
+    let far = (frame.far_models > 0).then(|| {
+        let from = bytes.len() - frame.far_models * FarCounters::READ_BYTES as usize;
+        let mut counts = FarCounts::default();
+        for c in bytes[from..].chunks_exact(FarCounters::READ_BYTES as usize) {
+            counts.add(bytemuck::pod_read_unaligned(c));
+        }
+        counts
+    });
     GpuCounters {
         gpu_ms,
         passes_ms,
         drawn,
         outline,
+        far,
     }
 }
 

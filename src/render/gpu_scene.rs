@@ -30,12 +30,22 @@ pub(super) struct Slice {
 
 /// What one frame tests of a slice: its part of the frame's ranges, relative to the
 /// slice's first node, the placement of each (empty: all at placement 0, a model drawn
-/// alone), and the nodes in them.
+/// alone), and the nodes in them; where the GPU also culls far instances into it, the
+/// buffer of the compute rasterizer's dispatch over its survivors
+/// ([`super::far::FarArgs::RASTER_AT`]).
 pub(super) struct Share<'a> {
     pub slice: &'a Slice,
     pub ranges: Vec<Range<u32>>,
     pub placements: Vec<u32>,
     pub count: u32,
+    pub far: Option<&'a wgpu::Buffer>,
+}
+
+impl Share<'_> {
+    /// Whether the frame may draw survivors of this slice.
+    pub fn drawn(&self) -> bool {
+        self.count > 0 || self.far.is_some()
+    }
 }
 
 /// The mesh of the reference pass on the GPU.
@@ -65,6 +75,8 @@ pub struct GpuScene {
     pub(super) placements: wgpu::Buffer,
     /// Room per slice for a model drawn at many placements (None: drawn alone).
     pub(super) room: Option<InstancedRoom>,
+    /// The counters of its far instances, where the GPU places them (`far.rs`).
+    pub(super) far_counters: Option<wgpu::Buffer>,
 }
 
 /// What a model drawn at many placements holds room for in each slice: survivors (each
@@ -117,6 +129,7 @@ impl GpuScene {
             asked_fitted: AtomicBool::new(true),
             placements,
             room,
+            far_counters: None,
         }
     }
 
@@ -251,6 +264,7 @@ impl GpuScene {
                     count: local.iter().map(|r| r.len() as u32).sum(),
                     ranges: local,
                     placements: Vec::new(),
+                    far: None,
                 }
             })
             .collect()

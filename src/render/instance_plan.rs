@@ -10,11 +10,14 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::camera::Camera;
+use super::far::FarPlan;
 use super::gpu_scene::GpuScene;
 use super::placement::Placement;
 use super::settings::Settings;
+use crate::tree::TreeMeta;
 use crate::tree::instances::InstancedScene;
-use crate::tree::instances::lod::{ModelLod, NearBy};
+use crate::tree::instances::groups::Group;
+use crate::tree::instances::lod::{ModelLod, NearBy, SLOTS};
 use crate::tree::select::{ViewCone, error_per_distance};
 
 /// An instance takes its ranges by its distance alone ([`ModelLod::far`]) from this many
@@ -29,6 +32,9 @@ pub(super) struct Planned {
     pub placements: Vec<Vec<Placement>>,
     /// Per model: ranges and each one's placement index.
     pub ranges: Vec<Vec<(Range<usize>, u32)>>,
+    /// Per model: the far groups handed to the GPU whole (`far.rs`).
+    pub far: Vec<FarPlan>,
+    /// Instances the CPU planned (the GPU counts the far groups' own).
     pub visible: usize,
     pub eps: f64,
     pub coarsened: bool,
@@ -54,36 +60,32 @@ pub(super) struct Planned {
 /// view changes little from frame to frame) instead of at the asked ε, whose plan would
 /// overfill again; a quarter octave finer where the room was filled less than a step's
 /// worth (the nodes tested grow about as 1/ε²), so that frames refine as the view
-/// allows.
+/// allows. A fill over 1 is the GPU's: its far instances asked for more survivors
+/// than the room held, and the search starts coarser by the square root.
+///
+/// `on_gpu[m]`: whether model m's far groups go to the GPU whole; `trim`: whether a
+/// near instance's prefixes end at their node (else at their block).
 pub(super) fn plan(
     (scene, models, lods): (&InstancedScene, &[GpuScene], &[ModelLod]),
     (camera, settings): (&Camera, &Settings),
     (width, height): (u32, u32),
-    last: Option<(f64, f64, f64)>,
+    (last, on_gpu, trim): (Option<(f64, f64, f64)>, &[bool], bool),
 ) -> Planned {
     let asked = match settings.lod {
         true => error_per_distance(settings.error_px, camera.fov_y, height),
         false => 0.0,
     };
     let start = match last {
+        Some((last_asked, drawn, fill)) if last_asked == asked && fill > 1.0 => {
+            (drawn * fill.sqrt().clamp(QUARTER_OCTAVE, 4.0)).max(asked)
+        }
         Some((last_asked, drawn, fill)) if last_asked == asked && drawn > asked => {
             let finer = fill * QUARTER_OCTAVE * QUARTER_OCTAVE < 1.0;
             (if finer { drawn / QUARTER_OCTAVE } else { drawn }).max(asked)
         }
         _ => asked,
     };
-    let aspect = width as f64 / height.max(1) as f64;
-    let origin = DVec3::from(scene.meta.origin);
-    let wide = shifted(&camera.view_cone(&scene.meta, aspect), -origin);
-    let (right, up, forward) = (wide.right, wide.up, wide.forward);
-    // Culling keeps what lies in front of the eye at all; the near plane is set
-    // from what it kept.
-    let cone = ViewCone::new(
-        camera.eye,
-        [right, up, forward],
-        wide.tan_half_fov,
-        f64::MIN_POSITIVE,
-    );
+    let cone = instance_cone(&scene.meta, camera, (width, height));
     let lod_eye = settings.lod_eye.unwrap_or(camera.eye);
     let mut eps = start;
     loop {
@@ -92,6 +94,8 @@ pub(super) fn plan(
             lod_eye,
             cone: &cone,
             eps,
+            on_gpu,
+            trim,
         };
         let mut planned = plan_at((scene, models, lods), &view);
         for (g, ranges) in models.iter().zip(&mut planned.ranges) {
@@ -124,6 +128,16 @@ pub(super) fn plan(
         // The nodes tested fall about as 1/ε² (a cut of a surface seen from afar).
         eps = (eps * over.sqrt().clamp(QUARTER_OCTAVE, 4.0)).max(floor);
     }
+}
+
+/// The view cone instances are culled by: world units, apex at the eye, keeping what
+/// lies in front of the eye at all (the near plane is set from what it kept).
+pub(super) fn instance_cone(meta: &TreeMeta, camera: &Camera, (width, height): (u32, u32)) -> ViewCone {
+    let aspect = width as f64 / height.max(1) as f64;
+    let origin = DVec3::from(meta.origin);
+    let wide = shifted(&camera.view_cone(meta, aspect), -origin);
+    let axes = [wide.right, wide.up, wide.forward];
+    ViewCone::new(camera.eye, axes, wide.tan_half_fov, f64::MIN_POSITIVE)
 }
 
 /// 2^¼: the least step of ε.
@@ -186,6 +200,8 @@ struct View<'a> {
     lod_eye: DVec3,
     cone: &'a ViewCone,
     eps: f64,
+    on_gpu: &'a [bool],
+    trim: bool,
 }
 
 /// The visible instances' placements and ranges at `view.eps`: groups in parallel,
@@ -194,11 +210,22 @@ fn plan_at(
     (scene, models, lods): (&InstancedScene, &[GpuScene], &[ModelLod]),
     view: &View,
 ) -> Planned {
-    let groups: Vec<Range<usize>> = scene
-        .groups
-        .visible(view.cone, scene.instances.len())
-        .collect();
     let count = scene.models.len();
+    let mut far: Vec<FarPlan> = vec![FarPlan::default(); count];
+    let mut far_near = f64::INFINITY;
+    let mut groups: Vec<Range<usize>> = Vec::new();
+    for group in scene.groups.visible(view.cone) {
+        let m = group.model as usize;
+        match far_slots(group, &lods[m], view) {
+            Some((slots, gap)) => {
+                let base = scene.instances.partition_point(|i| (i.model as usize) < m);
+                let members = group.members();
+                far[m].add(members.start - base..members.end - base, slots);
+                far_near = far_near.min(0.5 * gap);
+            }
+            None => groups.push(group.members()),
+        }
+    }
     // A plan that tests more than HOPELESS rooms' worth stops: the frame will coarsen
     // by about the ratio, which the groups planned so far tell well enough.
     let room = models
@@ -229,12 +256,38 @@ fn plan_at(
     for part in parts {
         all.join(part);
     }
+    all.far = far;
+    all.near = all.near.min(far_near);
     all.planned_share = done.into_inner() as f64 / groups.len().max(1) as f64;
     all
 }
 
 /// Rooms' worth of nodes to test after which a plan stops.
 const HOPELESS: usize = 1;
+
+/// Where `group`'s members all lie far enough for the GPU to place them whole (at least
+/// [`FAR_RADII`] of their spheres' radii outside them, their model's far groups handed
+/// to the GPU, ε > 0): the table slots their distances reach, and the group's distance
+/// to the eye (a bound on each member's).
+///
+/// With g the eye's distance to the group's sphere and s a member's scale, the eye lies
+/// at least g / s model units outside the member's sphere, and at most (|c − eye| + R) / s.
+fn far_slots(group: &Group, lod: &ModelLod, view: &View) -> Option<(Range<usize>, f64)> {
+    let m = group.model as usize;
+    if !view.on_gpu.get(m).copied().unwrap_or(false) || view.eps <= 0.0 {
+        return None;
+    }
+    let centre = (group.centre - view.eye).length();
+    let gap = centre - group.radius;
+    let (s_min, s_max) = (group.scale_min as f64, group.scale_max as f64);
+    if gap <= FAR_RADII * lod.radius * s_max {
+        return None;
+    }
+    // A slot's margin either side for the GPU's f32.
+    let lo = lod.slot(gap / s_max).saturating_sub(1);
+    let hi = (lod.slot((centre + group.radius) / s_min) + 2).min(SLOTS);
+    Some((lo..hi, gap))
+}
 
 /// Adds the instances of `group` that `view` sees to `out`.
 fn plan_group(
@@ -262,7 +315,7 @@ fn plan_group(
             false => {
                 let eye = to_world.eye_to_model(view.lod_eye) - origin;
                 let cone = shifted(&to_world.cone_to_model(view.cone), origin);
-                lod.near(model, eye, &cone, view.eps).into()
+                lod.near(model, (eye, &cone), view.eps, view.trim).into()
             }
         };
         if found.is_empty() {
@@ -289,6 +342,7 @@ impl Planned {
         Planned {
             placements: vec![Vec::new(); models],
             ranges: vec![Vec::new(); models],
+            far: Vec::new(),
             visible: 0,
             eps,
             coarsened: false,

@@ -20,9 +20,10 @@ use std::sync::Mutex;
 use glam::DVec3;
 
 use super::camera::Camera;
+use super::far::{FarCounts, FarModel};
 use super::frame::FrameUniform;
 use super::gpu_scene::{GpuScene, InstancedRoom, Share};
-use super::instance_plan::plan;
+use super::instance_plan::{instance_cone, plan};
 use super::placement::Placement;
 use super::plan::EncodedFrame;
 use super::renderer::{FrameStats, Image, Renderer};
@@ -38,13 +39,24 @@ use crate::tree::instances::lod::ModelLod;
 const MIN_SURVIVOR_ROOM: usize = 1 << 24;
 
 /// Instances a frame may hand over chunk by chunk (near ones) before their ranges are
-/// joined: the test ranges' room is two per instance and this many per chunk.
+/// joined: the test ranges' room is two per instance (of at most
+/// [`CPU_PLANNED`], where the GPU places the far ones) and this many per chunk.
 const NEAR_INSTANCES: usize = 16;
+
+/// Instances of a model whose far ones the GPU places that the test ranges' room
+/// holds two ranges for.
+const CPU_PLANNED: usize = 4096;
+
+/// Times `render_instanced` draws a frame again, coarser, when the GPU's far instances
+/// asked for more survivors than the room held.
+const REDRAWS: usize = 6;
 
 /// The models of a scene on the GPU, and their levels of detail.
 pub struct GpuInstances {
     pub models: Vec<GpuScene>,
     lods: Vec<ModelLod>,
+    /// Per model: its far instances on the GPU, where its list is one slice.
+    far: Vec<Option<FarModel>>,
     /// The ε asked and drawn of the last frame planned, and how full its room was
     /// (`instance_plan::plan`).
     last: Mutex<Option<(f64, f64, f64)>>,
@@ -59,20 +71,41 @@ pub struct SceneMemory {
     /// Survivor lists (a node index and a placement index each), beyond one index a
     /// node.
     pub survivor_room: u64,
-    /// A placement and room for two test ranges.
+    /// A placement and the rest: room for two test ranges, or the GPU's record of a
+    /// far instance (all models' instances together, rounded up).
     pub per_instance: u64,
 }
 
 impl GpuInstances {
+    /// Takes what the GPU measured of a frame's far instances: where they asked for
+    /// more survivors than the room held (some were not drawn), the next frame starts
+    /// coarser (`instance_plan::plan`). Returns whether they did.
+    pub fn observe(&self, far: FarCounts) -> bool {
+        if far.asked <= far.room {
+            return false;
+        }
+        let fill = far.asked as f64 / far.room.max(1) as f64;
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, _, kept)) = last.as_mut() {
+            *kept = kept.max(fill);
+        }
+        true
+    }
+
     /// Bytes of every buffer, by what it is for (the room of `upload_instanced`).
     pub fn memory(&self) -> SceneMemory {
-        let per_instance =
-            (size_of::<Placement>() + 2 * size_of::<super::cull::TestRange>()) as u64;
-        let (mut all, mut survivor_room, mut instances) = (0, 0, 0);
-        for g in &self.models {
+        let ranges = 2 * size_of::<super::cull::TestRange>() as u64;
+        let (mut all, mut survivor_room, mut instances, mut total) = (0, 0, 0, 0);
+        for (g, far) in self.models.iter().zip(&self.far) {
             let count = g.placements.size() / size_of::<Placement>() as u64;
             all += g.resident_bytes() + g.placements.size();
-            instances += count * per_instance;
+            all += far.as_ref().map_or(0, FarModel::bytes);
+            let rest = match far {
+                Some(_) => super::far::BYTES_PER_INSTANCE,
+                None => ranges,
+            };
+            instances += count * (size_of::<Placement>() as u64 + rest);
+            total += count;
             if let Some(room) = g.room {
                 let slices = g.resident_slices() as u64;
                 survivor_room += slices * (8 * room.survivors as u64) - 4 * g.total as u64;
@@ -81,7 +114,7 @@ impl GpuInstances {
         SceneMemory {
             models: all.saturating_sub(survivor_room + instances),
             survivor_room,
-            per_instance,
+            per_instance: instances.div_ceil(total.max(1)),
         }
     }
 }
@@ -98,7 +131,7 @@ pub struct InstancedFrame {
 impl Renderer {
     /// Uploads each model of `scene` once, with room for its instances.
     pub fn upload_instanced(&self, scene: &InstancedScene) -> GpuInstances {
-        let models = scene
+        let mut models = scene
             .models
             .iter()
             .enumerate()
@@ -107,9 +140,13 @@ impl Renderer {
                 let nodes = model.nodes().len();
                 let chunks = model.index.chunks().len();
                 let most = (self.gpu.max_binding_bytes() / 4) as usize;
+                let planned = match upload::planned_slices(&self.gpu, nodes) {
+                    1 => count.min(CPU_PLANNED),
+                    _ => count,
+                };
                 let room = InstancedRoom {
                     survivors: (2 * nodes).max(MIN_SURVIVOR_ROOM).min(most),
-                    ranges: 2 * count + NEAR_INSTANCES * chunks,
+                    ranges: 2 * planned + NEAR_INSTANCES * chunks,
                 };
                 let has_attributes = model.meta().has_attributes;
                 let mut gpu = upload::empty_gpu_scene(
@@ -126,11 +163,21 @@ impl Renderer {
                 }
                 gpu
             })
+            .collect::<Vec<GpuScene>>();
+        let far: Vec<Option<FarModel>> = (models.iter_mut().enumerate())
+            .map(|(m, g)| {
+                let one_slice = g.planned_slices() == 1 && scene.count_of(m) > 0;
+                let far = one_slice
+                    .then(|| FarModel::new(&self.gpu, self.far_pass(), (scene, m), &g.placements));
+                g.far_counters = far.as_ref().map(|f| f.counters.clone());
+                far
+            })
             .collect();
         let lods = scene.models.iter().map(ModelLod::new).collect();
         GpuInstances {
             models,
             lods,
+            far,
             last: Mutex::new(None),
         }
     }
@@ -146,16 +193,25 @@ impl Renderer {
         size: (u32, u32),
     ) -> anyhow::Result<(Image, FrameStats, usize)> {
         let targets = self.targets(size)?;
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        let drawn =
-            self.encode_instanced(&mut encoder, &targets, (scene, gpu), camera, settings)?;
         let all: Vec<&GpuScene> = gpu.models.iter().collect();
-        let frame = &drawn.frame;
-        let (image, counters) = self.read_frame(encoder, &targets, &all, frame)?;
-        let chunks = scene.models.iter().map(|m| m.index.chunks().len()).sum();
-        let selected = counters.drawn.unwrap_or(0) as usize;
-        let stats = FrameStats::of(frame, &counters, (chunks, drawn.ranges), selected);
-        Ok((image, stats, drawn.visible))
+        let mut redraws = 0;
+        loop {
+            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+            let drawn =
+                self.encode_instanced(&mut encoder, &targets, (scene, gpu), camera, settings)?;
+            let mut frame = drawn.frame;
+            let (image, counters) = self.read_frame(encoder, &targets, &all, &frame)?;
+            let far = counters.far.unwrap_or_default();
+            if gpu.observe(far) && redraws < REDRAWS {
+                redraws += 1;
+                continue;
+            }
+            frame.tested += far.tested as usize;
+            let chunks = scene.models.iter().map(|m| m.index.chunks().len()).sum();
+            let selected = counters.drawn.unwrap_or(0) as usize;
+            let stats = FrameStats::of(&frame, &counters, (chunks, drawn.ranges), selected);
+            return Ok((image, stats, drawn.visible + far.visible as usize));
+        }
     }
 
     /// Records one frame of `scene` into `encoder`, drawing into `targets.output`; the
@@ -180,12 +236,18 @@ impl Renderer {
         };
         let rasterized = self.rasterized(settings, size)?;
         let started = std::time::Instant::now();
+        // The GPU places far instances for the camera's own eye, at ε > 0.
+        let far_on_gpu = settings.far_on_gpu && settings.lod && settings.lod_eye.is_none();
+        let on_gpu: Vec<bool> = (gpu.far.iter())
+            .map(|f| far_on_gpu && f.is_some())
+            .collect();
+        let trim = self.prefix_cut(settings.prefix_cut) == super::settings::PrefixCut::Node;
         let mut last = gpu.last.lock().unwrap_or_else(|e| e.into_inner());
         let planned = plan(
             (scene, &gpu.models, &gpu.lods),
             (camera, settings),
             size,
-            *last,
+            (*last, &on_gpu, trim),
         );
         *last = Some((planned.asked, planned.eps, planned.fill));
         drop(last);
@@ -198,18 +260,38 @@ impl Renderer {
         let queue = &self.gpu.queue;
         queue.write_buffer(&targets.frame_buffer, 0, bytemuck::bytes_of(&uniform));
         let mut shares = Vec::new();
+        let mut draws = Vec::new();
+        let cone = instance_cone(&scene.meta, camera, size);
+        let origin = DVec3::from(scene.meta.origin);
         for (m, g) in gpu.models.iter().enumerate() {
             let placements = &planned.placements[m];
             if !placements.is_empty() {
                 queue.write_buffer(&g.placements, 0, bytemuck::cast_slice(placements));
             }
-            shares.extend(placed_shares(g, &planned.ranges[m]));
+            let mut model_shares = placed_shares(g, &planned.ranges[m]);
+            if let Some(far) = &gpu.far[m] {
+                far.reset(queue);
+                let plan = planned.far.get(m).filter(|p| !p.groups.is_empty());
+                if let (Some(plan), Some(share)) = (plan, model_shares.first_mut()) {
+                    let draw = far.prepare(
+                        (&self.gpu, self.far_pass()),
+                        (&scene.models[m], &gpu.lods[m]),
+                        plan,
+                        (camera.eye, &cone, origin),
+                        (planned.eps, placements.len() as u32),
+                        &share.slice.cull,
+                    );
+                    share.far = Some(&far.args);
+                    draws.push(draw);
+                }
+            }
+            shares.extend(model_shares);
         }
         let plan_ms = started.elapsed().as_secs_f64() * 1e3;
         self.encode_passes(
             encoder,
             targets,
-            &shares,
+            (&shares, &draws),
             settings,
             (true, rasterized, None),
         );
@@ -220,6 +302,7 @@ impl Renderer {
             eps: planned.eps,
             coarsened: planned.coarsened,
             slices: gpu.models.iter().map(|g| g.resident_slices()).sum(),
+            far_models: gpu.far.iter().flatten().count(),
             wanted_slices: Vec::new(),
             lod_eye: DVec3::ZERO,
             plan_ms,
@@ -242,6 +325,7 @@ fn placed_shares<'a>(g: &'a GpuScene, ranges: &[(Range<usize>, u32)]) -> Vec<Sha
             ranges: Vec::new(),
             placements: Vec::new(),
             count: 0,
+            far: None,
         })
         .collect();
     for (r, placement) in ranges {

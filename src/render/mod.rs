@@ -22,6 +22,7 @@ pub mod bindings;
 pub mod camera;
 mod counters;
 mod cull;
+mod far;
 mod frame;
 mod fullscreen;
 mod gbuffer;

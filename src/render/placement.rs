@@ -23,11 +23,13 @@ pub(crate) struct Placement {
     pub rotation: [u32; 2],
     /// The model's error scale times `scale`.
     pub error_scale: f32,
-    pub pad: u32,
+    /// A far instance placed by the GPU: its model's table slot (`render/far.rs`);
+    /// else 0.
+    pub slot: u32,
 }
 
 /// `v` in −1..1 as snorm16 (WGSL's `unpack2x16snorm` inverts it).
-fn snorm16(v: f64) -> u32 {
+pub(super) fn snorm16(v: f64) -> u32 {
     ((v.clamp(-1.0, 1.0) * 32767.0).round() as i32 as u32) & 0xffff
 }
 
@@ -46,7 +48,7 @@ impl Placement {
                 snorm16(q.z) | (snorm16(q.w) << 16),
             ],
             error_scale: (error_scale as f64 * to_world.scale) as f32,
-            pad: 0,
+            slot: 0,
         }
     }
 

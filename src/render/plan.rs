@@ -32,6 +32,8 @@ pub struct EncodedFrame {
     pub coarsened: bool,
     /// Slices of the list on the GPU when the frame was recorded.
     pub slices: usize,
+    /// Models whose far instances the GPU placed (their counters follow the slices').
+    pub far_models: usize,
     /// The slices the ranges at the asked ε lie in, ascending (all resident unless
     /// `coarsened`).
     pub wanted_slices: Vec<usize>,
@@ -108,6 +110,7 @@ pub(super) fn plan(
     let mut wanted_slices: Vec<usize> = wanted.iter().flat_map(|r| gpu.slices_of(r)).collect();
     wanted_slices.dedup();
     EncodedFrame {
+        far_models: 0,
         tested: tested(&ranges),
         ranges,
         compute,

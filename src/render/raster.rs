@@ -24,6 +24,7 @@ use std::sync::OnceLock;
 use super::accumulation::{Accumulation, FLOAT_DEPTH, sums_bytes};
 use super::bindings::{Slot, accumulate, raster as slots, resolve as out};
 use super::cull::storage;
+use super::far::FarArgs;
 use super::gbuffer::{COVERAGE, GBUFFER, GBuffer};
 use super::gpu_scene::Share;
 use super::placement::Placement;
@@ -262,10 +263,16 @@ impl ComputeRaster {
             for pipelines in stages {
                 for pipeline in pipelines {
                     pass.set_pipeline(pipeline);
-                    for share in shares.iter().filter(|s| s.count > 0) {
+                    for share in shares.iter().filter(|s| s.drawn()) {
                         pass.set_bind_group(1, &share.slice.rasterized, &[]);
-                        let (x, y) = grid(share.count.div_ceil(RASTER_WORKGROUP), max_groups);
-                        pass.dispatch_workgroups(x, y, 1);
+                        match share.far {
+                            Some(args) => pass.dispatch_workgroups_indirect(args, FarArgs::RASTER_AT),
+                            None => {
+                                let groups = share.count.div_ceil(RASTER_WORKGROUP);
+                                let (x, y) = grid(groups, max_groups);
+                                pass.dispatch_workgroups(x, y, 1);
+                            }
+                        }
                     }
                 }
             }

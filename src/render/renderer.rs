@@ -118,6 +118,8 @@ pub struct Renderer {
     raster: ComputeRaster,
     mesh: MeshPass,
     shading: ShadingPass,
+    /// The passes of far instances, made with a scene's first upload.
+    far: std::sync::OnceLock<super::far::FarPass>,
 }
 
 impl Renderer {
@@ -130,6 +132,7 @@ impl Renderer {
             raster: ComputeRaster::new(device, &frame_layout, gpu.on_cpu()),
             mesh: MeshPass::new(device, &frame_layout),
             shading: ShadingPass::new(device, &frame_layout),
+            far: std::sync::OnceLock::new(),
             frame_layout,
             gpu,
         }
@@ -191,7 +194,7 @@ impl Renderer {
         self.encode_passes(
             encoder,
             targets,
-            &shares,
+            (&shares, &[]),
             settings,
             (compute, rasterized, mesh),
         );
@@ -205,7 +208,7 @@ impl Renderer {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &FrameTargets,
-        shares: &[super::gpu_scene::Share],
+        (shares, far): (&[super::gpu_scene::Share], &[super::far::FarDraw]),
         settings: &Settings,
         (compute, rasterized, mesh): (bool, bool, Option<&super::gpu_scene::MeshBuffers>),
     ) {
@@ -214,6 +217,9 @@ impl Renderer {
             let queue = &self.gpu.queue;
             self.cull
                 .encode(queue, encoder, &targets.frame_bind, shares, start);
+        }
+        if !far.is_empty() {
+            self.far_pass().encode(encoder, &targets.frame_bind, far);
         }
         if rasterized {
             let (accumulation, gbuffer) = self.accumulation(targets);
@@ -226,6 +232,13 @@ impl Renderer {
         if let Some((set, resolve)) = &targets.queries {
             encoder.resolve_query_set(set, 0..stamp::COUNT, resolve, 0);
         }
+    }
+
+    /// The passes of far instances (`far.rs`).
+    pub(super) fn far_pass(&self) -> &super::far::FarPass {
+        self.far.get_or_init(|| {
+            super::far::FarPass::new(&self.gpu.device, &self.frame_layout, &self.cull.layout)
+        })
     }
 
     /// The way `asked` draws on this adapter: [`Raster::Auto`] is compute

@@ -241,6 +241,9 @@ pub struct Settings {
     /// distance in pixels of the neighbours it compares with.
     pub edl_strength: f32,
     pub edl_radius_px: f32,
+    /// A scene's far instances are placed by the GPU (`render/far.rs`); false plans
+    /// every instance on the CPU.
+    pub far_on_gpu: bool,
 }
 
 impl Default for Settings {
@@ -259,6 +262,7 @@ impl Default for Settings {
             lod_eye: None,
             edl_strength: 1.0,
             edl_radius_px: 1.5,
+            far_on_gpu: true,
         }
     }
 }

@@ -12,6 +12,8 @@
 //! broken shader fails `cargo test` without a GPU.
 
 use super::settings::Mode;
+use crate::tree::instances::groups::GROUP;
+use crate::tree::instances::lod::{STEPS, STEPS_PER_OCTAVE};
 use crate::surfel::clip::{NO_CLIP, WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
 
 /// Threads per workgroup of the compute passes (`@workgroup_size(WORKGROUP_SIZE)`).
@@ -20,6 +22,12 @@ pub const WORKGROUP_SIZE: u32 = 256;
 /// Threads per workgroup of the raster passes (`RASTER_WORKGROUP` in WGSL): the
 /// workgroup that shares a large footprint's pixels.
 pub const RASTER_WORKGROUP: u32 = 64;
+/// Threads per workgroup of `cull_far` (cull.wgsl): one far instance's nodes.
+pub const FAR_WORKGROUP: u32 = 64;
+/// Workgroups a dispatch's x may count on any adapter (WebGPU's least
+/// `maxComputeWorkgroupsPerDimension`): the GPU's own dispatches (cull.wgsl) stay
+/// within it.
+pub const MAX_GROUPS_X: u32 = 65535;
 /// The resolve's workgroups are tiles of this many pixels a side.
 pub const RESOLVE_TILE: u32 = 8;
 /// Channels of the fixed-point sums (`SUM_*` in accumulate.wgsl).
@@ -41,8 +49,10 @@ const FILES: &[(&str, &str)] = &[
     ("common", include_str!("../../shaders/common.wgsl")),
     ("cull", include_str!("../../shaders/cull.wgsl")),
     ("ewa", include_str!("../../shaders/ewa.wgsl")),
+    ("far", include_str!("../../shaders/far.wgsl")),
     ("fullscreen", include_str!("../../shaders/fullscreen.wgsl")),
     ("mesh", include_str!("../../shaders/mesh.wgsl")),
+    ("place", include_str!("../../shaders/place.wgsl")),
     ("present", include_str!("../../shaders/present.wgsl")),
     ("raster", include_str!("../../shaders/raster.wgsl")),
     ("resolve", include_str!("../../shaders/resolve.wgsl")),
@@ -114,7 +124,12 @@ pub fn constants_wgsl() -> String {
          const WEDGE_MARGIN: f32 = {WEDGE_MARGIN:?};\n\
          const WEDGE_ANGLE_BITS: u32 = {WEDGE_ANGLE_BITS}u;\n\
          const WEDGE_TAG: u32 = {WEDGE_TAG}u;\n\
-         const NO_CLIP: u32 = {NO_CLIP}u;\n"
+         const NO_CLIP: u32 = {NO_CLIP}u;\n\
+         const FAR_WORKGROUP: u32 = {FAR_WORKGROUP}u;\n\
+         const MAX_GROUPS_X: u32 = {MAX_GROUPS_X}u;\n\
+         const GROUP: u32 = {GROUP}u;\n\
+         const STEPS: i32 = {STEPS}i;\n\
+         const STEPS_PER_OCTAVE: f32 = {STEPS_PER_OCTAVE:?};\n"
     );
     let values = [
         ("ALL_SPLATS", SplatClass::All as u32),

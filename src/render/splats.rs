@@ -326,7 +326,7 @@ impl SplatPasses {
             if let Some(depth) = depth_bind {
                 pass.set_bind_group(slots::VISIBLE_DEPTH.group, depth, &[]);
             }
-            for share in shares.iter().filter(|s| s.count > 0) {
+            for share in shares.iter().filter(|s| s.drawn()) {
                 if compacted {
                     pass.set_bind_group(1, &share.slice.compacted, &[]);
                     pass.draw_indirect(&share.slice.compaction, draw_at);

@@ -28,6 +28,11 @@ fn max_slice_nodes(gpu: &Gpu) -> usize {
     (gpu.max_binding_bytes() / record).clamp(1, MAX_SLICE_NODES) as usize
 }
 
+/// Slices of a list of `nodes` nodes without a memory budget.
+pub(super) fn planned_slices(gpu: &Gpu, nodes: usize) -> usize {
+    nodes.div_ceil(max_slice_nodes(gpu))
+}
+
 /// Slices of at least this many nodes under a budget (smaller ones cost more draw calls
 /// than they save memory).
 const MIN_BUDGET_SLICE_NODES: usize = 1 << 14;

@@ -63,7 +63,7 @@ pub struct ViewCone {
     pub forward: DVec3,
     pub tan_half_fov: [f64; 2],
     /// √(1 + t²) of each tangent: a sphere's reach across a side plane per unit radius.
-    secants: [f64; 2],
+    pub secants: [f64; 2],
     pub near: f64,
 }
 

@@ -1,60 +1,95 @@
-//! Instances in spatial groups, so that a frame culls a group of [`GROUP`] instances by
-//! one sphere test before testing its members: the instances are sorted along a Morton
-//! curve of their centres, and each run of [`GROUP`] is a group with the sphere that
-//! holds its members' spheres. 10⁵ instances make 1,563 groups; the table costs half
-//! a byte an instance.
+//! Instances in spatial groups, so that a frame culls a group of at most [`GROUP`]
+//! instances by one sphere test before testing its members: the instances are sorted by
+//! model, then along a Morton curve of their centres, and each run of [`GROUP`] of one
+//! model is a group, with the sphere that holds its members' spheres and their largest
+//! scale. 10⁵ instances of one model make 1,563 groups; the table costs about half a
+//! byte an instance.
+
+use std::ops::Range;
 
 use glam::DVec3;
 
 use super::Instance;
 use crate::tree::select::ViewCone;
 
-/// Instances per group.
+/// Instances per group at most (`GROUP` in WGSL: a workgroup of the GPU's placement
+/// pass places one group).
 pub const GROUP: usize = 64;
 
-/// The groups of a sorted instance list: group g holds instances g·GROUP ….
+/// One group: its members (instance indices), their model, the sphere holding theirs,
+/// and their least and largest scales.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Group {
+    pub centre: DVec3,
+    pub radius: f64,
+    pub start: u32,
+    pub end: u32,
+    pub model: u32,
+    pub scale_min: f32,
+    pub scale_max: f32,
+}
+
+impl Group {
+    pub fn members(&self) -> Range<usize> {
+        self.start as usize..self.end as usize
+    }
+}
+
+/// The groups of a sorted instance list.
 #[derive(Debug, Clone, Default)]
 pub struct Groups {
-    spheres: Vec<(DVec3, f64)>,
+    groups: Vec<Group>,
     /// Each instance's sphere radius is its model's times its scale; the models'.
     model_spheres: Vec<(DVec3, f64)>,
 }
 
 impl Groups {
-    /// Sorts `instances` along a Morton curve of their centres and groups them; the
-    /// models' bounding spheres (file coordinates) are `spheres`.
+    /// Sorts `instances` by model, then along a Morton curve of their centres, and
+    /// groups them; the models' bounding spheres (file coordinates) are `spheres`.
     pub fn sort(instances: &mut [Instance], spheres: &[(DVec3, f64)]) -> Groups {
-        let centre = |i: &Instance| sphere(i, spheres).0;
-        let (lo, hi) =
-            instances
-                .iter()
-                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), i| {
-                    let c = centre(i);
-                    (lo.min(c), hi.max(c))
-                });
+        let centres: Vec<DVec3> = instances.iter().map(|i| sphere(i, spheres).0).collect();
+        let (lo, hi) = centres
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), c| {
+                (lo.min(*c), hi.max(*c))
+            });
         let extent = (hi - lo).max_element().max(f64::MIN_POSITIVE);
-        instances.sort_by_cached_key(|i| morton((centre(i) - lo) / extent));
-        let spheres_of_groups = instances
-            .chunks(GROUP)
-            .map(|members| enclosing(members.iter().map(|i| sphere(i, spheres))))
+        let mut order: Vec<(u32, u64, u32)> = (instances.iter().zip(&centres).enumerate())
+            .map(|(k, (i, c))| (i.model, morton((*c - lo) / extent), k as u32))
             .collect();
+        order.sort_unstable();
+        let sorted: Vec<Instance> = order.iter().map(|o| instances[o.2 as usize]).collect();
+        instances.copy_from_slice(&sorted);
+        let mut groups = Vec::with_capacity(instances.len().div_ceil(GROUP));
+        let mut start = 0;
+        while start < instances.len() {
+            let model = instances[start].model;
+            let run = instances[start..].partition_point(|i| i.model == model);
+            for members in (start..start + run).step_by(GROUP) {
+                let end = (members + GROUP).min(start + run);
+                let of = &instances[members..end];
+                let (centre, radius) = enclosing(of.iter().map(|i| sphere(i, spheres)));
+                groups.push(Group {
+                    centre,
+                    radius,
+                    start: members as u32,
+                    end: end as u32,
+                    model,
+                    scale_min: of.iter().map(|i| i.scale).fold(f32::INFINITY, f32::min),
+                    scale_max: of.iter().map(|i| i.scale).fold(0.0, f32::max),
+                });
+            }
+            start += run;
+        }
         Groups {
-            spheres: spheres_of_groups,
+            groups,
             model_spheres: spheres.to_vec(),
         }
     }
 
-    /// The instance index ranges of the groups `cone` may see.
-    pub fn visible<'a>(
-        &'a self,
-        cone: &'a ViewCone,
-        total: usize,
-    ) -> impl Iterator<Item = std::ops::Range<usize>> + 'a {
-        self.spheres
-            .iter()
-            .enumerate()
-            .filter(|(_, (c, r))| cone.sees_sphere(*c, *r))
-            .map(move |(g, _)| g * GROUP..((g + 1) * GROUP).min(total))
+    /// The groups `cone` may see.
+    pub fn visible<'a>(&'a self, cone: &'a ViewCone) -> impl Iterator<Item = &'a Group> + 'a {
+        (self.groups.iter()).filter(|g| cone.sees_sphere(g.centre, g.radius))
     }
 
     /// Instance `i`'s bounding sphere in the world.
@@ -64,15 +99,15 @@ impl Groups {
 
     /// Bytes of the group table.
     pub fn bytes(&self) -> u64 {
-        std::mem::size_of_val(self.spheres.as_slice()) as u64
+        std::mem::size_of_val(self.groups.as_slice()) as u64
     }
 
     pub fn len(&self) -> usize {
-        self.spheres.len()
+        self.groups.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.spheres.is_empty()
+        self.groups.is_empty()
     }
 }
 
@@ -125,14 +160,22 @@ mod tests {
             })
             .collect();
         let groups = Groups::sort(&mut instances, &spheres);
-        assert_eq!(groups.len(), 1000usize.div_ceil(GROUP));
-        for (k, i) in instances.iter().enumerate() {
-            let (gc, gr) = groups.spheres[k / GROUP];
-            let (c, r) = groups.sphere_of(i);
-            assert!((c - gc).length() + r <= gr * (1.0 + 1e-12), "instance {k}");
+        // 500 instances of each model: 8 groups each.
+        assert_eq!(groups.len(), 16);
+        let mut covered = 0;
+        for g in &groups.groups {
+            assert_eq!(g.start as usize, covered);
+            covered = g.end as usize;
+            for (k, i) in instances[g.members()].iter().enumerate() {
+                assert_eq!(i.model, g.model);
+                assert!(g.scale_min <= i.scale && i.scale <= g.scale_max);
+                let (c, r) = groups.sphere_of(i);
+                assert!((c - g.centre).length() + r <= g.radius * (1.0 + 1e-12), "instance {k}");
+            }
         }
+        assert_eq!(covered, instances.len());
         // Sorted spatially: a group spans far less than the whole scene.
-        let mean = groups.spheres.iter().map(|s| s.1).sum::<f64>() / groups.len() as f64;
+        let mean = groups.groups.iter().map(|g| g.radius).sum::<f64>() / groups.len() as f64;
         assert!(mean < 40.0, "mean group radius {mean}");
     }
 }

@@ -22,9 +22,11 @@ use crate::tree::scene::Scene;
 use crate::tree::select::ViewCone;
 
 /// Steps of the rounded distance per octave.
-const STEPS_PER_OCTAVE: f64 = 16.0;
+pub const STEPS_PER_OCTAVE: f64 = 16.0;
 /// Rounded distances kept: 2⁻¹²⁸ to 2¹²⁸ sphere radii.
-const STEPS: i32 = 128 * STEPS_PER_OCTAVE as i32;
+pub const STEPS: i32 = 128 * STEPS_PER_OCTAVE as i32;
+/// Slots of a model's table: one per rounded distance (step + [`STEPS`]).
+pub const SLOTS: usize = 2 * STEPS as usize + 1;
 
 /// Tables kept for other ε than the current one.
 const KEPT_EPS: usize = 8;
@@ -62,7 +64,7 @@ impl ModelLod {
             radius,
             kept: Mutex::new(Kept {
                 eps: f64::NAN,
-                by_step: vec![None; 2 * STEPS as usize + 1],
+                by_step: vec![None; SLOTS],
                 others: Vec::new(),
             }),
         }
@@ -76,7 +78,7 @@ impl ModelLod {
             let found = kept.others.iter().position(|(e, _)| *e == eps);
             let table = match found {
                 Some(k) => kept.others.swap_remove(k).1,
-                None => vec![None; 2 * STEPS as usize + 1],
+                None => vec![None; SLOTS],
             };
             let old = (kept.eps, std::mem::replace(&mut kept.by_step, table));
             kept.eps = eps;
@@ -101,9 +103,7 @@ impl ModelLod {
         eps: f64,
         near_by: &mut NearBy,
     ) -> Arc<[Range<usize>]> {
-        let step = ((d / self.radius).log2() * STEPS_PER_OCTAVE).floor();
-        let step = step.clamp(-STEPS as f64, STEPS as f64) as i32;
-        let slot = (step + STEPS) as usize;
+        let slot = self.slot(d);
         if let Some((_, found)) = near_by.0.iter().find(|(s, _)| *s == slot) {
             return found.clone();
         }
@@ -112,8 +112,15 @@ impl ModelLod {
         found
     }
 
+    /// The slot of an eye `d` model units outside the sphere: the rounded distance
+    /// ⌊16 log₂(d / r)⌋ + [`STEPS`], clamped to the table.
+    pub fn slot(&self, d: f64) -> usize {
+        let step = ((d / self.radius).log2() * STEPS_PER_OCTAVE).floor();
+        (step.clamp(-STEPS as f64, STEPS as f64) as i32 + STEPS) as usize
+    }
+
     /// The ranges of rounded distance `slot` (step + STEPS): kept, or searched and kept.
-    fn far_kept(&self, model: &Scene, slot: usize, eps: f64) -> Arc<[Range<usize>]> {
+    pub fn far_kept(&self, model: &Scene, slot: usize, eps: f64) -> Arc<[Range<usize>]> {
         if let Some(found) = &self.lock(eps).by_step[slot] {
             return found.clone();
         }
@@ -127,11 +134,21 @@ impl ModelLod {
     }
 
     /// The ranges of an instance whose eye is `eye` (model units, relative to the
-    /// origin), within or near its sphere, chunks culled by `cone` (the same units).
-    pub fn near(&self, model: &Scene, eye: DVec3, cone: &ViewCone, eps: f64) -> Vec<Range<usize>> {
+    /// origin), within or near its sphere, chunks culled by `cone` (the same units);
+    /// each prefix ends at its node (`trim`) or its block.
+    pub fn near(
+        &self,
+        model: &Scene,
+        (eye, cone): (DVec3, &ViewCone),
+        eps: f64,
+        trim: bool,
+    ) -> Vec<Range<usize>> {
         let index = &model.index;
         let prefixes = index.prefixes(eye, eps, Some(cone));
-        index.refined(&prefixes, model.nodes(), |_| true)
+        match trim {
+            true => index.refined(&prefixes, model.nodes(), |_| true),
+            false => prefixes.bounds(),
+        }
     }
 
     /// The eye's distance to the sphere, model units, from its world distance to the
