@@ -38,7 +38,10 @@ pub struct GpuCounters {
 /// far instances' counters of each model the GPU places them for.
 fn counters_bytes(gpu_scenes: &[&GpuScene]) -> u64 {
     let slices: usize = gpu_scenes.iter().map(|g| g.planned_slices()).sum();
-    let far = gpu_scenes.iter().filter(|g| g.far_counters.is_some()).count() as u64;
+    let far = gpu_scenes
+        .iter()
+        .filter(|g| g.far_counters.is_some())
+        .count() as u64;
     STAMP_BYTES + 8 * slices.max(1) as u64 + far * FarCounters::READ_BYTES
 }
 

@@ -166,7 +166,8 @@ impl FarPass {
         frame_layout: &wgpu::BindGroupLayout,
         cull_layout: &wgpu::BindGroupLayout,
     ) -> FarPass {
-        let entry = |slot: Slot, read_only: bool, size: usize| storage(slot, read_only, size as u64);
+        let entry =
+            |slot: Slot, read_only: bool, size: usize| storage(slot, read_only, size as u64);
         let counters = size_of::<FarCounters>();
         let place_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("place"),
@@ -184,7 +185,11 @@ impl FarPass {
                 entry(place_slots::INSTANCES, true, size_of::<FarInstance>()),
                 entry(place_slots::GROUPS, true, 8),
                 entry(place_slots::ENTRIES, true, size_of::<FarEntry>()),
-                entry(place_slots::PLACED, false, size_of::<super::placement::Placement>()),
+                entry(
+                    place_slots::PLACED,
+                    false,
+                    size_of::<super::placement::Placement>(),
+                ),
                 entry(place_slots::COUNTERS, false, counters),
             ],
         });
@@ -278,10 +283,33 @@ pub(super) struct FarPlan {
 }
 
 impl FarPlan {
-    /// Adds a group of members `members` (model-local) whose eyes lie `d` model units
-    /// outside their spheres, `d` in `reach` (slots of `lod`).
+    /// Adds a group of at most [`GROUP`] members (model-local instance indices) whose
+    /// rounded distances lie in `slots`.
     pub fn add(&mut self, members: Range<usize>, slots: Range<usize>) {
         self.groups.push([members.start as u32, members.end as u32]);
+        self.reach(slots);
+    }
+
+    /// Adds member `k` (a far instance of a group planned on the CPU), joined to the
+    /// last group where it follows it and that holds fewer than [`GROUP`].
+    pub fn add_member(&mut self, k: usize, slots: Range<usize>) {
+        let k = k as u32;
+        match self.groups.last_mut() {
+            Some([start, end]) if *end == k && ((k - *start) as usize) < GROUP => *end += 1,
+            _ => self.groups.push([k, k + 1]),
+        }
+        self.reach(slots);
+    }
+
+    /// Appends `other`'s groups.
+    pub fn join(&mut self, other: FarPlan) {
+        self.groups.extend(other.groups);
+        if let Some(slots) = other.slots {
+            self.reach(slots);
+        }
+    }
+
+    fn reach(&mut self, slots: Range<usize>) {
         self.slots = Some(match self.slots.take() {
             Some(s) => s.start.min(slots.start)..s.end.max(slots.end),
             None => slots,
@@ -303,14 +331,16 @@ struct FarTable {
 /// rotation; 32 bytes each), the frame's far groups, its table and counters.
 pub(super) struct FarModel {
     instances: wgpu::Buffer,
-    groups: wgpu::Buffer,
     entries: wgpu::Buffer,
     pub counters: wgpu::Buffer,
     /// The indirect dispatches ([`FarArgs`]): the compute rasterizer reads its own.
     pub args: wgpu::Buffer,
     args_bind: wgpu::BindGroup,
     params: wgpu::Buffer,
-    place: wgpu::BindGroup,
+    placements: wgpu::Buffer,
+    /// The frame's far groups (grown as frames hand over more) and the placing's bind
+    /// group, which reads them.
+    groups: Mutex<(wgpu::Buffer, wgpu::BindGroup)>,
     table: Mutex<FarTable>,
 }
 
@@ -382,29 +412,17 @@ impl FarModel {
             size_of::<PlaceParams>(),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let place = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("place"),
-            layout: &pass.place_layout,
-            entries: &[
-                bind(place_slots::PARAMS, &params),
-                bind(place_slots::INSTANCES, &instances),
-                bind(place_slots::GROUPS, &groups),
-                bind(place_slots::ENTRIES, &entries),
-                bind(place_slots::PLACED, placements),
-                bind(place_slots::COUNTERS, &counters),
-            ],
-        });
         let ranges_buffer = buffer("far ranges", 1 << 16, storage);
         let far = far_bind(device, pass, [&entries, &ranges_buffer, &counters]);
-        FarModel {
+        let mut model = FarModel {
             instances,
-            groups,
             entries,
             counters,
             args,
             args_bind,
             params,
-            place,
+            placements: placements.clone(),
+            groups: Mutex::new((groups.clone(), far.clone())),
             table: Mutex::new(FarTable {
                 eps: f64::NAN,
                 filled: vec![false; SLOTS],
@@ -412,7 +430,45 @@ impl FarModel {
                 ranges_buffer,
                 far,
             }),
+        };
+        let place = model.place_bind(device, pass, &groups);
+        model.groups = Mutex::new((groups, place));
+        model
+    }
+
+    /// The placing's bind group, reading the far groups from `groups`.
+    fn place_bind(&self, device: &wgpu::Device, pass: &FarPass, groups: &wgpu::Buffer) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("place"),
+            layout: &pass.place_layout,
+            entries: &[
+                bind(place_slots::PARAMS, &self.params),
+                bind(place_slots::INSTANCES, &self.instances),
+                bind(place_slots::GROUPS, groups),
+                bind(place_slots::ENTRIES, &self.entries),
+                bind(place_slots::PLACED, &self.placements),
+                bind(place_slots::COUNTERS, &self.counters),
+            ],
+        })
+    }
+
+    /// Writes the frame's far groups (growing their buffer where they outgrow it) and
+    /// returns the placing's bind group.
+    fn write_groups(&self, gpu: &Gpu, pass: &FarPass, groups: &[[u32; 2]]) -> wgpu::BindGroup {
+        let mut held = self.groups.lock().unwrap_or_else(|e| e.into_inner());
+        let bytes = std::mem::size_of_val(groups) as u64;
+        if bytes > held.0.size() {
+            let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("far groups"),
+                size: bytes.next_power_of_two(),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let place = self.place_bind(&gpu.device, pass, &buffer);
+            *held = (buffer, place);
         }
+        gpu.queue.write_buffer(&held.0, 0, bytemuck::cast_slice(groups));
+        held.1.clone()
     }
 
     /// Zeroes its counters for a frame that places none of its instances.
@@ -424,9 +480,10 @@ impl FarModel {
     /// Bytes of its buffers (the table's ranges as they stand).
     pub fn bytes(&self) -> u64 {
         let table = self.table.lock().unwrap_or_else(|e| e.into_inner());
+        let groups = self.groups.lock().unwrap_or_else(|e| e.into_inner());
         [
             &self.instances,
-            &self.groups,
+            &groups.0,
             &self.entries,
             &self.counters,
             &self.args,
@@ -453,9 +510,14 @@ impl FarModel {
         let queue = &gpu.queue;
         let far = match &plan.slots {
             Some(slots) => self.fill(gpu, pass, (model, lod), eps, slots.clone()),
-            None => self.table.lock().unwrap_or_else(|e| e.into_inner()).far.clone(),
+            None => self
+                .table
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .far
+                .clone(),
         };
-        queue.write_buffer(&self.groups, 0, bytemuck::cast_slice(&plan.groups));
+        let place = self.write_groups(gpu, pass, &plan.groups);
         let meta = model.meta();
         let (eye, eye_rest) = split(eye - scene_origin);
         let params = PlaceParams {
@@ -481,7 +543,7 @@ impl FarModel {
         };
         queue.write_buffer(&self.counters, 0, bytemuck::bytes_of(&counters));
         FarDraw {
-            place: self.place.clone(),
+            place,
             far,
             args_bind: &self.args_bind,
             cull,

@@ -86,6 +86,9 @@ pub(super) fn plan(
         _ => asked,
     };
     let cone = instance_cone(&scene.meta, camera, (width, height));
+    let firsts: Vec<usize> = (0..scene.models.len())
+        .map(|m| scene.instances.partition_point(|i| (i.model as usize) < m))
+        .collect();
     let lod_eye = settings.lod_eye.unwrap_or(camera.eye);
     let mut eps = start;
     loop {
@@ -96,6 +99,7 @@ pub(super) fn plan(
             eps,
             on_gpu,
             trim,
+            firsts: &firsts,
         };
         let mut planned = plan_at((scene, models, lods), &view);
         for (g, ranges) in models.iter().zip(&mut planned.ranges) {
@@ -132,7 +136,11 @@ pub(super) fn plan(
 
 /// The view cone instances are culled by: world units, apex at the eye, keeping what
 /// lies in front of the eye at all (the near plane is set from what it kept).
-pub(super) fn instance_cone(meta: &TreeMeta, camera: &Camera, (width, height): (u32, u32)) -> ViewCone {
+pub(super) fn instance_cone(
+    meta: &TreeMeta,
+    camera: &Camera,
+    (width, height): (u32, u32),
+) -> ViewCone {
     let aspect = width as f64 / height.max(1) as f64;
     let origin = DVec3::from(meta.origin);
     let wide = shifted(&camera.view_cone(meta, aspect), -origin);
@@ -202,6 +210,8 @@ struct View<'a> {
     eps: f64,
     on_gpu: &'a [bool],
     trim: bool,
+    /// Each model's first instance in the scene's list (sorted by model).
+    firsts: &'a [usize],
 }
 
 /// The visible instances' placements and ranges at `view.eps`: groups in parallel,
@@ -218,8 +228,7 @@ fn plan_at(
         let m = group.model as usize;
         match far_slots(group, &lods[m], view) {
             Some((slots, gap)) => {
-                let base = scene.instances.partition_point(|i| (i.model as usize) < m);
-                let members = group.members();
+                let (base, members) = (view.firsts[m], group.members());
                 far[m].add(members.start - base..members.end - base, slots);
                 far_near = far_near.min(0.5 * gap);
             }
@@ -256,7 +265,9 @@ fn plan_at(
     for part in parts {
         all.join(part);
     }
-    all.far = far;
+    for (all, far) in all.far.iter_mut().zip(far) {
+        all.join(far);
+    }
     all.near = all.near.min(far_near);
     all.planned_share = done.into_inner() as f64 / groups.len().max(1) as f64;
     all
@@ -297,7 +308,7 @@ fn plan_group(
     out: &mut Planned,
 ) {
     let mut near_by: Vec<NearBy> = (0..scene.models.len()).map(|_| NearBy::default()).collect();
-    for instance in &scene.instances[group] {
+    for (k, instance) in group.clone().zip(&scene.instances[group]) {
         let m = instance.model as usize;
         let (model, lod) = (&scene.models[m], &lods[m]);
         let meta = model.meta();
@@ -310,7 +321,16 @@ fn plan_group(
         }
         let gap = (centre - view.eye).length() - radius;
         let d = lod.gap((centre - view.lod_eye).length(), to_world.scale);
-        let found = match d > FAR_RADII * lod.radius && view.eps > 0.0 {
+        let far = d > FAR_RADII * lod.radius && view.eps > 0.0;
+        if far && view.on_gpu[m] {
+            // The GPU places it (its cone test again, its slot from d).
+            let slot = lod.slot(d);
+            let slots = slot.saturating_sub(1)..(slot + 2).min(SLOTS);
+            out.far[m].add_member(k - view.firsts[m], slots);
+            out.near = out.near.min(0.5 * gap);
+            continue;
+        }
+        let found = match far {
             true => lod.far(model, d, view.eps, &mut near_by[m]),
             false => {
                 let eye = to_world.eye_to_model(view.lod_eye) - origin;
@@ -342,7 +362,7 @@ impl Planned {
         Planned {
             placements: vec![Vec::new(); models],
             ranges: vec![Vec::new(); models],
-            far: Vec::new(),
+            far: vec![FarPlan::default(); models],
             visible: 0,
             eps,
             coarsened: false,
@@ -360,6 +380,9 @@ impl Planned {
             let offset = self.placements[m].len() as u32;
             self.placements[m].extend(placements);
             self.ranges[m].extend(ranges.into_iter().map(|(r, p)| (r, p + offset)));
+        }
+        for (far, part) in self.far.iter_mut().zip(part.far) {
+            far.join(part);
         }
         self.visible += part.visible;
         self.tested += part.tested;

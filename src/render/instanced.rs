@@ -77,19 +77,21 @@ pub struct SceneMemory {
 }
 
 impl GpuInstances {
-    /// Takes what the GPU measured of a frame's far instances: where they asked for
-    /// more survivors than the room held (some were not drawn), the next frame starts
-    /// coarser (`instance_plan::plan`). Returns whether they did.
-    pub fn observe(&self, far: FarCounts) -> bool {
-        if far.asked <= far.room {
-            return false;
-        }
+    /// Takes what the GPU measured of the far instances of a frame drawn at ε = `eps`:
+    /// how full they filled the room left to them, which the next frame's ε follows
+    /// (`instance_plan::plan`: coarser where they asked for more survivors than it
+    /// held, and some were not drawn; finer only where a quarter octave finer would
+    /// fit). Returns whether they overfilled it.
+    pub fn observe(&self, far: FarCounts, eps: f64) -> bool {
         let fill = far.asked as f64 / far.room.max(1) as f64;
+        let over = far.asked > far.room;
         let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some((_, _, kept)) = last.as_mut() {
+        if let Some((_, drawn, kept)) = last.as_mut()
+            && (over || *drawn == eps)
+        {
             *kept = kept.max(fill);
         }
-        true
+        over
     }
 
     /// Bytes of every buffer, by what it is for (the room of `upload_instanced`).
@@ -202,7 +204,7 @@ impl Renderer {
             let mut frame = drawn.frame;
             let (image, counters) = self.read_frame(encoder, &targets, &all, &frame)?;
             let far = counters.far.unwrap_or_default();
-            if gpu.observe(far) && redraws < REDRAWS {
+            if gpu.observe(far, frame.eps) && redraws < REDRAWS {
                 redraws += 1;
                 continue;
             }

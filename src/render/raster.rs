@@ -266,7 +266,9 @@ impl ComputeRaster {
                     for share in shares.iter().filter(|s| s.drawn()) {
                         pass.set_bind_group(1, &share.slice.rasterized, &[]);
                         match share.far {
-                            Some(args) => pass.dispatch_workgroups_indirect(args, FarArgs::RASTER_AT),
+                            Some(args) => {
+                                pass.dispatch_workgroups_indirect(args, FarArgs::RASTER_AT)
+                            }
                             None => {
                                 let groups = share.count.div_ceil(RASTER_WORKGROUP);
                                 let (x, y) = grid(groups, max_groups);

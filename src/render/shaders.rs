@@ -12,9 +12,9 @@
 //! broken shader fails `cargo test` without a GPU.
 
 use super::settings::Mode;
+use crate::surfel::clip::{NO_CLIP, WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
 use crate::tree::instances::groups::GROUP;
 use crate::tree::instances::lod::{STEPS, STEPS_PER_OCTAVE};
-use crate::surfel::clip::{NO_CLIP, WEDGE_ANGLE_BITS, WEDGE_MARGIN, WEDGE_TAG};
 
 /// Threads per workgroup of the compute passes (`@workgroup_size(WORKGROUP_SIZE)`).
 pub const WORKGROUP_SIZE: u32 = 256;

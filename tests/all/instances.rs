@@ -243,3 +243,95 @@ fn a_scattered_scene_opens_and_draws() {
     assert!(out.contains("instances 41 drawn"), "{out}");
     assert!(png.exists());
 }
+
+/// Largest FLIP between a scene's frame with its far instances placed by the GPU and
+/// the same frame planned wholly on the CPU: the two test the same nodes at placements
+/// rounded apart by an f32 ulp (measured: 0.0000–0.0011).
+const GPU_PLACED_SAME: f64 = 0.005;
+
+/// Far instances placed by the GPU (render/far.rs) draw what the CPU's plan of every
+/// instance draws: 1,024 bunnies on a grid at a UTM-like position and 64 more 10⁶
+/// units away, seen whole from afar, from low within the grid (near instances planned
+/// on the CPU, far ones on the GPU) and at the far cluster (its placements kept to
+/// 10⁻⁴ units by an f32 and its f16 rest).
+#[test]
+fn far_instances_placed_by_the_gpu_draw_as_the_cpu_plans_them() {
+    let Some(data) = common::shared_data() else {
+        return;
+    };
+    let dir = common::temp_dir();
+    let bunny = data.join("bunny.ply");
+    let grid = |origin: DVec3, side: usize| {
+        (0..side * side).map(move |k| Similarity {
+            translation: origin + DVec3::new(0.3 * (k % side) as f64, 0.3 * (k / side) as f64, 0.0),
+            rotation: DQuat::from_rotation_y(0.7 * k as f64) * DQuat::from_rotation_x(1.2),
+            scale: 0.5 + 1.5 * ((k * 7) % 16) as f64 / 15.0,
+        })
+    };
+    let similarities: Vec<Similarity> = grid(BASE, 32).chain(grid(BASE + FAR, 8)).collect();
+    let json = dir.path().join("grid.json");
+    std::fs::write(&json, scene_json(&bunny, &similarities)).unwrap();
+    let r = common::renderer();
+    let scene = InstancedScene::open(&json, &Silent).unwrap();
+    let uploaded = r.upload_instanced(&scene);
+    let centre = BASE + DVec3::new(4.65, 4.65, 0.0);
+    let cluster = BASE + FAR + DVec3::new(1.05, 1.05, 0.0);
+    let views = [
+        (
+            "grid from afar",
+            camera(centre + DVec3::new(0.0, -12.0, 8.0), centre),
+            true,
+        ),
+        (
+            "grid, low",
+            camera(BASE + DVec3::new(-0.4, -0.4, 0.25), centre),
+            false,
+        ),
+        (
+            "far cluster",
+            camera(cluster + DVec3::new(0.0, -4.0, 2.5), cluster),
+            true,
+        ),
+    ];
+    for (view, cam, all_far) in &views {
+        let draw = |far_on_gpu: bool| {
+            let settings = Settings {
+                far_on_gpu,
+                ..Settings::default()
+            };
+            r.render_instanced(&scene, &uploaded, cam, &settings, (256, 256))
+                .unwrap()
+        };
+        let (gpu_image, gpu_stats, gpu_visible) = draw(true);
+        let (cpu_image, cpu_stats, cpu_visible) = draw(false);
+        let (gpu_drawn, cpu_drawn) = (gpu_stats.gpu_drawn.unwrap(), cpu_stats.gpu_drawn.unwrap());
+        let flip = flip_mean(&gpu_image, &cpu_image);
+        eprintln!(
+            "{view}: {gpu_visible} instances, {gpu_drawn} splats ({cpu_drawn} planned on the \
+             CPU), CPU ranges {} against {}, FLIP {flip:.4}",
+            gpu_stats.chunks_tested, cpu_stats.chunks_tested
+        );
+        assert!(
+            covered(&cpu_image) > 2000,
+            "{view}: the bunnies are in view"
+        );
+        assert_eq!(gpu_visible, cpu_visible, "{view}: instances drawn");
+        let ratio = gpu_drawn as f64 / cpu_drawn as f64;
+        assert!(
+            (0.995..1.005).contains(&ratio),
+            "{view}: {ratio:.4}× the splats"
+        );
+        assert!(flip <= GPU_PLACED_SAME, "{view}: FLIP {flip:.4}");
+        if *all_far {
+            assert_eq!(
+                gpu_stats.chunks_tested, 0,
+                "{view}: every instance placed by the GPU"
+            );
+        } else {
+            assert!(
+                gpu_stats.chunks_tested > 0,
+                "{view}: near instances planned on the CPU"
+            );
+        }
+    }
+}

@@ -40,9 +40,11 @@ pub enum Content {
         gpu: GpuInstances,
         /// The scene's box as one chunk, to frame it.
         frame: [Chunk; 1],
-        /// Instances the last frame drew, and the test ranges they handed over.
+        /// Instances the last frame planned on the CPU, and the test ranges they
+        /// handed over; far instances the GPU placed (read a few frames late).
         visible: usize,
         ranges: usize,
+        far_visible: usize,
     },
 }
 
@@ -127,9 +129,10 @@ impl Model {
             Content::Many {
                 scene,
                 visible,
+                far_visible,
                 ranges,
                 ..
-            } => Some((scene.instances.len(), *visible, *ranges)),
+            } => Some((scene.instances.len(), visible + far_visible, *ranges)),
         }
     }
 
@@ -247,6 +250,7 @@ impl Viewer {
             frame,
             visible: 0,
             ranges: 0,
+            far_visible: 0,
         };
         self.install_content(path, content, view);
     }
@@ -573,7 +577,15 @@ impl Viewer {
 
     fn collect_counters(&mut self) {
         if let Some(m) = &mut self.model {
-            self.stats.took(m.counters.poll(&self.renderer.gpu));
+            let arrived = m.counters.poll(&self.renderer.gpu);
+            if let (Some((frame, counters)), Content::Many { gpu, far_visible, .. }) =
+                (&arrived, &mut m.content)
+            {
+                let far = counters.far.unwrap_or_default();
+                gpu.observe(far, frame.eps);
+                *far_visible = far.visible as usize;
+            }
+            self.stats.took(arrived);
         }
     }
 

@@ -170,7 +170,10 @@ mod tests {
                 assert_eq!(i.model, g.model);
                 assert!(g.scale_min <= i.scale && i.scale <= g.scale_max);
                 let (c, r) = groups.sphere_of(i);
-                assert!((c - g.centre).length() + r <= g.radius * (1.0 + 1e-12), "instance {k}");
+                assert!(
+                    (c - g.centre).length() + r <= g.radius * (1.0 + 1e-12),
+                    "instance {k}"
+                );
             }
         }
         assert_eq!(covered, instances.len());
