@@ -46,8 +46,9 @@ pub fn run(path: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> 
         count(scene.groups.len() as u64)
     );
     println!(
-        "instances {} drawn (in view, with nodes to test)",
-        count(visible as u64)
+        "instances {} drawn (in view, with nodes to test), {} of them placed by the GPU",
+        count(visible as u64),
+        count(stats.gpu_placed.unwrap_or(0))
     );
     if stats.coarsened {
         let px = stats.eps / error_per_distance(1.0, camera.fov_y, args.size.1);

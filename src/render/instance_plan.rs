@@ -26,6 +26,15 @@ use crate::tree::select::{ViewCone, error_per_distance};
 /// prefixes would. Nearer, its chunks are searched one by one.
 const FAR_RADII: f64 = 4.0;
 
+/// What the frame before drew: the ε it asked and drew, and how full it filled its room
+/// (over 1 where the GPU's far instances asked for more survivors than it held).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct LastFrame {
+    pub asked: f64,
+    pub drawn: f64,
+    pub fill: f64,
+}
+
 /// What the CPU decided for one frame of a scene: per model, the placements of its
 /// visible instances and the ranges they hand over.
 pub(super) struct Planned {
@@ -58,10 +67,12 @@ pub(super) struct Planned {
 /// `last`: the ε asked and drawn of the frame before, and how full its room was. Where
 /// that frame asked the same ε and had to coarsen, the search starts where it drew (a
 /// view changes little from frame to frame) instead of at the asked ε, whose plan would
-/// overfill again; a quarter octave finer where the room was filled less than a step's
-/// worth (the nodes tested grow about as 1/ε²), so that frames refine as the view
-/// allows. A fill over 1 is the GPU's: its far instances asked for more survivors
-/// than the room held, and the search starts coarser by the square root.
+/// overfill again; a quarter octave finer where the room was filled less than half
+/// (a step's worth twice over: the survivors grow as 1/ε² or faster, measured up to 1/ε³
+/// on the forest, and a frame that overfills is drawn again), so that frames refine
+/// as the view allows without swinging between two steps. A fill over 1 is the GPU's:
+/// its far instances asked for more survivors than the room held, and the search
+/// starts coarser by the square root.
 ///
 /// `on_gpu[m]`: whether model m's far groups go to the GPU whole; `trim`: whether a
 /// near instance's prefixes end at their node (else at their block).
@@ -69,19 +80,27 @@ pub(super) fn plan(
     (scene, models, lods): (&InstancedScene, &[GpuScene], &[ModelLod]),
     (camera, settings): (&Camera, &Settings),
     (width, height): (u32, u32),
-    (last, on_gpu, trim): (Option<(f64, f64, f64)>, &[bool], bool),
+    (last, on_gpu, trim): (Option<LastFrame>, &[bool], bool),
 ) -> Planned {
     let asked = match settings.lod {
         true => error_per_distance(settings.error_px, camera.fov_y, height),
         false => 0.0,
     };
     let start = match last {
-        Some((last_asked, drawn, fill)) if last_asked == asked && fill > 1.0 => {
-            (drawn * fill.sqrt().clamp(QUARTER_OCTAVE, 4.0)).max(asked)
+        Some(LastFrame {
+            asked: was,
+            drawn,
+            fill,
+        }) if was == asked && fill > 1.0 => {
+            on_steps(asked, drawn * fill.sqrt().clamp(QUARTER_OCTAVE, 4.0))
         }
-        Some((last_asked, drawn, fill)) if last_asked == asked && drawn > asked => {
-            let finer = fill * QUARTER_OCTAVE * QUARTER_OCTAVE < 1.0;
-            (if finer { drawn / QUARTER_OCTAVE } else { drawn }).max(asked)
+        Some(LastFrame {
+            asked: was,
+            drawn,
+            fill,
+        }) if was == asked && drawn > asked => {
+            let finer = fill * QUARTER_OCTAVE.powi(4) < 1.0;
+            on_steps(asked, if finer { drawn / QUARTER_OCTAVE } else { drawn })
         }
         _ => asked,
     };
@@ -130,8 +149,23 @@ pub(super) fn plan(
             };
         }
         // The nodes tested fall about as 1/ε² (a cut of a surface seen from afar).
-        eps = (eps * over.sqrt().clamp(QUARTER_OCTAVE, 4.0)).max(floor);
+        eps = on_steps(
+            asked,
+            (eps * over.sqrt().clamp(QUARTER_OCTAVE, 4.0)).max(floor),
+        );
     }
+}
+
+/// The least ε ≥ `eps` of the quarter-octave steps above `asked` (asked · 2^(k/4), k ≥
+/// 0; `eps` itself when nothing was asked: leaves only). A coarsened frame draws at one
+/// of a few ε, whose tables of far ranges (lod.rs, far.rs) the frames after it find
+/// kept.
+fn on_steps(asked: f64, eps: f64) -> f64 {
+    if asked <= 0.0 {
+        return eps;
+    }
+    let k = ((eps / asked).log2() * 4.0 - 1e-6).ceil().max(0.0);
+    asked * (k / 4.0).exp2()
 }
 
 /// The view cone instances are culled by: world units, apex at the eye, keeping what
@@ -399,4 +433,31 @@ fn shifted(cone: &ViewCone, origin: DVec3) -> ViewCone {
         cone.tan_half_fov,
         cone.near,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_coarsened_eps_lands_on_a_quarter_octave_above_the_asked() {
+        let asked = 1e-3;
+        assert_eq!(on_steps(asked, asked), asked);
+        assert_eq!(
+            on_steps(0.0, 0.25),
+            0.25,
+            "leaves only keeps what it is given"
+        );
+        for eps in [1.01e-3, 1.3e-3, 2.0e-3, 7.7e-3] {
+            let stepped = on_steps(asked, eps);
+            let k = (stepped / asked).log2() * 4.0;
+            assert!((k - k.round()).abs() < 1e-9, "{eps}: {k} quarter octaves");
+            assert!(
+                stepped >= eps && stepped < eps * QUARTER_OCTAVE,
+                "{eps} → {stepped}"
+            );
+        }
+        // Twice the asked ε is 4 steps, not 5.
+        assert!((on_steps(asked, 2.0 * asked) - 2.0 * asked).abs() < 1e-15);
+    }
 }

@@ -23,7 +23,7 @@ use super::camera::Camera;
 use super::far::{FarCounts, FarModel};
 use super::frame::FrameUniform;
 use super::gpu_scene::{GpuScene, InstancedRoom, Share};
-use super::instance_plan::{instance_cone, plan};
+use super::instance_plan::{LastFrame, instance_cone, plan};
 use super::placement::Placement;
 use super::plan::EncodedFrame;
 use super::renderer::{FrameStats, Image, Renderer};
@@ -59,7 +59,7 @@ pub struct GpuInstances {
     far: Vec<Option<FarModel>>,
     /// The ε asked and drawn of the last frame planned, and how full its room was
     /// (`instance_plan::plan`).
-    last: Mutex<Option<(f64, f64, f64)>>,
+    last: Mutex<Option<LastFrame>>,
 }
 
 /// A scene's GPU memory: its models' lists, their survivor room, and what each
@@ -86,10 +86,10 @@ impl GpuInstances {
         let fill = far.asked as f64 / far.room.max(1) as f64;
         let over = far.asked > far.room;
         let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some((_, drawn, kept)) = last.as_mut()
-            && (over || *drawn == eps)
+        if let Some(last) = last.as_mut()
+            && (over || last.drawn == eps)
         {
-            *kept = kept.max(fill);
+            last.fill = last.fill.max(fill);
         }
         over
     }
@@ -251,7 +251,11 @@ impl Renderer {
             size,
             (*last, &on_gpu, trim),
         );
-        *last = Some((planned.asked, planned.eps, planned.fill));
+        *last = Some(LastFrame {
+            asked: planned.asked,
+            drawn: planned.eps,
+            fill: planned.fill,
+        });
         drop(last);
         let mut uniform = FrameUniform::new(&scene.meta, camera, settings, size, planned.eps);
         // The scene's box may span a country: the near plane comes from the instances

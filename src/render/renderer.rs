@@ -82,6 +82,9 @@ pub struct FrameStats {
     pub coarsened: bool,
     /// What planning the frame (chunks, prefixes) took the CPU, ms.
     pub plan_ms: f64,
+    /// A scene's instances the GPU placed itself (its far ones, `far.rs`), of those
+    /// drawn.
+    pub gpu_placed: Option<u64>,
 }
 
 impl FrameStats {
@@ -105,6 +108,7 @@ impl FrameStats {
             eps: frame.eps,
             coarsened: frame.coarsened,
             plan_ms: frame.plan_ms,
+            gpu_placed: counters.far.map(|f| f.visible),
         }
     }
 }

@@ -578,8 +578,12 @@ impl Viewer {
     fn collect_counters(&mut self) {
         if let Some(m) = &mut self.model {
             let arrived = m.counters.poll(&self.renderer.gpu);
-            if let (Some((frame, counters)), Content::Many { gpu, far_visible, .. }) =
-                (&arrived, &mut m.content)
+            if let (
+                Some((frame, counters)),
+                Content::Many {
+                    gpu, far_visible, ..
+                },
+            ) = (&arrived, &mut m.content)
             {
                 let far = counters.far.unwrap_or_default();
                 gpu.observe(far, frame.eps);
