@@ -11,7 +11,9 @@
 #                                      # Lucy-size generated model (made and converted
 #                                      # into data/large/ once), the LiDAR tile, and the
 #                                      # forest scene (10⁵ trees of 10⁶ samples on the
-#                                      # tile, tools/gen_forest.rs, made once)
+#                                      # tile, tools/gen_forest.rs, made once), its far
+#                                      # instances placed by the GPU and, for
+#                                      # comparison, all planned on the CPU
 #   tools/gpu_check.sh --quick         # 320×240, 3 frames, the default model and the
 #                                      # tile: a check that both paths run (CI)
 #   SPT=path/spt GEN_MODEL=path/gen_model GEN_FOREST=path/gen_forest SPT_DATA=path \
@@ -27,7 +29,7 @@ quick=0
 for arg in "$@"; do
   case $arg in
     --quick) quick=1 ;;
-    -h | --help) sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h | --help) sed -n '2,25p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "gpu_check.sh: unknown option $arg (use --quick or --help)" >&2; exit 2 ;;
   esac
 done
@@ -68,7 +70,9 @@ else
     "data/torus_knot.ply|"
     "data/torus_knot.ply|--mode points"
     "$forest|"
+    "$forest|--cpu-instances"
     "$forest|--eye 512300,5403300,380 --target 512700,5403700,300"
+    "$forest|--eye 512300,5403300,380 --target 512700,5403700,300 --cpu-instances"
     "$lucy|"
     "$lucy|--orbit 30,20,1.3"
     "$lucy|--orbit 30,20,1.3 --mode points"
