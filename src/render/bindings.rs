@@ -227,7 +227,9 @@ mod tests {
         assert_eq!(mismatches("cull", &moved, &slots).len(), 1);
         let renamed = cull.replace("var<storage, read> ranges", "var<storage, read> spans");
         let renamed = renamed.replace("far_ranges[", "FAR[");
-        let renamed = renamed.replace("ranges[", "spans[").replace("FAR[", "far_ranges[");
+        let renamed = renamed
+            .replace("ranges[", "spans[")
+            .replace("FAR[", "far_ranges[");
         assert_eq!(mismatches("cull", &renamed, &slots).len(), 1);
     }
 }

@@ -18,7 +18,7 @@ use super::loader::{Loaded, Loading};
 use super::pacing::Pacer;
 use super::panel::{self, PanelStatus};
 use super::present::{Presented, Presenter};
-use super::viewer::Viewer;
+use super::viewer::{PREVIEW_COARSER, Viewer};
 use crate::apps::frame_args::RenderArgs;
 use crate::apps::stats::Summary;
 use crate::apps::text::count;
@@ -431,19 +431,24 @@ impl App {
         if w.viewer.model.is_some() && !self.first_frame_logged {
             self.first_frame_logged = true;
             let coarse = w.viewer.stats.frame.as_ref().is_some_and(|f| f.coarsened);
+            let note = if w.viewer.stats.preview {
+                format!(
+                    " (a preview at {PREVIEW_COARSER}× the asked ε_px; the frame at ε_px follows)"
+                )
+            } else if coarse {
+                " (coarser than asked until the model is uploaded)".to_string()
+            } else {
+                String::new()
+            };
             eprintln!(
-                "first frame {:.2} s after launch{}",
+                "first frame {:.2} s after launch{note}",
                 self.launched.elapsed().as_secs_f64(),
-                if coarse {
-                    " (coarser than asked until the model is uploaded)"
-                } else {
-                    ""
-                }
             );
         }
         // The scripted frames start once the whole model is on the GPU (under a budget:
         // checked, and what the view wants streamed in).
-        if w.viewer.model.is_some() && self.loading.is_none() && w.viewer.is_streaming_settled() {
+        let settled = self.loading.is_none() && w.viewer.is_streaming_settled();
+        if w.viewer.model.is_some() && settled && !w.viewer.stats.preview {
             self.script.frames += 1;
             if self.script.frames > 1 {
                 self.script.frame_ms.push(seconds * 1e3);

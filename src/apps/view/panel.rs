@@ -305,7 +305,12 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
                     Some((_, _, ranges)) => format!("{} ranges", count(ranges as u64)),
                     None => format!("{} chunks", count(f.ranges.len() as u64)),
                 };
-                row("tested", format!("{} in {ranges}", count(f.tested as u64)));
+                let mut tested = format!("{} in {ranges}", count(f.tested as u64));
+                if let Some(far) = st.gpu.far.filter(|_| instances.is_some()) {
+                    let placed = count(far.visible);
+                    tested += &format!(" + {} of {placed} far instances", count(far.tested));
+                }
+                row("tested", tested);
                 row("plan", format!("{:.2} ms CPU", f.plan_ms));
                 if f.coarsened {
                     row("", "coarser until uploaded".into());

@@ -158,15 +158,24 @@ pub struct Stats {
     pub frame: Option<EncodedFrame>,
     /// The ε_px that frame was asked for: the user's, or the pacer's while moving.
     pub frame_error_px: f64,
+    /// The next frame is a scene's first, drawn as a preview; the frame just recorded
+    /// was one ([`PREVIEW_COARSER`]).
+    preview_next: bool,
+    pub preview: bool,
     recent: VecDeque<Instant>,
 }
+
+/// A scene's first frame is a preview at this many times the user's ε_px (about 1/16
+/// of the splats: on lavapipe, a forest of 10⁵ trees in well under a second instead of
+/// five); the frame at the user's ε follows at once.
+pub const PREVIEW_COARSER: f64 = 4.0;
 
 impl Stats {
     /// Takes the counters of a frame that arrived, if one did.
     fn took(&mut self, arrived: Option<(EncodedFrame, GpuCounters)>) {
         if let Some((frame, counters)) = arrived {
             self.gpu = counters;
-            self.measured_tested = frame.tested;
+            self.measured_tested = frame.tested + counters.far.map_or(0, |f| f.tested as usize);
         }
     }
 
@@ -253,6 +262,7 @@ impl Viewer {
             far_visible: 0,
         };
         self.install_content(path, content, view);
+        self.stats.preview_next = true;
     }
 
     fn install_content(
@@ -521,10 +531,16 @@ impl Viewer {
         let start = Instant::now();
         self.targets(size)?;
         let targets = self.targets.as_ref().expect("made above");
+        let preview = std::mem::take(&mut self.stats.preview_next) && self.model.is_some();
+        let error_px = match preview {
+            true => (self.settings.error_px.max(0.25) * PREVIEW_COARSER).min(ERROR_PX_RANGE.1),
+            false => self.pacer.error_px(start, self.settings.error_px),
+        };
         let settings = Settings {
-            error_px: self.pacer.error_px(start, self.settings.error_px),
+            error_px,
             ..self.settings
         };
+        self.stats.preview = preview;
         self.stats.frame_error_px = settings.error_px;
         match &mut self.model {
             Some(m) => {
@@ -556,9 +572,12 @@ impl Viewer {
             .frame_done(used, frame_ms, self.settings.error_px);
     }
 
-    /// When a frame at the user's ε_px is due: the last frame was drawn coarser for the
-    /// frame-time target, and the camera rests from then on.
+    /// When a frame at the user's ε_px is due: at once after a scene's preview, or, where
+    /// the last frame was drawn coarser for the frame-time target, once the camera rests.
     pub fn refine_due(&self) -> Option<Instant> {
+        if self.stats.preview && self.model.is_some() {
+            return Some(Instant::now());
+        }
         let coarser = self.stats.frame_error_px != self.settings.error_px;
         self.pacer
             .rest_at()

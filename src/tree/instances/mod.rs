@@ -105,16 +105,19 @@ pub struct InstancedScene {
 }
 
 impl InstancedScene {
-    /// Reads the scene file `path` and opens each of its models once, telling `report`
-    /// each model's steps.
+    /// Reads the scene file `path` and opens each of its models once (in parallel),
+    /// telling `report` each model's steps.
     pub fn open(path: &Path, report: &dyn Report) -> anyhow::Result<InstancedScene> {
         let file = read_scene(path)?;
-        let mut models = Vec::with_capacity(file.models.len());
-        for m in &file.models {
-            let scene = Scene::open_reporting(m, report)
-                .map_err(|e| anyhow::anyhow!("{}: model {}: {e:#}", path.display(), m.display()))?;
-            models.push(scene);
-        }
+        // In parallel: opening a model is mostly checking its checksum.
+        use rayon::prelude::*;
+        let models = (file.models.par_iter())
+            .map(|m| {
+                Scene::open_reporting(m, report).map_err(|e| {
+                    anyhow::anyhow!("{}: model {}: {e:#}", path.display(), m.display())
+                })
+            })
+            .collect::<anyhow::Result<Vec<Scene>>>()?;
         Ok(InstancedScene::new(models, file.models, file.instances))
     }
 
