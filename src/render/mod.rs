@@ -47,6 +47,7 @@ mod upload;
 
 pub use camera::{Camera, OrbitAxes};
 pub use counters::{CounterReadback, GpuCounters};
+pub use far::FarCounts;
 pub use frame::{linear_to_srgb, srgb_to_linear};
 pub use fullscreen::{fragment_texture, fullscreen_pipeline};
 pub use gpu::Gpu;

@@ -245,6 +245,33 @@ fn display_section(ui: &mut egui::Ui, viewer: &mut Viewer) {
 /// Width of the stats grid's label column, points: "splats drawn", the longest.
 const STATS_LABEL_WIDTH: f32 = 90.0;
 
+/// The nodes a frame handed to the GPU to test: in its chunks' prefixes (a model), or
+/// in the CPU's ranges (a scene, `ranges` of them) and for the far instances the GPU
+/// placed (`far`, read a few frames late).
+fn tested_text(
+    f: &crate::render::EncodedFrame,
+    ranges: Option<usize>,
+    far: Option<crate::render::FarCounts>,
+) -> String {
+    let Some(ranges) = ranges else {
+        return format!(
+            "{} in {} chunks",
+            count(f.tested as u64),
+            count(f.ranges.len() as u64)
+        );
+    };
+    let mut tested = format!(
+        "{} in {} ranges",
+        count(f.tested as u64),
+        count(ranges as u64)
+    );
+    if let Some(far) = far {
+        let placed = count(far.visible);
+        tested += &format!(" + {} of {placed} far instances", count(far.tested));
+    }
+    tested
+}
+
 fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
     let st = &viewer.stats;
     let ms = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.2} ms"));
@@ -301,16 +328,8 @@ fn stats_section(ui: &mut egui::Ui, viewer: &Viewer, status: &PanelStatus) {
                 );
             }
             if let Some(f) = &st.frame {
-                let ranges = match instances {
-                    Some((_, _, ranges)) => format!("{} ranges", count(ranges as u64)),
-                    None => format!("{} chunks", count(f.ranges.len() as u64)),
-                };
-                let mut tested = format!("{} in {ranges}", count(f.tested as u64));
-                if let Some(far) = st.gpu.far.filter(|_| instances.is_some()) {
-                    let placed = count(far.visible);
-                    tested += &format!(" + {} of {placed} far instances", count(far.tested));
-                }
-                row("tested", tested);
+                let ranges = instances.map(|(_, _, ranges)| ranges);
+                row("tested", tested_text(f, ranges, st.gpu.far));
                 row("plan", format!("{:.2} ms CPU", f.plan_ms));
                 if f.coarsened {
                     row("", "coarser until uploaded".into());

@@ -104,11 +104,8 @@ impl FarModel {
             size_of::<FarArgs>(),
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
         );
-        let args_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("far dispatches"),
-            layout: &pass.args_layout,
-            entries: &[bind(far_slots::ARGS, &args)],
-        });
+        let args_layout = ("far dispatches", &pass.args_layout);
+        let args_bind = bind_group(device, args_layout, [far_slots::ARGS], [&args]);
         let params = buffer(
             "place params",
             size_of::<PlaceParams>(),
@@ -326,6 +323,23 @@ fn bind(slot: Slot, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     }
 }
 
+/// A bind group of `layout` binding each of `buffers` at its slot.
+fn bind_group<const N: usize>(
+    device: &wgpu::Device,
+    (label, layout): (&str, &wgpu::BindGroupLayout),
+    slots: [Slot; N],
+    buffers: [&wgpu::Buffer; N],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = (slots.into_iter().zip(buffers))
+        .map(|(slot, buffer)| bind(slot, buffer))
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
 /// The placing's bind group: params, instances, far groups, entries, placements,
 /// counters.
 fn place_bind(
@@ -341,25 +355,11 @@ fn place_bind(
         place_slots::PLACED,
         place_slots::COUNTERS,
     ];
-    let entries: Vec<wgpu::BindGroupEntry> = (slots.into_iter().zip(buffers))
-        .map(|(slot, buffer)| bind(slot, buffer))
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("place"),
-        layout: &pass.place_layout,
-        entries: &entries,
-    })
+    bind_group(device, ("place", &pass.place_layout), slots, buffers)
 }
 
 /// The bind group of `cull_far`'s group 2: entries, ranges, counters.
 fn far_bind(device: &wgpu::Device, pass: &FarPass, buffers: [&wgpu::Buffer; 3]) -> wgpu::BindGroup {
     let slots = [far_slots::ENTRIES, far_slots::RANGES, far_slots::COUNTERS];
-    let entries: Vec<wgpu::BindGroupEntry> = (slots.into_iter().zip(buffers))
-        .map(|(slot, buffer)| bind(slot, buffer))
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("far"),
-        layout: &pass.far_layout,
-        entries: &entries,
-    })
+    bind_group(device, ("far", &pass.far_layout), slots, buffers)
 }
