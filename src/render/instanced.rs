@@ -83,8 +83,7 @@ impl GpuInstances {
     /// held, and some were not drawn; finer only where a quarter octave finer would
     /// fit). Returns whether they overfilled it.
     pub fn observe(&self, far: FarCounts, eps: f64) -> bool {
-        let fill = far.asked as f64 / far.room.max(1) as f64;
-        let over = far.asked > far.room;
+        let (fill, over) = (far.fill, far.fill > 1.0);
         let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(last) = last.as_mut()
             && (over || last.drawn == eps)

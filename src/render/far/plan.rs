@@ -48,7 +48,7 @@ impl FarPlan {
 }
 
 #[cfg(test)]
-mod plan_tests {
+mod tests {
     use super::*;
 
     #[test]

@@ -84,7 +84,7 @@ pub(super) struct PlaceParams {
 }
 
 /// What the GPU measured of a frame's far instances, all models together.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct FarCounts {
     /// Instances placed, and the nodes their slots hold (tested).
     pub visible: u64,
@@ -92,6 +92,8 @@ pub struct FarCounts {
     /// Survivors they asked for, and the room left to them.
     pub asked: u64,
     pub room: u64,
+    /// The fullest model's share of its room asked for (over 1: some were not stored).
+    pub fill: f64,
 }
 
 impl FarCounts {
@@ -101,6 +103,9 @@ impl FarCounts {
         self.tested += c[1] as u64;
         self.asked += c[2] as u64;
         self.room += c[3] as u64;
+        if c[2] > 0 {
+            self.fill = self.fill.max(c[2] as f64 / c[3].max(1) as f64);
+        }
     }
 }
 
@@ -129,6 +134,17 @@ mod tests {
         assert_wgsl_size::<FarRange>("far", "FarRange");
         assert_wgsl_size::<FarCounters>("far", "FarCounters");
         assert_wgsl_size::<FarArgs>("far", "FarArgs");
+    }
+
+    #[test]
+    fn the_fill_is_the_fullest_model_s_not_the_sum_s() {
+        let mut counts = FarCounts::default();
+        // One model asks 3 survivors of a room of 2; another 1 of 1,000.
+        counts.add([1, 10, 3, 2]);
+        counts.add([5, 50, 1, 1000]);
+        assert_eq!((counts.visible, counts.tested), (6, 60));
+        assert_eq!(counts.fill, 1.5);
+        assert!(counts.asked < counts.room, "the sums alone would hide it");
     }
 
     #[test]
