@@ -275,7 +275,6 @@ impl Renderer {
             }
             let mut model_shares = placed_shares(g, &planned.ranges[m]);
             if let Some(far) = &gpu.far[m] {
-                far.reset(queue);
                 let plan = planned.far.get(m).filter(|p| !p.groups.is_empty());
                 if let (Some(plan), Some(share)) = (plan, model_shares.first_mut()) {
                     let draw = far.prepare(
@@ -288,6 +287,8 @@ impl Renderer {
                     );
                     share.far = Some(&far.args);
                     draws.push(draw);
+                } else {
+                    far.reset(queue);
                 }
             }
             shares.extend(model_shares);

@@ -47,18 +47,19 @@ impl Groups {
     /// Sorts `instances` by model, then along a Morton curve of their centres, and
     /// groups them; the models' bounding spheres (file coordinates) are `spheres`.
     pub fn sort(instances: &mut [Instance], spheres: &[(DVec3, f64)]) -> Groups {
-        let centres: Vec<DVec3> = instances.iter().map(|i| sphere(i, spheres).0).collect();
-        let (lo, hi) = centres
-            .iter()
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), c| {
-                (lo.min(*c), hi.max(*c))
-            });
+        // Each instance's sphere once: the sort key and its group's sphere both read it.
+        let of_each: Vec<(DVec3, f64)> = instances.iter().map(|i| sphere(i, spheres)).collect();
+        let (lo, hi) = of_each.iter().fold(
+            (DVec3::INFINITY, DVec3::NEG_INFINITY),
+            |(lo, hi), (c, _)| (lo.min(*c), hi.max(*c)),
+        );
         let extent = (hi - lo).max_element().max(f64::MIN_POSITIVE);
-        let mut order: Vec<(u32, u64, u32)> = (instances.iter().zip(&centres).enumerate())
-            .map(|(k, (i, c))| (i.model, morton((*c - lo) / extent), k as u32))
+        let mut order: Vec<(u32, u64, u32)> = (instances.iter().zip(&of_each).enumerate())
+            .map(|(k, (i, (c, _)))| (i.model, morton((*c - lo) / extent), k as u32))
             .collect();
         order.sort_unstable();
         let sorted: Vec<Instance> = order.iter().map(|o| instances[o.2 as usize]).collect();
+        let of_each: Vec<(DVec3, f64)> = order.iter().map(|o| of_each[o.2 as usize]).collect();
         instances.copy_from_slice(&sorted);
         let mut groups = Vec::with_capacity(instances.len().div_ceil(GROUP));
         let mut start = 0;
@@ -68,7 +69,7 @@ impl Groups {
             for members in (start..start + run).step_by(GROUP) {
                 let end = (members + GROUP).min(start + run);
                 let of = &instances[members..end];
-                let (centre, radius) = enclosing(of.iter().map(|i| sphere(i, spheres)));
+                let (centre, radius) = enclosing(of_each[members..end].iter().copied());
                 groups.push(Group {
                     centre,
                     radius,
