@@ -4,7 +4,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 /// Axis-aligned box in the file's own coordinates, at full f64 precision.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
 pub struct Bounds {
     pub min: [f64; 3],
     pub max: [f64; 3],

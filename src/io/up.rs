@@ -9,7 +9,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 /// A signed coordinate axis taken as up (serialized by its [`UpAxis::name`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, serde::Deserialize)]
 pub enum UpAxis {
     #[serde(rename = "x")]
     X,

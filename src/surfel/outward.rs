@@ -49,7 +49,7 @@ pub const OPEN_AREA: f64 = 0.01;
 
 /// A piece's terms of the vote, about a centre c: sums over its vertices, which add
 /// up over pieces of a model ([`crate::tree::out_of_core`]).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct Vote {
     /// Σ r² (p − c)·n.
     pub flux: f64,

@@ -17,7 +17,7 @@ pub enum Orientation {
 
 /// Which way a model's normals were turned when its surfels were estimated: what the
 /// renderer must know of the [`Orientation`] (a `.spt` file stores it from version 8).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum NormalsTurned {
     /// Not turned: a mesh's, given ones, or a cloud's of unknown orientation (drawn

@@ -6,13 +6,15 @@
 //! its sizes, its box, a sample of its intensities. Given its input points, a job
 //! depends on nothing else, so jobs can run anywhere.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
+use serde::{Deserialize, Serialize};
+use xxhash_rust::xxh3::Xxh3;
 
+use super::manifest::FileEntry;
 use super::spill::{JobFiles, SpillPoint, read_records, read_spill};
+use crate::io::atomic::write_atomically;
 use crate::io::up::UpAxis;
 use crate::io::{Bounds, Geometry, PointAttributes};
 use crate::surfel::shape::SplatShape;
@@ -27,7 +29,7 @@ use crate::tree::{
 const INTENSITY_SAMPLE: usize = 1 << 16;
 
 /// What the model shares with every job.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Model {
     pub origin: DVec3,
     pub bounds: Bounds,
@@ -47,10 +49,12 @@ pub struct Model {
 
 /// A job's subtree, written to `path` as its list's sections back to back: nodes,
 /// parents (u32::MAX for the root, first), shapes, attributes (when the model has
-/// them), chunks.
-#[derive(Debug, Clone)]
+/// them), chunks, then the intensity sample.
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Part {
+    #[serde(skip)]
     pub path: PathBuf,
+    #[serde(with = "super::record::root_hex")]
     pub root: (NodeRecord, SplatShape, PointAttributes),
     pub nodes: u64,
     pub leaves: u64,
@@ -68,7 +72,11 @@ pub struct Part {
     /// Which way its estimated normals were turned (every job decides it alike, on the
     /// model's core box).
     pub normals_turned: NormalsTurned,
+    /// A sample of its points' attributes, for the model's intensity range: at the end of
+    /// the part file, `intensity_count` of them.
+    #[serde(skip)]
     pub intensities: Vec<PointAttributes>,
+    pub intensity_count: u64,
     /// The error scale its leaves alone would take ([`crate::tree::error_scale`]: the
     /// largest extent of the box holding their disks).
     pub disk_extent: f32,
@@ -113,8 +121,11 @@ fn read_normals(files: JobFiles, points: usize) -> anyhow::Result<Option<Vec<Vec
     Ok(Some(normals.into_iter().map(Vec3::from).collect()))
 }
 
+/// A built part and its file's entry (size, checksum).
+pub type Built = (Part, FileEntry);
+
 /// Builds the job of spill files `files` into `part`.
-pub fn build(model: &Model, files: JobFiles, part: &Path) -> anyhow::Result<Part> {
+pub fn build(model: &Model, files: JobFiles, part: &Path) -> anyhow::Result<Built> {
     let (own, halo) = (files.own, files.halo);
     let own_points = read_spill(own)?;
     anyhow::ensure!(
@@ -148,7 +159,7 @@ pub fn build_leaves(
     mut leaves: LeafSurfels,
     intensities: Vec<PointAttributes>,
     part: &Path,
-) -> anyhow::Result<Part> {
+) -> anyhow::Result<Built> {
     leaves.drop_redundant();
     let (leaf_count, walls) = (leaves.surfels.len() as u64, leaves.stats.added_splats());
     let disk_extent = crate::tree::error_scale(&leaves.surfels);
@@ -156,8 +167,9 @@ pub fn build_leaves(
     let hierarchy = build_hierarchy(&leaves, &Silent);
     let set = build_records_scaled(leaves, hierarchy, model.error_scale, &Silent);
     let list = sort_list_chunked(set, model.chunk_nodes);
-    write_part(&list, part)?;
-    Ok(Part {
+    let file = write_part(&list, &intensities, part)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", part.display()))?;
+    let part = Part {
         path: part.to_owned(),
         root: (
             list.nodes[0],
@@ -178,22 +190,42 @@ pub fn build_leaves(
         centre_max: Vec3::from(list.meta.centre_max),
         oriented,
         normals_turned,
+        intensity_count: intensities.len() as u64,
         intensities,
         disk_extent,
-    })
+    };
+    Ok((part, file))
 }
 
-fn write_part(list: &SequentialList, path: &Path) -> std::io::Result<()> {
-    let mut w = BufWriter::with_capacity(1 << 20, File::create(path)?);
-    let sections: [&[u8]; 5] = [
+/// Writes the part file atomically; returns its entry (size, xxh3).
+fn write_part(
+    list: &SequentialList,
+    intensities: &[PointAttributes],
+    path: &Path,
+) -> std::io::Result<FileEntry> {
+    let sections: [&[u8]; 6] = [
         bytemuck::cast_slice(&list.nodes),
         bytemuck::cast_slice(&list.parents),
         bytemuck::cast_slice(&list.shapes),
         bytemuck::cast_slice(&list.attributes),
         bytemuck::cast_slice::<Chunk, u8>(&list.chunks),
+        bytemuck::cast_slice(intensities),
     ];
-    for s in sections {
-        w.write_all(s)?;
-    }
-    w.flush()
+    let mut hash = Xxh3::new();
+    let mut bytes = 0;
+    write_atomically(path, |w| {
+        for s in sections {
+            w.write_all(s)?;
+            hash.update(s);
+            bytes += s.len() as u64;
+        }
+        Ok(())
+    })?;
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    Ok(FileEntry {
+        role: "part".to_owned(),
+        name: name.into_owned(),
+        bytes,
+        xxh3: format!("{:016x}", hash.digest()),
+    })
 }

@@ -13,7 +13,7 @@ use std::path::Path;
 
 use glam::{DVec3, Vec3};
 
-use super::job::{Model, Part, build_leaves};
+use super::job::{Built, Model, build_leaves};
 use super::mesh_spill::MeshVertex;
 use super::spill::read_records;
 use crate::io::Geometry;
@@ -118,7 +118,7 @@ pub fn build(
     files: Files,
     (turn, c): (bool, DVec3),
     part: &Path,
-) -> anyhow::Result<(Part, Vote)> {
+) -> anyhow::Result<(Built, Vote)> {
     let (g, own) = geometry(model, files)?;
     anyhow::ensure!(own > 0, "{}: a job without vertices", files.0.display());
     let (leaves, vote) = mesh_surfels_of(&g, own, (turn, c));

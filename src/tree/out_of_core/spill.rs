@@ -271,9 +271,12 @@ pub fn split(
     Split::Node(Box::new(left), Box::new(right))
 }
 
-/// Each cell's job.
+/// A cell of no job (a cell of an empty box, dropped from the split: no point lies in it).
+pub const NO_CELL_JOB: u32 = u32::MAX;
+
+/// Each cell's job ([`NO_CELL_JOB`] outside every box of `jobs`).
 pub fn cell_jobs(jobs: &[JobBox]) -> Vec<u32> {
-    let mut table = vec![0u32; (GRID * GRID * GRID) as usize];
+    let mut table = vec![NO_CELL_JOB; (GRID * GRID * GRID) as usize];
     for (j, job) in jobs.iter().enumerate() {
         for z in job.lo.z..job.hi.z {
             for y in job.lo.y..job.hi.y {
@@ -295,39 +298,12 @@ pub struct SpillFiles {
     pub normals: Option<(Vec<PathBuf>, Vec<PathBuf>)>,
 }
 
-impl SpillFiles {
-    /// Job `j`'s files: own, halo, and their normals' when there are.
-    pub fn of(&self, j: usize) -> JobFiles<'_> {
-        JobFiles {
-            own: &self.own[j],
-            halo: &self.halo[j],
-            normals: self.normals.as_ref().map(|(o, h)| (&*o[j], &*h[j])),
-        }
-    }
-}
-
 /// One job's spill files.
 #[derive(Debug, Clone, Copy)]
 pub struct JobFiles<'a> {
     pub own: &'a Path,
     pub halo: &'a Path,
     pub normals: Option<(&'a Path, &'a Path)>,
-}
-
-impl JobFiles<'_> {
-    pub fn remove(&self) -> std::io::Result<()> {
-        let normals = self
-            .normals
-            .map_or([None, None], |(o, h)| [Some(o), Some(h)]);
-        for p in [Some(self.own), Some(self.halo)]
-            .into_iter()
-            .chain(normals)
-            .flatten()
-        {
-            std::fs::remove_file(p)?;
-        }
-        Ok(())
-    }
 }
 
 /// The jobs other than `job` whose cells lie within [`HALO`] of `p`'s cell faces.
@@ -351,7 +327,7 @@ fn halo_jobs(table: &[u32], (cell, frac): (IVec3, DVec3), job: u32, out: &mut Ve
         for &dy in &sy {
             for &dx in &sx {
                 let other = table[Grid::index(cell + IVec3::new(dx, dy, dz))];
-                if other != job && !out.contains(&other) {
+                if other != job && other != NO_CELL_JOB && !out.contains(&other) {
                     out.push(other);
                 }
             }
