@@ -96,6 +96,14 @@ enum Command {
         #[arg(long)]
         out_of_core: bool,
     },
+    /// The out-of-core build's three steps as separate commands over a shared job
+    /// directory, for a cluster to run the jobs (docs/cluster.md): `plan` splits and
+    /// spills the model, `build` builds jobs into parts, `join` writes the .spt file.
+    /// The same budget gives the same file as `spt convert --out-of-core`.
+    Jobs {
+        #[command(subcommand)]
+        command: spt::apps::jobs::JobsCommand,
+    },
 }
 
 fn main() -> ExitCode {
@@ -119,6 +127,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => spt::apps::bench::run(&args),
         Command::Info { file, json } => spt::apps::info::run(&file, json),
         Command::Scatter(args) => spt::apps::scatter::run(&args),
+        Command::Jobs { command } => spt::apps::jobs::run(&command),
         Command::Convert {
             input,
             output,
@@ -148,6 +157,10 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<spt::apps::jobs::RebuildNeeded>() => {
+            eprintln!("{e:#}");
+            ExitCode::from(spt::apps::jobs::REBUILD_STATUS)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE

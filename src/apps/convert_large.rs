@@ -11,7 +11,7 @@ use crate::apps::progress::Stage;
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::{count, walls};
 use crate::io::formats::ModelStream;
-use crate::tree::out_of_core::{BYTES_PER_JOB_POINT, Options, Progress, build_file};
+use crate::tree::out_of_core::{BYTES_PER_JOB_POINT, Built, Options, Progress, build_file};
 
 /// Bytes per point the in-memory build takes at its peak on a cloud (measured: 14 M
 /// points, 3.5 GiB).
@@ -46,12 +46,13 @@ pub fn wanted(input: &Path, memory: u64, forced: bool) -> anyhow::Result<bool> {
 /// Shows each stage of the build as a progress bar over its points, then its time and
 /// points/s.
 #[derive(Default)]
-struct Bars {
+pub struct Bars {
     current: Mutex<Option<(Stage, u64)>>,
 }
 
 impl Bars {
-    fn finish(&self) {
+    /// Ends the current stage's bar with its time and points/s.
+    pub fn finish(&self) {
         if let Some((stage, total)) = self
             .current
             .lock()
@@ -87,8 +88,9 @@ impl Progress for Bars {
     }
 }
 
-pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
-    let start = Instant::now();
+/// The options for a budget of `memory` bytes, the job files beside `output`; says the
+/// budget and the jobs' size.
+pub fn options(output: &Path, memory: u64) -> Options {
     let temp_dir = output
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
@@ -101,9 +103,21 @@ pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
         count(options.job_points),
         BYTES_PER_JOB_POINT
     );
+    options
+}
+
+pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let options = options(output, memory);
     let bars = Bars::default();
     let built = build_file(input, output, &options, &bars)?;
     bars.finish();
+    summary(&built, output, start);
+    Ok(())
+}
+
+/// Prints what the build made, dropped, and its total time, rate and peak memory.
+pub fn summary(built: &Built, output: &Path, start: Instant) {
     let m = &built.meta;
     let total = start.elapsed().as_secs_f64();
     let walls = walls(built.walls);
@@ -131,5 +145,4 @@ pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
             b as f64 / (1u64 << 30) as f64
         ))
     );
-    Ok(())
 }

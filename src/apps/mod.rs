@@ -7,6 +7,7 @@ pub mod convert_large;
 pub mod frame_args;
 pub mod info;
 pub mod info_scene;
+pub mod jobs;
 pub mod progress;
 pub mod render;
 pub mod render_scene;

@@ -10,13 +10,22 @@ use std::path::{Path, PathBuf};
 
 pub use super::syncing_file::SyncingFile;
 
-/// The temporary name used while writing `path`.
+/// The temporary name used while writing `path`: its name, this process's id and a
+/// token drawn once per process from the clock, so that processes on machines sharing
+/// a directory (whose ids may coincide) never write the same temporary file.
 pub fn temporary_path(path: &Path) -> PathBuf {
+    static TOKEN: std::sync::OnceLock<u32> = std::sync::OnceLock::new();
+    let token = TOKEN.get_or_init(|| {
+        let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH);
+        let nanos = now.map_or(0, |d| d.as_nanos());
+        let key = (nanos, std::process::id(), std::thread::current().id());
+        xxhash_rust::xxh3::xxh3_64(format!("{key:?}").as_bytes()) as u32
+    });
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
-    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
+    path.with_file_name(format!(".{name}.tmp-{}-{token:08x}", std::process::id()))
 }
 
 /// The writer an atomic write's closure gets.

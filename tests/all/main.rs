@@ -13,6 +13,7 @@ mod docs;
 mod file_quirks;
 mod hostile_inputs;
 mod instances;
+mod jobs;
 mod layers;
 mod mesh_sides;
 mod out_of_core;

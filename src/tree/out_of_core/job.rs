@@ -12,7 +12,7 @@ use glam::{DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 use xxhash_rust::xxh3::Xxh3;
 
-use super::manifest::FileEntry;
+use super::checksums::FileEntry;
 use super::spill::{JobFiles, SpillPoint, read_records, read_spill};
 use crate::io::atomic::write_atomically;
 use crate::io::up::UpAxis;

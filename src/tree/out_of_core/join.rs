@@ -32,7 +32,10 @@ fn records(dir: &Path, m: &Manifest) -> anyhow::Result<Vec<PartRecord>> {
         .into_par_iter()
         .map(|j| {
             let Some(r) = PartRecord::read(dir, j)? else {
-                anyhow::bail!("job {j} has no part yet; {}", again(j));
+                anyhow::bail!(
+                    "job {j} has no part yet; build it: `spt jobs build {} {j}`",
+                    dir.display()
+                );
             };
             anyhow::ensure!(
                 r.plan == id && r.built_with == m.build,

@@ -4,15 +4,15 @@
 //!
 //! It holds the model's shared values ([`Model`]), the split (the top tree's shape), and
 //! per job its box, its point count and its input files, each with its size and xxh3
-//! checksum: a job refuses an input whose bytes differ. [`BuildParams`] are what every
+//! checksum ([`FileEntry`]): a job refuses an input whose bytes differ. [`BuildParams`] are what every
 //! part must be built with; the join may change them (a larger error scale, a mesh
 //! turned the other way) and then asks for every part again.
 
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use xxhash_rust::xxh3::Xxh3;
 
+use super::checksums::FileEntry;
 use super::job::Model;
 use super::spill::Split;
 use crate::io::atomic::write_atomically;
@@ -31,17 +31,6 @@ pub struct BuildParams {
     pub turn: bool,
     /// How many times the join asked for the parts again.
     pub round: u32,
-}
-
-/// One input file of a job, relative to the job directory.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FileEntry {
-    /// What the file holds: `own`, `halo`, `own_normals`, `halo_normals`, `tri`.
-    pub role: String,
-    pub name: String,
-    pub bytes: u64,
-    /// xxh3-64 of its bytes, 16 hex digits.
-    pub xxh3: String,
 }
 
 /// One job: its box of grid cells, its own points, its input files.
@@ -201,49 +190,4 @@ fn decode(
             Ok(Split::Job(j as usize))
         }
     }
-}
-
-/// The size and xxh3-64 of the file at `path`, read a MiB at a time.
-pub fn checksum(path: &Path) -> std::io::Result<(u64, String)> {
-    use std::io::Read;
-    let mut file = std::fs::File::open(path)?;
-    let mut hash = Xxh3::new();
-    let mut buffer = vec![0u8; 1 << 20];
-    let mut bytes = 0u64;
-    loop {
-        let n = file.read(&mut buffer)?;
-        if n == 0 {
-            break;
-        }
-        hash.update(&buffer[..n]);
-        bytes += n as u64;
-    }
-    Ok((bytes, format!("{:016x}", hash.digest())))
-}
-
-/// The entry of the file `name` in `dir`, with its size and checksum.
-pub fn entry(dir: &Path, role: &str, name: &str) -> std::io::Result<FileEntry> {
-    let (bytes, xxh3) = checksum(&dir.join(name))?;
-    Ok(FileEntry {
-        role: role.to_owned(),
-        name: name.to_owned(),
-        bytes,
-        xxh3,
-    })
-}
-
-/// Checks that the file of `entry` in `dir` has its bytes: an error names the file, and
-/// what it holds against what the manifest says.
-pub fn verify(dir: &Path, entry: &FileEntry) -> anyhow::Result<()> {
-    let path = dir.join(&entry.name);
-    let (bytes, xxh3) = checksum(&path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    anyhow::ensure!(
-        bytes == entry.bytes && xxh3 == entry.xxh3,
-        "{}: damaged: {bytes} bytes with checksum {xxh3}, where the plan wrote {} bytes \
-         with checksum {}",
-        path.display(),
-        entry.bytes,
-        entry.xxh3
-    );
-    Ok(())
 }

@@ -32,6 +32,7 @@
 //! Normals that the file gives are kept, for a cloud's points as for a mesh's vertices.
 
 pub(crate) mod assemble;
+pub mod checksums;
 pub(crate) mod job;
 pub mod join;
 pub mod manifest;

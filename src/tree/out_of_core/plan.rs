@@ -7,8 +7,9 @@ use std::path::Path;
 
 use glam::IVec3;
 
+use super::checksums::{self, FileEntry};
 use super::job::Model;
-use super::manifest::{self, BuildParams, FileEntry, Input, JobEntry, Manifest};
+use super::manifest::{self, BuildParams, Input, JobEntry, Manifest};
 use super::spill::{self, GRID, Grid, JobBox, Scan, Split};
 use super::{Options, Progress, mesh_job, mesh_spill, record};
 use crate::io::formats::ModelStream;
@@ -133,7 +134,7 @@ fn model_of(stream: &ModelStream, scan: &Scan) -> Model {
 }
 
 /// Removes the files of an earlier plan in `dir`: its jobs' inputs, parts and records.
-fn remove_files(dir: &Path, m: &Manifest) -> anyhow::Result<()> {
+pub fn remove_files(dir: &Path, m: &Manifest) -> anyhow::Result<()> {
     for (j, job) in m.jobs.iter().enumerate() {
         let names = job.files.iter().map(|f| f.name.clone());
         let built = [record::part_name(j), record::record_name(j)];
@@ -180,7 +181,7 @@ impl Spilling<'_> {
                 (files.iter())
                     .map(|(role, paths)| {
                         let name = paths[j].file_name().unwrap_or_default().to_string_lossy();
-                        manifest::entry(self.dir, role, &name)
+                        checksums::entry(self.dir, role, &name)
                             .map_err(|e| anyhow::anyhow!("{}: {e}", paths[j].display()))
                     })
                     .collect()

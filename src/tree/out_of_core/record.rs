@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::checksums::{FileEntry, checksum};
 use super::job::Part;
-use super::manifest::{BuildParams, FileEntry, checksum};
+use super::manifest::BuildParams;
 use crate::io::PointAttributes;
 use crate::io::atomic::write_atomically;
 use crate::surfel::outward::Vote;

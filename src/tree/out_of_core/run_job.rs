@@ -8,8 +8,9 @@ use std::path::Path;
 
 use glam::DVec3;
 
+use super::checksums;
 use super::job::{self, Model};
-use super::manifest::{self, Manifest};
+use super::manifest::Manifest;
 use super::mesh_job;
 use super::record::{PartRecord, part_name};
 use super::spill::JobFiles;
@@ -45,7 +46,7 @@ pub fn run(dir: &Path, manifest: &Manifest, j: usize) -> anyhow::Result<Ran> {
         return Ok(Ran::Kept(record));
     }
     for f in &entry.files {
-        manifest::verify(dir, f).map_err(|e| {
+        checksums::verify(dir, f).map_err(|e| {
             e.context(format!(
                 "job {j}: an input file differs from the plan; plan again (`spt jobs plan`)"
             ))

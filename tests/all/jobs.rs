@@ -1,0 +1,215 @@
+//! The out-of-core build's steps run apart (`spt jobs plan|build|join`, and the library
+//! functions under them): the same file as one process, byte for byte, whatever the
+//! order of the jobs; a job run twice writes the same bytes; a truncated part is refused
+//! by the join and built again; a damaged job input is refused by its checksum; a join
+//! that needs another error scale asks for the parts again (exit 3).
+
+use std::path::{Path, PathBuf};
+
+use crate::common;
+
+use spt::tree::out_of_core::join::{Joined, join};
+use spt::tree::out_of_core::manifest::Manifest;
+use spt::tree::out_of_core::plan::{Planned, plan};
+use spt::tree::out_of_core::run_job::{Ran, run};
+use spt::tree::out_of_core::{Options, Progress, build_file};
+
+struct Quiet;
+
+impl Progress for Quiet {
+    fn stage(&self, _: &'static str, _: u64) {}
+    fn advance(&self, _: u64) {}
+}
+
+fn options(dir: &Path) -> Options {
+    Options {
+        job_points: 3000,
+        spill_buffers: 1 << 20,
+        temp_dir: dir.to_owned(),
+    }
+}
+
+/// A LAS tile of 25,600 points, planned into `dir/jobs` in jobs of 3,000 points.
+fn planned(dir: &Path) -> (PathBuf, PathBuf, Manifest) {
+    let input = dir.join("tile.las");
+    std::fs::write(&input, common::las_files::sample(64 * 400, false)).unwrap();
+    let jobs = dir.join("jobs");
+    let planned = plan(&input, &jobs, &options(dir), &Quiet).unwrap();
+    let Planned::New(m) = planned else {
+        panic!("a fresh directory holds no plan")
+    };
+    assert!(m.jobs.len() >= 8, "{} jobs", m.jobs.len());
+    (input, jobs, m)
+}
+
+fn joined(jobs: &Path, output: &Path) -> Vec<u8> {
+    match join(jobs, output).unwrap() {
+        Joined::Written(_) => std::fs::read(output).unwrap(),
+        Joined::Rebuild(why) => panic!("asked for the parts again: {why}"),
+    }
+}
+
+#[test]
+fn steps_run_apart_in_any_order_give_the_file_of_one_process() {
+    let dir = common::temp_dir();
+    let (input, jobs, m) = planned(dir.path());
+    let one_process = dir.path().join("one.spt");
+    build_file(&input, &one_process, &options(dir.path()), &Quiet).unwrap();
+    for j in (0..m.jobs.len()).rev() {
+        assert!(matches!(run(&jobs, &m, j).unwrap(), Ran::Built(_)));
+    }
+    let apart = joined(&jobs, &dir.path().join("apart.spt"));
+    assert_eq!(apart, std::fs::read(&one_process).unwrap());
+    // Planned again: the plan is kept, and so is every part.
+    let again = plan(&input, &jobs, &options(dir.path()), &Quiet).unwrap();
+    assert!(matches!(again, Planned::Kept(_)));
+    assert!(matches!(run(&jobs, &m, 0).unwrap(), Ran::Kept(_)));
+    // A job run again from scratch writes the same bytes.
+    let part = jobs.join("job3.part");
+    let first = std::fs::read(&part).unwrap();
+    std::fs::remove_file(jobs.join("job3.part.json")).unwrap();
+    assert!(matches!(run(&jobs, &m, 3).unwrap(), Ran::Built(_)));
+    assert_eq!(std::fs::read(&part).unwrap(), first);
+}
+
+#[test]
+fn a_truncated_part_is_refused_by_the_join_and_built_again() {
+    let dir = common::temp_dir();
+    let (_, jobs, m) = planned(dir.path());
+    for j in 0..m.jobs.len() {
+        run(&jobs, &m, j).unwrap();
+    }
+    let output = dir.path().join("out.spt");
+    let whole = joined(&jobs, &output);
+    let part = jobs.join("job2.part");
+    let bytes = std::fs::read(&part).unwrap();
+    std::fs::write(&part, &bytes[..bytes.len() / 2]).unwrap();
+    let refused = join(&jobs, &output).unwrap_err().to_string();
+    assert!(
+        refused.contains("job2.part") && refused.contains("truncated"),
+        "{refused}"
+    );
+    // The file already there is untouched.
+    assert_eq!(std::fs::read(&output).unwrap(), whole);
+    let ran: Vec<bool> = (0..m.jobs.len())
+        .map(|j| matches!(run(&jobs, &m, j).unwrap(), Ran::Built(_)))
+        .collect();
+    assert_eq!(ran.iter().filter(|&&b| b).count(), 1, "{ran:?}");
+    assert!(ran[2]);
+    assert_eq!(joined(&jobs, &output), whole);
+}
+
+#[test]
+fn a_damaged_job_input_is_refused_by_its_checksum() {
+    let dir = common::temp_dir();
+    let (_, jobs, m) = planned(dir.path());
+    let own = jobs.join(&m.jobs[1].files[0].name);
+    let mut bytes = std::fs::read(&own).unwrap();
+    bytes[100] ^= 0x10;
+    std::fs::write(&own, &bytes).unwrap();
+    let refused = format!("{:#}", run(&jobs, &m, 1).unwrap_err());
+    assert!(
+        refused.contains(&*own.to_string_lossy()) && refused.contains("damaged"),
+        "{refused}"
+    );
+    assert!(!jobs.join("job1.part").exists());
+}
+
+/// An edit of a manifest.
+type Lie = Box<dyn Fn(&mut Manifest)>;
+
+#[test]
+fn a_manifest_that_lies_is_refused_with_its_path() {
+    let dir = common::temp_dir();
+    let (_, jobs, m) = planned(dir.path());
+    let cases: [(&str, Lie); 3] = [
+        (
+            "twice",
+            Box::new(|m| {
+                let first = m.split.iter().position(|&c| c >= 0).unwrap();
+                m.split[first] = m.split[first + 1];
+            }),
+        ),
+        (
+            "not a plain name",
+            Box::new(|m| m.jobs[0].files[0].name = "../x".into()),
+        ),
+        (
+            "ends early",
+            Box::new(|m| {
+                m.split.pop();
+            }),
+        ),
+    ];
+    for (says, lie) in cases {
+        let mut bad = m.clone();
+        lie(&mut bad);
+        let text = serde_json::to_string(&bad).unwrap();
+        std::fs::write(Manifest::path(&jobs), text).unwrap();
+        let e = Manifest::read(&jobs).unwrap_err().to_string();
+        assert!(e.contains("manifest.json") && e.contains(says), "{e}");
+    }
+    std::fs::write(Manifest::path(&jobs), "{\"format\": 1").unwrap();
+    let e = Manifest::read(&jobs).unwrap_err().to_string();
+    assert!(e.contains("not a job manifest"), "{e}");
+}
+
+#[test]
+fn the_commands_ask_for_the_parts_again_when_the_join_needs_another_error_scale() {
+    // Points 10⁻³⁰ apart whose disks dwarf their box (the fuzzer's case): the leaves'
+    // error scale is known only once they are built.
+    let dir = common::temp_dir();
+    let d = dir.path();
+    let cloud = spt::io::ply::PolyMesh {
+        positions: vec![
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0],
+            [
+                5.831554006032442e-39,
+                -6.310887241768095e-30,
+                5.6492941212700346e-39,
+            ],
+            [
+                7.681846387076256e31,
+                1.6884937804572382e25,
+                4.3053280908255565e21,
+            ],
+        ],
+        normals: None,
+        colors: None,
+        faces: spt::io::ply::FaceList::default(),
+    };
+    let input = d.join("tiny.ply");
+    common::write_double(&input, &cloud);
+    let jobs = d.join("jobs");
+    let spt = |args: &[&Path]| common::run_spt(args);
+    let (plan, build, join) = (Path::new("plan"), Path::new("build"), Path::new("join"));
+    let cmd = Path::new("jobs");
+    let out = d.join("tiny.spt");
+    let (status, _, err) = spt(&[cmd, join, &jobs, &out]);
+    assert_eq!(status, Some(1), "{err}");
+    assert!(err.contains("manifest.json"), "{err}");
+    assert_eq!(spt(&[cmd, plan, &input, &jobs]).0, Some(0));
+    let (status, _, err) = spt(&[cmd, join, &jobs, &out]);
+    assert!(
+        status == Some(1) && err.contains("job 0 has no part"),
+        "{err}"
+    );
+    assert_eq!(spt(&[cmd, build, &jobs]).0, Some(0));
+    let (status, _, err) = spt(&[cmd, join, &jobs, &out]);
+    assert!(
+        status == Some(3) && err.contains("error scale"),
+        "{status:?} {err}"
+    );
+    assert!(!out.exists());
+    assert_eq!(spt(&[cmd, build, &jobs]).0, Some(0));
+    let clean = Path::new("--clean");
+    let (status, _, err) = spt(&[cmd, join, &jobs, &out, clean]);
+    assert_eq!(status, Some(0), "{err}");
+    assert!(!jobs.exists(), "--clean leaves the job directory");
+    let one = d.join("one.spt");
+    let convert = Path::new("convert");
+    let ooc = Path::new("--out-of-core");
+    assert_eq!(spt(&[convert, &input, &one, ooc]).0, Some(0));
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&one).unwrap());
+}
