@@ -156,25 +156,11 @@ fn a_manifest_that_lies_is_refused_with_its_path() {
 
 #[test]
 fn the_commands_ask_for_the_parts_again_when_the_join_needs_another_error_scale() {
-    // Points 10⁻³⁰ apart whose disks dwarf their box (the fuzzer's case): the leaves'
-    // error scale is known only once they are built.
+    // The leaves' error scale is known only once they are built.
     let dir = common::temp_dir();
     let d = dir.path();
     let cloud = spt::io::ply::PolyMesh {
-        positions: vec![
-            [0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0],
-            [
-                5.831554006032442e-39,
-                -6.310887241768095e-30,
-                5.6492941212700346e-39,
-            ],
-            [
-                7.681846387076256e31,
-                1.6884937804572382e25,
-                4.3053280908255565e21,
-            ],
-        ],
+        positions: common::disks_dwarf_their_box(),
         normals: None,
         colors: None,
         faces: spt::io::ply::FaceList::default(),

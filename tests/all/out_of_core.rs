@@ -288,22 +288,7 @@ fn stray_and_unstorable_points_are_dropped_or_kept_as_the_whole_file_reader_does
 
 #[test]
 fn a_model_whose_disks_dwarf_its_points_box_gets_their_error_scale() {
-    // The fuzzer's case: points 10⁻³⁰ apart, whose disks (sized by the unit-scale
-    // fallback) are 10²⁶ times the points' box; errors relative to the box overflow f16.
-    let positions = vec![
-        [0.0, 0.0, 0.0],
-        [0.0, 0.0, 0.0],
-        [
-            5.831554006032442e-39,
-            -6.310887241768095e-30,
-            5.6492941212700346e-39,
-        ],
-        [
-            7.681846387076256e31,
-            1.6884937804572382e25,
-            4.3053280908255565e21,
-        ],
-    ];
+    let positions = common::disks_dwarf_their_box();
     let dir = common::temp_dir();
     let input = write_cloud(dir.path(), "tiny.ply", positions);
     let (_, list) = build_in_jobs(&input, 64, dir.path());

@@ -1,6 +1,7 @@
-//! The plan of an out-of-core build as a file, `manifest.json` in the job directory: what
-//! every step reads ([`super::steps`]), so that the steps can run as separate processes
-//! on machines that share the directory (docs/cluster.md).
+//! The plan of an out-of-core build as a file, `manifest.json` in the job directory:
+//! what every step reads ([`super::plan`], [`super::run_job`], [`super::join`]), so
+//! that the steps can run as separate processes on machines that share the directory
+//! (docs/cluster.md).
 //!
 //! It holds the model's shared values ([`Model`]), the split (the top tree's shape), and
 //! per job its box, its point count and its input files, each with its size and xxh3
@@ -54,6 +55,8 @@ impl JobEntry {
 pub struct Input {
     pub path: PathBuf,
     pub bytes: u64,
+    /// Its modification time, in nanoseconds since the Unix epoch (0 where unknown).
+    pub modified: u64,
     /// Points kept, dropped (not finite, or beyond reach) and kept outside the core.
     pub points: u64,
     pub dropped: u64,

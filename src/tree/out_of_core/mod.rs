@@ -1,7 +1,7 @@
 //! Out-of-core builds (docs/design.md §5, "Chunks"): a model larger than memory turned into
 //! an `.spt` file while holding only a bounded part of it, in passes over the input (a
 //! LAS, LAZ or PLY cloud, or a PLY mesh, read a batch at a time by
-//! [`ModelStream`]):
+//! [`crate::io::formats::ModelStream`]):
 //!
 //! ```text
 //! scan ─► count per grid cell ─► split into jobs ─► spill to job files ─► build each job ─► top tree, file

@@ -32,7 +32,8 @@ impl Planned {
 }
 
 /// Plans the build of `input` into the job directory `dir` (created if needed), unless
-/// it holds the plan of this input (same path and size) with these options already.
+/// it holds the plan of this input (same path, size and modification time) with these
+/// options already.
 pub fn plan(
     input: &Path,
     dir: &Path,
@@ -42,11 +43,11 @@ pub fn plan(
     std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?;
     let path =
         std::fs::canonicalize(input).map_err(|e| anyhow::anyhow!("{}: {e}", input.display()))?;
-    let bytes = std::fs::metadata(&path)?.len();
+    let metadata = std::fs::metadata(&path)?;
+    let (bytes, modified) = (metadata.len(), modified_nanos(&metadata));
     let old = Manifest::read(dir).ok();
     if let Some(m) = &old
-        && m.input.path == path
-        && m.input.bytes == bytes
+        && (&m.input.path, m.input.bytes, m.input.modified) == (&path, bytes, modified)
         && m.job_points == options.job_points
     {
         return Ok(Planned::Kept(m.clone()));
@@ -88,6 +89,7 @@ pub fn plan(
         input: Input {
             path,
             bytes,
+            modified,
             points: scan.count,
             dropped: scan.dropped,
             outliers: scan.outliers,
@@ -114,6 +116,12 @@ pub fn plan(
     };
     manifest.write(dir)?;
     Ok(Planned::New(manifest))
+}
+
+/// A file's modification time in nanoseconds since the Unix epoch; 0 where unknown.
+fn modified_nanos(metadata: &std::fs::Metadata) -> u64 {
+    let since = |t: std::time::SystemTime| t.duration_since(std::time::UNIX_EPOCH).ok();
+    (metadata.modified().ok().and_then(since)).map_or(0, |d| d.as_nanos() as u64)
 }
 
 /// The model's shared values from its scan.

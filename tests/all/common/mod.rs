@@ -94,6 +94,26 @@ pub fn write_double(path: &Path, mesh: &PolyMesh) {
     write_ply(path, mesh, &layout).expect("write PLY");
 }
 
+/// The fuzzer's degenerate cloud: points 10⁻³⁰ apart beside one 10³¹ away, whose disks
+/// (sized by the unit-scale fallback) are 10²⁶ times the points' box, so that errors
+/// relative to the box overflow f16.
+pub fn disks_dwarf_their_box() -> Vec<[f64; 3]> {
+    vec![
+        [0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0],
+        [
+            5.831554006032442e-39,
+            -6.310887241768095e-30,
+            5.6492941212700346e-39,
+        ],
+        [
+            7.681846387076256e31,
+            1.6884937804572382e25,
+            4.3053280908255565e21,
+        ],
+    ]
+}
+
 /// Geometry of points given in file coordinates, without reading a file: rebased by
 /// the library as the reader does.
 pub fn geometry_of(points: &[[f64; 3]]) -> Geometry {
