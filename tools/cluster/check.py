@@ -13,6 +13,8 @@ worker processes started here. Prints a Markdown report; exits 1 if a check fail
 3. A part file truncated after a run: `spt jobs join` refuses it, naming the file; the
    driver run again builds that job only, and the file is the same.
 4. A job input damaged on disk: `spt jobs build` refuses it by its checksum.
+5. A degenerate cloud whose error scale only the join can decide: the join exits 3, the
+   driver builds the parts again, and the file is `spt convert --out-of-core`'s.
 """
 
 import argparse
@@ -214,6 +216,27 @@ def damaged_input(args, work):
           f"a damaged job input is refused: {err.strip()}")
 
 
+def rebuilt_parts(args, work):
+    """A degenerate cloud whose leaves' error scale only the join can know: the join
+    exits 3, the driver builds the parts again, and the file is one process's."""
+    tiny = os.path.join(work, "tiny.ply")
+    rows = ["0 0 0", "0 0 0", "5.831554006032442e-39 -6.310887241768095e-30 5.6492941212700346e-39",
+            "7.681846387076256e31 1.6884937804572382e25 4.3053280908255565e21"]
+    with open(tiny, "w") as f:
+        f.write("ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\n"
+                "property double y\nproperty double z\nend_header\n" + "\n".join(rows) + "\n")
+    one, out = os.path.join(work, "tiny_one.spt"), os.path.join(work, "tiny.spt")
+    subprocess.check_call([args.spt, "convert", tiny, one, "--out-of-core"],
+                          stdout=subprocess.DEVNULL)
+    cmd = [sys.executable, os.path.join(HERE, "convert.py"), tiny, out, "--scheduler-file",
+           args.cluster.file, "--spt", args.spt, "--clean"]
+    run = subprocess.run(cmd, capture_output=True, text=True)
+    asked = "asks for the parts again" in run.stdout
+    check(run.returncode == 0 and asked and sha256(out) == sha256(one),
+          "a join that needs another error scale: the driver built the parts again, "
+          "the file is one process's")
+
+
 def shutil_rmtree(path):
     import shutil
     shutil.rmtree(path, ignore_errors=True)
@@ -247,6 +270,7 @@ def main():
             killed_worker(args, work, digest)
             truncated_part(args, work, digest)
             damaged_input(args, work)
+            rebuilt_parts(args, work)
     finally:
         args.cluster.close()
     if not args.work:
