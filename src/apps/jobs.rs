@@ -46,6 +46,7 @@ pub enum JobsCommand {
     /// for this plan, whole, is kept; a job's input that differs from its checksum is
     /// refused. The same job gives the same bytes wherever it runs.
     Build {
+        /// The job directory that `spt jobs plan` wrote.
         dir: PathBuf,
         /// Job numbers (0 to jobs − 1).
         jobs: Vec<usize>,
@@ -54,6 +55,7 @@ pub enum JobsCommand {
     /// atomically. Exits 3 when the parts must be built again with new parameters
     /// (a larger error scale, a mesh's orientation), which the manifest then holds.
     Join {
+        /// The job directory, every job built.
         dir: PathBuf,
         /// The .spt file to write (replaced if it exists).
         output: PathBuf,
