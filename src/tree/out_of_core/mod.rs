@@ -53,7 +53,9 @@ use manifest::Manifest;
 /// Bytes of memory a job takes per point at its peak (its surfels, k-d tree, nodes and
 /// list), halo included. Measured on the 200 M-point `gen_cloud` tile's jobs of 6.7 M
 /// points: 160, and about 300 with a terrain's averaged normals (each sample's 24
-/// neighbours are kept between the fits and their mean, `surfel::cloud`).
+/// neighbours are kept between the fits and their mean, `surfel::cloud`). Its jobs of
+/// 12.5 M points peak at 393 (4.58 GiB, docs/cluster.md): such a job takes 57 %
+/// of the budget, where [`Options::for_memory`] plans for half.
 pub const BYTES_PER_JOB_POINT: u64 = 320;
 
 /// How far the leaves' own error scale may exceed the model's (from the points' box)
