@@ -244,12 +244,15 @@ impl Renderer {
             .collect();
         let trim = self.prefix_cut(settings.prefix_cut) == super::settings::PrefixCut::Node;
         let mut last = gpu.last.lock().unwrap_or_else(|e| e.into_inner());
-        let planned = plan(
-            (scene, &gpu.models, &gpu.lods),
-            (camera, settings),
-            size,
-            (*last, &on_gpu, trim),
-        );
+        let was = *last;
+        let planned = self.planning(|| {
+            plan(
+                (scene, &gpu.models, &gpu.lods),
+                (camera, settings),
+                size,
+                (was, &on_gpu, trim),
+            )
+        });
         *last = Some(LastFrame {
             asked: planned.asked,
             drawn: planned.eps,

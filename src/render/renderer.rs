@@ -124,6 +124,8 @@ pub struct Renderer {
     shading: ShadingPass,
     /// The passes of far instances, made with a scene's first upload.
     far: std::sync::OnceLock<super::far::FarPass>,
+    /// One thread for a scene's plan on a CPU adapter ([`Renderer::planning`]).
+    plan_thread: Option<rayon::ThreadPool>,
 }
 
 impl Renderer {
@@ -137,8 +139,22 @@ impl Renderer {
             mesh: MeshPass::new(device, &frame_layout),
             shading: ShadingPass::new(device, &frame_layout),
             far: std::sync::OnceLock::new(),
+            plan_thread: gpu.on_cpu().then(one_thread).flatten(),
             frame_layout,
             gpu,
+        }
+    }
+
+    /// Runs a frame's plan: on rayon's pool, or on a thread of its own on a CPU
+    /// adapter. There the rasterizer's threads still hold the cores when the frame
+    /// after is planned, and a plan split over the pool's threads waits on whichever
+    /// was preempted: the forest's fly-through planned in 2–8 ms on 2 cores (65
+    /// involuntary context switches in one plan) against 1.0–1.7 ms on one thread
+    /// (docs/scenes.md).
+    pub(super) fn planning<R: Send>(&self, plan: impl FnOnce() -> R + Send) -> R {
+        match &self.plan_thread {
+            Some(pool) => pool.install(plan),
+            None => plan(),
         }
     }
 
@@ -517,4 +533,11 @@ impl Renderer {
             height,
         ))
     }
+}
+
+/// A pool of one thread (None where the system gives none: the plan then runs on
+/// rayon's own).
+fn one_thread() -> Option<rayon::ThreadPool> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1);
+    pool.thread_name(|_| "spt-plan".into()).build().ok()
 }
