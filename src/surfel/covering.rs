@@ -350,8 +350,10 @@ fn widest_gap(sorted: &[f32]) -> (f32, f32) {
 /// change.
 fn median_spacing(points: &[Vec3]) -> f32 {
     let points = &points[..points.len().min(SPACING_MEMBERS)];
-    // Coordinates in columns, padded with far points, so that each member's distances
-    // to all others are one vectorised pass over fixed-size arrays.
+    // Coordinates in columns, padded with far points: each member is a lane, and a
+    // pass over the others keeps every lane's two least squared distances at once
+    // (vectorised across the lanes; a reduction along each member's own row is a
+    // chain of dependent minima that the CPU waits out).
     let mut columns = [[f32::INFINITY; SPACING_MEMBERS]; 3];
     for (j, q) in points.iter().enumerate() {
         for (axis, column) in columns.iter_mut().enumerate() {
@@ -359,26 +361,25 @@ fn median_spacing(points: &[Vec3]) -> f32 {
         }
     }
     let [xs, ys, zs] = &columns;
-    let nearest = points.iter().map(|a| {
-        let mut d = [f32::INFINITY; SPACING_MEMBERS];
-        for (((d, x), y), z) in d.iter_mut().zip(xs).zip(ys).zip(zs) {
-            let d2 = (x - a.x).powi(2) + (y - a.y).powi(2) + (z - a.z).powi(2);
-            // The member itself (and a coinciding one) is at 0; a padding slot at ∞.
-            *d = if d2 > 0.0 { d2 } else { f32::INFINITY };
+    let mut least = [f32::INFINITY; SPACING_MEMBERS];
+    let mut second = [f32::INFINITY; SPACING_MEMBERS];
+    for q in points {
+        for lane in 0..SPACING_MEMBERS {
+            let d2 = (q.x - xs[lane]).powi(2) + (q.y - ys[lane]).powi(2) + (q.z - zs[lane]).powi(2);
+            // The member itself (and a coinciding one) is at 0: not counted.
+            let d = if d2 > 0.0 { d2 } else { f32::INFINITY };
+            let above = if d > least[lane] { d } else { least[lane] };
+            second[lane] = if above < second[lane] {
+                above
+            } else {
+                second[lane]
+            };
+            least[lane] = if d < least[lane] { d } else { least[lane] };
         }
-        // Reductions over the row, each vectorised: the least, how many share it, and
-        // the least beyond it.
-        let least = d.iter().fold(f32::INFINITY, |m, &x| m.min(x));
-        let ties = d.iter().filter(|&&x| x == least).count();
-        let beyond = d
-            .iter()
-            .fold(f32::INFINITY, |m, &x| if x > least { m.min(x) } else { m });
-        if ties >= 2 || !beyond.is_finite() {
-            least
-        } else {
-            beyond
-        }
-    });
+    }
+    // The second least counts a tie with the least: twin returns give their distance.
+    let nearest = (least.iter().zip(&second).take(points.len()))
+        .map(|(&l, &s)| if s.is_finite() { s } else { l });
     let mut nearest: ArrayVec<f32, SPACING_MEMBERS> = nearest.filter(|d| d.is_finite()).collect();
     if nearest.is_empty() {
         return 0.0;
