@@ -211,10 +211,11 @@ pub fn samples_no_surface(offsets: &[Vec3]) -> bool {
     let Some(cov) = super::pca::scatter_matrix(offsets.iter().copied()) else {
         return false;
     };
-    let (values, _) = super::pca::symmetric_eigen(cov);
-    let mut v = values.to_array();
-    v.sort_by(f64::total_cmp);
-    v[0] > SCATTER * 0.5 * (v[1] + v[2])
+    // λ₁ + λ₂ = trace − λ₀: the least eigenvalue is all the test needs.
+    let Some((least, trace)) = super::pca::least_eigenvalue(cov) else {
+        return false;
+    };
+    least > SCATTER * 0.5 * (trace - least)
 }
 
 /// The ellipse's axes from [`AXIS_ROUNDS`] rings, starting from `circle`; a ring found

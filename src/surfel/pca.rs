@@ -79,23 +79,52 @@ pub fn plane_normal(points: impl Iterator<Item = Vec3> + Clone) -> Vec3 {
     vectors.col(k).as_vec3().try_normalize().unwrap_or(Vec3::Z)
 }
 
+/// The least eigenvalue of the symmetric `m` in closed form ([`least_axis`]'s), and
+/// its trace; `None` where m has a NaN. Every eigenvalue is the mean of the diagonal
+/// where m is a multiple of I.
+pub fn least_eigenvalue(m: DMat3) -> Option<(f64, f64)> {
+    let trace = m.x_axis.x + m.y_axis.y + m.z_axis.z;
+    match Cubic::of(m) {
+        Some(cubic) => Some((cubic.least, trace)),
+        None if trace.is_nan() => None,
+        None => Some((trace / 3.0, trace)),
+    }
+}
+
+/// The trigonometric solution of a symmetric 3×3 matrix's characteristic cubic (Smith
+/// 1961): with q the mean of the diagonal and p² the mean square of m − qI's entries
+/// (times 1.5), the eigenvalues are q + 2p cos(φ + 2πk/3), φ = acos(det((m − qI)/p) / 2) / 3.
+struct Cubic {
+    least: f64,
+    /// 6 p².
+    p2: f64,
+}
+
+impl Cubic {
+    /// None where p is 0 (m a multiple of I) or NaN.
+    fn of(m: DMat3) -> Option<Cubic> {
+        let (a, b, c) = (m.x_axis, m.y_axis, m.z_axis);
+        let off = a.y * a.y + a.z * a.z + b.z * b.z;
+        let q = (a.x + b.y + c.z) / 3.0;
+        let p2 = (a.x - q).powi(2) + (b.y - q).powi(2) + (c.z - q).powi(2) + 2.0 * off;
+        let p = (p2 / 6.0).sqrt();
+        if p.is_nan() || p <= 0.0 {
+            return None;
+        }
+        let shifted = (m - DMat3::from_diagonal(DVec3::splat(q))) * (1.0 / p);
+        let phi = (shifted.determinant() / 2.0).clamp(-1.0, 1.0).acos() / 3.0;
+        let least = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+        Some(Cubic { least, p2 })
+    }
+}
+
 /// The unit eigenvector of the least eigenvalue of the symmetric `m` in closed form,
 /// a quarter of [`symmetric_eigen`]'s time: λ from the trigonometric solution of the
 /// characteristic cubic (Smith 1961), the vector as the longest cross product of two
 /// rows of m − λI (their common orthogonal). `None` where that is ill-conditioned: the
 /// least eigenvalue is (nearly) double, or m is (nearly) a multiple of I.
 pub fn least_axis(m: DMat3) -> Option<DVec3> {
-    let (a, b, c) = (m.x_axis, m.y_axis, m.z_axis);
-    let off = a.y * a.y + a.z * a.z + b.z * b.z;
-    let q = (a.x + b.y + c.z) / 3.0;
-    let p2 = (a.x - q).powi(2) + (b.y - q).powi(2) + (c.z - q).powi(2) + 2.0 * off;
-    let p = (p2 / 6.0).sqrt();
-    if p.is_nan() || p <= 0.0 {
-        return None;
-    }
-    let shifted = (m - DMat3::from_diagonal(DVec3::splat(q))) * (1.0 / p);
-    let phi = (shifted.determinant() / 2.0).clamp(-1.0, 1.0).acos() / 3.0;
-    let least = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+    let Cubic { least, p2 } = Cubic::of(m)?;
     // m is symmetric: the columns of m − λI are its rows.
     let rows = m - DMat3::from_diagonal(DVec3::splat(least));
     let (r0, r1, r2) = (rows.x_axis, rows.y_axis, rows.z_axis);
@@ -110,6 +139,25 @@ pub fn least_axis(m: DMat3) -> Option<DVec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_least_eigenvalue_in_closed_form_is_jacobi_s() {
+        let cases = [
+            [[4.0, 1.0, -2.0], [1.0, 2.0, 0.5], [-2.0, 0.5, 3.0]],
+            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1e-9]],
+            [[2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]],
+            [[0.0; 3]; 3],
+        ];
+        for case in cases {
+            let m = DMat3::from_cols_array_2d(&case);
+            let (values, _) = symmetric_eigen(m);
+            let jacobi = values.min_element();
+            let (least, trace) = least_eigenvalue(m).unwrap();
+            assert!((least - jacobi).abs() < 1e-12, "{case:?}: {least} against {jacobi}");
+            assert!((trace - values.element_sum()).abs() < 1e-12);
+        }
+        assert!(least_eigenvalue(DMat3::from_diagonal(DVec3::splat(f64::NAN))).is_none());
+    }
 
     #[test]
     fn eigen_reconstructs_matrix() {
