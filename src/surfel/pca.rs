@@ -153,7 +153,10 @@ mod tests {
             let (values, _) = symmetric_eigen(m);
             let jacobi = values.min_element();
             let (least, trace) = least_eigenvalue(m).unwrap();
-            assert!((least - jacobi).abs() < 1e-12, "{case:?}: {least} against {jacobi}");
+            assert!(
+                (least - jacobi).abs() < 1e-12,
+                "{case:?}: {least} against {jacobi}"
+            );
             assert!((trace - values.element_sum()).abs() < 1e-12);
         }
         assert!(least_eigenvalue(DMat3::from_diagonal(DVec3::splat(f64::NAN))).is_none());
