@@ -496,6 +496,51 @@ mod tests {
     }
 
     #[test]
+    fn the_spacing_is_the_median_of_each_member_s_second_nearest_distinct_distance() {
+        // Against the definition, row by row: members on a coarse lattice (ties),
+        // with coinciding pairs, in neighbourhoods of 1 to 20 members (proptest's seeded
+        // generator).
+        use proptest::prelude::Rng;
+        let mut rng = proptest::test_runner::TestRng::deterministic_rng(
+            proptest::test_runner::RngAlgorithm::ChaCha,
+        );
+        let reference = |points: &[Vec3]| -> f32 {
+            let points = &points[..points.len().min(SPACING_MEMBERS)];
+            let mut nearest: Vec<f32> = points
+                .iter()
+                .filter_map(|a| {
+                    let mut d: Vec<f32> = (points.iter())
+                        .map(|q| (q.x - a.x).powi(2) + (q.y - a.y).powi(2) + (q.z - a.z).powi(2))
+                        .filter(|&d2| d2 > 0.0)
+                        .collect();
+                    d.sort_by(f32::total_cmp);
+                    d.get(1).or(d.first()).copied()
+                })
+                .collect();
+            if nearest.is_empty() {
+                return 0.0;
+            }
+            let mid = nearest.len() / 2;
+            nearest.select_nth_unstable_by(mid, f32::total_cmp).1.sqrt()
+        };
+        for n in 1..=20 {
+            for _ in 0..50 {
+                let mut points: Vec<Vec3> = (0..n)
+                    .map(|_| {
+                        Vec3::new(
+                            rng.random_range(0..4) as f32,
+                            rng.random_range(0..3) as f32,
+                            0.0,
+                        )
+                    })
+                    .collect();
+                points[0] = points[n - 1];
+                assert_eq!(median_spacing(&points), reference(&points), "{points:?}");
+            }
+        }
+    }
+
+    #[test]
     fn a_boundary_point_keeps_a_circle_of_its_neighbours_spacing() {
         // A half-plane: every neighbour lies at x ≥ 0.
         let near: Vec<Vec3> = grid(0..=3, -2..=2, 1.0);

@@ -92,11 +92,12 @@ pub fn least_eigenvalue(m: DMat3) -> Option<(f64, f64)> {
 }
 
 /// The trigonometric solution of a symmetric 3×3 matrix's characteristic cubic (Smith
-/// 1961): with q the mean of the diagonal and p² the mean square of m − qI's entries
-/// (times 1.5), the eigenvalues are q + 2p cos(φ + 2πk/3), φ = acos(det((m − qI)/p) / 2) / 3.
+/// 1961): with q the mean of the diagonal and p² = ‖m − qI‖²_F / 6, the eigenvalues are
+/// q + 2p cos(φ + 2πk/3), k = 0, 1, 2, with φ = acos(det((m − qI) / p) / 2) / 3; k = 1
+/// gives the least.
 struct Cubic {
     least: f64,
-    /// 6 p².
+    /// ‖m − qI‖²_F = 6 p².
     p2: f64,
 }
 
