@@ -242,23 +242,7 @@ impl Renderer {
         let on_gpu: Vec<bool> = (gpu.far.iter())
             .map(|f| far_on_gpu && f.is_some())
             .collect();
-        let trim = self.prefix_cut(settings.prefix_cut) == super::settings::PrefixCut::Node;
-        let mut last = gpu.last.lock().unwrap_or_else(|e| e.into_inner());
-        let was = *last;
-        let planned = self.planning(|| {
-            plan(
-                (scene, &gpu.models, &gpu.lods),
-                (camera, settings),
-                size,
-                (was, &on_gpu, trim),
-            )
-        });
-        *last = Some(LastFrame {
-            asked: planned.asked,
-            drawn: planned.eps,
-            fill: planned.fill,
-        });
-        drop(last);
+        let planned = self.plan_scene((scene, gpu), (camera, settings), size, &on_gpu);
         let mut uniform = FrameUniform::new(&scene.meta, camera, settings, size, planned.eps);
         // The scene's box may span a country: the near plane comes from the instances
         // in view instead (half the distance to the nearest one's sphere).
@@ -321,6 +305,34 @@ impl Renderer {
             visible: planned.visible,
             ranges: planned.ranges.iter().map(Vec::len).sum(),
         })
+    }
+
+    /// The CPU's plan of a frame of `scene` ([`plan`], on [`Renderer::planning`]'s
+    /// thread), from what the frame before it drew; kept for the frame after.
+    fn plan_scene(
+        &self,
+        (scene, gpu): (&InstancedScene, &GpuInstances),
+        (camera, settings): (&Camera, &Settings),
+        size: (u32, u32),
+        on_gpu: &[bool],
+    ) -> super::instance_plan::Planned {
+        let trim = self.prefix_cut(settings.prefix_cut) == super::settings::PrefixCut::Node;
+        let mut last = gpu.last.lock().unwrap_or_else(|e| e.into_inner());
+        let was = *last;
+        let planned = self.planning(|| {
+            plan(
+                (scene, &gpu.models, &gpu.lods),
+                (camera, settings),
+                size,
+                (was, on_gpu, trim),
+            )
+        });
+        *last = Some(LastFrame {
+            asked: planned.asked,
+            drawn: planned.eps,
+            fill: planned.fill,
+        });
+        planned
     }
 }
 
