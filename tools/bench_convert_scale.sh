@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Conversion at scale, against PotreeConverter 2 built from its public
 # source (tools/build_potree.sh): the Lucy-size mesh (14,028,800 vertices; spt reads the
-# PLY, Potree the same points as LAS, tools/ply_to_las.py) and a generated city tile of
+# PLY, Potree the same points as LAS, tools/ply_to_las.py), the same vertices as a cloud
+# (`gen_model --preset lucy --no-faces`, in memory) and a generated city tile of
 # 200 M points with colours (LAS, tools/gen_cloud.rs). Lucy is converted in memory (the
 # default where it fits) and out of core (--out-of-core --memory LUCY_MEMORY_MIB, 1024
 # by default). Runs alternate spt and Potree on one machine; wall time and peak resident
@@ -21,9 +22,12 @@ cargo build --release --quiet --bin spt --example gen_model --example gen_cloud
 potree=$(tools/build_potree.sh)
 mkdir -p data/large
 lucy=data/large/lucy_knot.ply
+cloud=data/large/lucy_cloud.ply
 city=data/large/city_$((points / 1000000))m.las
 [ -f "$lucy" ] || ./target/release/examples/gen_model --preset lucy
 [ -f "${lucy%.ply}.las" ] || python3 tools/ply_to_las.py "$lucy" "${lucy%.ply}.las"
+[ -f "$cloud" ] || ./target/release/examples/gen_model --preset lucy --no-faces -o "$cloud"
+[ -f "${cloud%.ply}.las" ] || python3 tools/ply_to_las.py "$cloud" "${cloud%.ply}.las"
 [ "$city_wanted" = 0 ] || [ -f "$city" ] || ./target/release/examples/gen_cloud --points "$points" --out "$city"
 logs=$(mktemp -d)
 # One timed run: "seconds peak_kib" appended to $logs/$1.
@@ -37,7 +41,11 @@ for i in $(seq "$runs"); do
   timed spt_lucy_ooc ./target/release/spt convert "$lucy" "$logs/lucy.spt" --out-of-core --memory "$lucy_memory"
   rm -rf "$logs/potree_out"
   timed potree_lucy "$potree" "${lucy%.ply}.las" -o "$logs/potree_out"
+  timed spt_cloud ./target/release/spt convert "$cloud" "$logs/lucy.spt"
+  rm -rf "$logs/potree_out"
+  timed potree_cloud "$potree" "${cloud%.ply}.las" -o "$logs/potree_out"
 done
+cp "$logs/spt_cloud.out" "$logs/spt_cloud.stages"
 cp "$logs/spt_lucy_ooc.out" "$logs/spt_lucy_ooc.stages"
 if [ "$city_wanted" != 0 ]; then
 timed spt_city ./target/release/spt convert "$city" "$logs/city.spt" --memory "$memory"
@@ -63,14 +71,14 @@ mem = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
 print(f"{datetime.date.today()}, {os.cpu_count()} cores ({cpu}), {mem:.0f} GiB; median wall time, largest peak memory.\n")
 print("| model | points | spt convert | PotreeConverter 2 | time spt / Potree | memory spt / Potree |")
 print("| --- | --- | --- | --- | --- | --- |")
-for label, n, a, b in [("Lucy-size mesh, in memory", 14028800, "spt_lucy", "potree_lucy"), (f"Lucy-size mesh, out of core (--memory {lucy_memory})", 14028800, "spt_lucy_ooc", "potree_lucy"), (f"city tile", points, "spt_city", "potree_city")]:
+for label, n, a, b in [("Lucy-size mesh, in memory", 14028800, "spt_lucy", "potree_lucy"), (f"Lucy-size mesh, out of core (--memory {lucy_memory})", 14028800, "spt_lucy_ooc", "potree_lucy"), ("Lucy-size cloud, in memory", 14028800, "spt_cloud", "potree_cloud"), (f"city tile", points, "spt_city", "potree_city")]:
     s, p = runs(a), runs(b)
     if s is None:
         continue
     cell = lambda r: "–" if r is None else f"{r[0]:.1f} s, {r[1]:.2f} GiB ({n / r[0] / 1e6:.2f} M points/s, {r[2]} run{'s' if r[2] > 1 else ''})"
     ratio = lambda k: "–" if p is None else f"{s[k] / p[k]:.2f}"
     print(f"| {label} | {n:,} | {cell(s)} | {cell(p)} | {ratio(0)} | {ratio(1)} |")
-for name, what in [("spt_lucy_ooc", "the Lucy-size mesh out of core (last run)"), ("spt_city", "the city tile")]:
+for name, what in [("spt_lucy_ooc", "the Lucy-size mesh out of core (last run)"), ("spt_cloud", "the Lucy-size cloud (last run)"), ("spt_city", "the city tile")]:
     path = os.path.join(logs, name + ".stages")
     if os.path.exists(path):
         print(f"\nspt's stages on {what}:\n\n```")
