@@ -110,6 +110,12 @@ pub fn height_field_keeping(
     positions: &[Vec3],
     keep_long: impl Fn(Vec3, f64) -> bool,
 ) -> Vec<[u32; 3]> {
+    drop_long(positions, &delaunay_xy(positions), keep_long)
+}
+
+/// The Delaunay triangulation of `positions` in x–y, wound as delaunator winds it, long
+/// triangles kept. Of the samples that share an x–y it holds one.
+pub fn delaunay_xy(positions: &[Vec3]) -> Vec<[u32; 3]> {
     let xy = |p: &Vec3| delaunator::Point {
         x: p.x as f64,
         y: p.y as f64,
@@ -118,12 +124,36 @@ pub fn height_field_keeping(
     // Only the triangles are kept (their half-edges and hull would double the peak).
     let delaunator::Triangulation { triangles, .. } = delaunator::triangulate(&points);
     drop(points);
-    let length = |a: usize, b: usize| {
-        let (p, q) = (&positions[a], &positions[b]);
+    (triangles.chunks_exact(3))
+        .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
+        .collect()
+}
+
+/// `triangles` of `positions` without those with an edge (in x–y) longer than
+/// [`TERRAIN_MAX_EDGE`] × the median edge, but where `keep_long` holds for the
+/// triangle's centroid and the median edge.
+pub fn drop_long(
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    keep_long: impl Fn(Vec3, f64) -> bool,
+) -> Vec<[u32; 3]> {
+    let kept = short_or_kept(positions, triangles, keep_long);
+    (triangles.iter().zip(kept))
+        .filter_map(|(t, kept)| kept.then_some(*t))
+        .collect()
+}
+
+/// Whether [`drop_long`] keeps each of `triangles`.
+pub fn short_or_kept(
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    keep_long: impl Fn(Vec3, f64) -> bool,
+) -> Vec<bool> {
+    let length = |a: u32, b: u32| {
+        let (p, q) = (&positions[a as usize], &positions[b as usize]);
         DVec3::new((p.x - q.x) as f64, (p.y - q.y) as f64, 0.0).length()
     };
-    let mut edges: Vec<f64> = triangles
-        .chunks_exact(3)
+    let mut edges: Vec<f64> = (triangles.iter())
         .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
         .map(|(a, b)| length(a, b))
         .collect();
@@ -133,13 +163,12 @@ pub fn height_field_keeping(
     let mid = edges.len() / 2;
     let median = *edges.select_nth_unstable_by(mid, f64::total_cmp).1;
     drop(edges);
-    triangles
-        .chunks_exact(3)
-        .filter(|t| {
+    (triangles.iter())
+        .map(|t| {
             let short = (0..3).all(|k| length(t[k], t[(k + 1) % 3]) <= TERRAIN_MAX_EDGE * median);
-            short || keep_long(t.iter().map(|&v| positions[v]).sum::<Vec3>() / 3.0, median)
+            let centroid = || t.iter().map(|&v| positions[v as usize]).sum::<Vec3>() / 3.0;
+            short || keep_long(centroid(), median)
         })
-        .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
         .collect()
 }
 

@@ -41,9 +41,10 @@
 use std::collections::HashMap;
 
 use glam::{DMat3, DVec3, Vec2, Vec3};
+use rayon::prelude::*;
 
 use super::sets::Sets;
-use crate::io::triangulate::height_field;
+use crate::io::triangulate::short_or_kept;
 
 /// Height between an edge's ends, in spacings, beyond which it drops: 0.75 m at the
 /// simulated scan's 0.5 m, a step no street or lawn takes between neighbours; the 1 m
@@ -82,14 +83,15 @@ pub enum Standing {
     Lone,
 }
 
-/// What each of `which` (indices into `points`, the samples that one TIN holds:
-/// neither vegetation nor deck) stands on (the module doc).
-pub fn free_standing(points: &[Vec3], which: &[u32]) -> Vec<Standing> {
-    let positions: Vec<Vec3> = which.iter().map(|&i| points[i as usize]).collect();
-    let triangles = height_field(&positions);
-    let (edges, border) = tin_edges(&triangles);
-    let Some(spacing) = median_length(&positions, &edges) else {
-        return vec![Standing::Joined; which.len()];
+/// What each of `positions` (the samples that one TIN holds: neither vegetation nor
+/// deck) stands on (the module doc), from `delaunay`, their Delaunay triangulation in
+/// x–y ([`delaunay_xy`](crate::io::triangulate::delaunay_xy), long triangles kept).
+pub fn free_standing(positions: &[Vec3], delaunay: &[[u32; 3]]) -> Vec<Standing> {
+    let kept = short_or_kept(positions, delaunay, |_, _| false);
+    let triangles = || (delaunay.iter().zip(&kept)).filter_map(|(t, &k)| k.then_some(t));
+    let (edges, border) = tin_edges(triangles());
+    let Some(spacing) = median_length(positions, &edges) else {
+        return vec![Standing::Joined; positions.len()];
     };
     let drop = DROP_SPACINGS * spacing;
     let (down, level): (Vec<_>, Vec<_>) = (edges.iter())
@@ -102,8 +104,8 @@ pub fn free_standing(points: &[Vec3], which: &[u32]) -> Vec<Standing> {
             }
         })
         .partition(|&(hi, lo)| positions[hi].z - positions[lo].z > drop);
-    let top = tops_joined(&positions, &level);
-    let mut tops = held_tops(&positions, &top, PLANAR_SPACINGS * spacing);
+    let top = tops_joined(positions, &level);
+    let mut tops = held_tops(positions, &top, PLANAR_SPACINGS * spacing);
     let mut above_a_drop = vec![false; positions.len()];
     for &(hi, lo) in &down {
         above_a_drop[hi] = true;
@@ -117,7 +119,7 @@ pub fn free_standing(points: &[Vec3], which: &[u32]) -> Vec<Standing> {
         tops[top[a as usize]].bordered = true;
         tops[top[b as usize]].bordered = true;
     }
-    for t in &triangles {
+    for t in triangles() {
         let [a, b, c] = t.map(|k| top[k as usize]);
         if a == b && b == c {
             tops[a].surface = true;
@@ -129,7 +131,7 @@ pub fn free_standing(points: &[Vec3], which: &[u32]) -> Vec<Standing> {
         .filter(|&&(hi, _)| tops[top[hi]].stands_free())
         .map(|&(hi, lo)| (top[hi], lo))
         .collect();
-    for t in walled_tops(&positions, &standing, spacing) {
+    for t in walled_tops(positions, &standing, spacing) {
         tops[t].walled = true;
     }
     top.iter().map(|&t| tops[t].standing()).collect()
@@ -142,7 +144,7 @@ fn tops_joined(positions: &[Vec3], level: &[(usize, usize)]) -> Vec<usize> {
     level.iter().for_each(|&(a, b)| sets.join(a, b));
     let mut order: Vec<usize> = (0..positions.len()).collect();
     let xy = |k: &usize| (positions[*k].x.to_bits(), positions[*k].y.to_bits());
-    order.sort_unstable_by_key(xy);
+    order.par_sort_unstable_by_key(xy);
     for pair in order.windows(2).filter(|p| xy(&p[0]) == xy(&p[1])) {
         sets.join(pair[0], pair[1]);
     }
@@ -237,13 +239,12 @@ type Edge = (u32, u32);
 /// The edges of the samples' TIN (long triangles dropped), each once, lesser end first;
 /// and those of its border (of one triangle only: its hull, and around the holes where
 /// it left long triangles out).
-fn tin_edges(triangles: &[[u32; 3]]) -> (Vec<Edge>, Vec<Edge>) {
+fn tin_edges<'a>(triangles: impl Iterator<Item = &'a [u32; 3]>) -> (Vec<Edge>, Vec<Edge>) {
     let mut sides: Vec<Edge> = triangles
-        .iter()
         .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
         .map(|(a, b)| (a.min(b), a.max(b)))
         .collect();
-    sides.sort_unstable();
+    sides.par_sort_unstable();
     let mut border = Vec::new();
     for (k, side) in sides.iter().enumerate() {
         let shared = (k > 0 && sides[k - 1] == *side) || sides.get(k + 1) == Some(side);
@@ -309,6 +310,7 @@ fn walled_tops(positions: &[Vec3], standing: &[(usize, usize)], spacing: f32) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::triangulate::delaunay_xy;
 
     /// Ground 0.5 m apart over 20 × 12 m, a roof 6 × 6 m at `x0` standing `height`
     /// over it, and `wall` samples down its west edge (one per scan row, 1 m down).
@@ -334,8 +336,7 @@ mod tests {
     }
 
     fn standings(points: &[Vec3]) -> Vec<Standing> {
-        let which: Vec<u32> = (0..points.len() as u32).collect();
-        free_standing(points, &which)
+        free_standing(points, &delaunay_xy(points))
     }
 
     fn free_of(points: &[Vec3]) -> Vec<bool> {

@@ -15,11 +15,15 @@
 
 use glam::Vec3;
 
+use rayon::prelude::*;
+
 use super::cloud;
 use super::free_roofs::{self, Standing};
 use super::terrain::{self, Cover, TinSplats};
+use super::tin_removal;
 use super::{Surfel, SurfelStats};
 use crate::io::Geometry;
+use crate::io::triangulate::delaunay_xy;
 
 /// The layer a sample is drawn in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -37,8 +41,8 @@ pub const BRIDGE_DECK: u8 = 17;
 /// at all), by its geometry; decks by class; among the rest, the slabs that stand free
 /// as decks and the lone returns as vegetation, by their geometry. A sample's layer
 /// does not depend on which piece of an out-of-core job holds it but through its
-/// neighbours.
-pub fn labels(g: &Geometry, own: usize, scale: f32) -> Vec<Layer> {
+/// neighbours. With them, the TIN that the slabs and lone returns were found on.
+pub fn labels(g: &Geometry, own: usize, scale: f32) -> (Vec<Layer>, FirstTin) {
     let class = |i: usize| g.attributes.as_deref().map_or(0, |a| a[i].class);
     let unclassified = |i: usize| matches!(class(i), 0 | 1);
     let plants = if (0..own).any(unclassified) {
@@ -57,7 +61,10 @@ pub fn labels(g: &Geometry, own: usize, scale: f32) -> Vec<Layer> {
     let ground: Vec<u32> = (0..g.positions.len() as u32)
         .filter(|&i| labels[i as usize] == Layer::Ground)
         .collect();
-    let standing = free_roofs::free_standing(&g.positions, &ground);
+    let positions = pick(&g.positions, &ground);
+    let delaunay = delaunay_xy(&positions);
+    let standing = free_roofs::free_standing(&positions, &delaunay);
+    drop(positions);
     for (&i, standing) in ground.iter().zip(standing) {
         match standing {
             Standing::Joined => {}
@@ -65,7 +72,49 @@ pub fn labels(g: &Geometry, own: usize, scale: f32) -> Vec<Layer> {
             Standing::Lone => labels[i as usize] = Layer::Plants,
         }
     }
-    labels
+    let first = FirstTin {
+        which: ground,
+        delaunay,
+    };
+    (labels, first)
+}
+
+/// The TIN [`labels`] found the slabs and lone returns on: the samples that the
+/// classes and the geometry left on the ground, and their Delaunay triangulation.
+pub struct FirstTin {
+    /// Indices into the model, ascending.
+    which: Vec<u32>,
+    /// [`delaunay_xy`] of those samples (indices into `which`).
+    delaunay: Vec<[u32; 3]>,
+}
+
+impl FirstTin {
+    /// The Delaunay triangulation (long triangles kept) of the samples of `g` that
+    /// `labels` leaves on the ground (`which`, ascending), as indices into `which`:
+    /// this TIN less the samples taken off the ground ([`tin_removal::without`]), or
+    /// a new one where that cannot be.
+    pub fn ground(self, g: &Geometry, labels: &[Layer], which: &[u32]) -> Vec<[u32; 3]> {
+        let positions = pick(&g.positions, &self.which);
+        let removed: Vec<bool> = (self.which.iter())
+            .map(|&i| labels[i as usize] != Layer::Ground)
+            .collect();
+        let held = self
+            .which
+            .iter()
+            .filter(|&&i| labels[i as usize] == Layer::Ground);
+        let same = held.copied().eq(which.iter().copied());
+        let rest = same.then(|| tin_removal::without(&positions, self.delaunay, &removed));
+        let Some(Some(mut rest)) = rest else {
+            return delaunay_xy(&pick(&g.positions, which));
+        };
+        let mut renumber = vec![u32::MAX; positions.len()];
+        let kept = (0..positions.len()).filter(|&k| !removed[k]);
+        for (n, k) in kept.enumerate() {
+            renumber[k] = n as u32;
+        }
+        (rest.par_iter_mut().flatten()).for_each(|v| *v = renumber[*v as usize]);
+        rest
+    }
 }
 
 /// Each layer's samples, its own (the first `own` of the model) first, then its
@@ -98,13 +147,13 @@ impl Layers {
 }
 
 /// The TIN's surfels of the samples `which` (of which the first `own` are the model's
-/// own) among themselves, into `surfels` (one per sample of `g`), keeping the long
-/// triangles under `cover`; their long triangles' splats and spacing. None where they
+/// own) among themselves, into `surfels` (one per sample of `g`), from their `delaunay`
+/// triangulation (made here where None), keeping the long triangles under `cover`; their long triangles' splats and spacing. None where they
 /// make no triangle.
 pub fn tin_among(
     (g, scale): (&Geometry, f32),
     (which, own): (&[u32], usize),
-    cover: &Cover,
+    (delaunay, cover): (Option<Vec<[u32; 3]>>, &Cover),
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
 ) -> Option<TinSplats> {
@@ -114,7 +163,9 @@ pub fn tin_among(
     let look = (given.as_deref(), (colors.as_deref(), attributes.as_deref()));
     let mut picked = pick(surfels, which);
     let positions: Vec<Vec3> = pick(&g.positions, which);
-    let tin = terrain::terrain_disks((&positions, scale), (own, cover), look, &mut picked, stats)?;
+    let delaunay = delaunay.unwrap_or_else(|| delaunay_xy(&positions));
+    let at = (&positions[..], delaunay, scale);
+    let tin = terrain::terrain_disks(at, (own, cover), look, &mut picked, stats)?;
     for (k, &i) in which.iter().enumerate() {
         surfels[i as usize] = picked[k];
     }

@@ -27,6 +27,7 @@ pub(crate) mod ring;
 pub(crate) mod sets;
 pub mod shape;
 pub mod terrain;
+mod tin_removal;
 pub(crate) mod triangle;
 pub(crate) mod vegetation;
 pub(crate) mod walls;
@@ -36,6 +37,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::io::triangulate::delaunay_xy;
 use crate::io::{Geometry, PointAttributes};
 use layers::Layer;
 use shape::SplatShape;
@@ -340,24 +342,38 @@ fn terrain_path(
     if given.is_some_and(|n| n.iter().all(|v| *v != Vec3::ZERO)) {
         return None;
     }
-    let layers = layers::Layers::of(&layers::labels(g, own, scale), own);
+    let (labels, first) = layers::labels(g, own, scale);
+    let layers = layers::Layers::of(&labels, own);
+    let ground_layer = layers.get(Layer::Ground);
     if layers.all_ground() {
+        // Every sample, the halo's too, in one TIN: the first, where it holds them all.
+        let delaunay = match ground_layer.0.len() == g.positions.len() {
+            true => first.ground(g, &labels, ground_layer.0),
+            false => delaunay_xy(&g.positions),
+        };
         let look = (given, (g.colors.as_deref(), g.attributes.as_deref()));
         let all = (own, &terrain::Cover::none());
-        return terrain::terrain_disks((&g.positions, scale), all, look, surfels, stats)
-            .map(|tin| tin.splats);
+        let at = (&g.positions[..], delaunay, scale);
+        return terrain::terrain_disks(at, all, look, surfels, stats).map(|tin| tin.splats);
     }
     // The ground first, under the cover of the decks and the vegetation.
     let (decks, decks_own) = layers.get(Layer::Deck);
     let mut plants = layers.get(Layer::Plants).0.to_vec();
     let over = decks.iter().chain(&plants);
     let cover = terrain::Cover::of(over.map(|&i| g.positions[i as usize]));
-    let ground_layer = layers.get(Layer::Ground);
-    let ground = layers::tin_among((g, scale), ground_layer, &cover, surfels, stats)?;
+    let ground_tin = (Some(first.ground(g, &labels, ground_layer.0)), &cover);
+    drop(labels);
+    let ground = layers::tin_among((g, scale), ground_layer, ground_tin, surfels, stats)?;
     let mut splats = ground.splats;
     if decks_own > 0 {
         let none = terrain::Cover::none();
-        match layers::tin_among((g, scale), (decks, decks_own), &none, surfels, stats) {
+        match layers::tin_among(
+            (g, scale),
+            (decks, decks_own),
+            (None, &none),
+            surfels,
+            stats,
+        ) {
             Some(deck) => {
                 stats.decks = decks_own as u64;
                 splats.extend(deck.splats);

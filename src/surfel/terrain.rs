@@ -38,7 +38,9 @@ use rayon::prelude::*;
 
 use super::long_triangles::{self, Looks, Reach};
 use super::{Surfel, SurfelStats};
-use crate::io::triangulate::height_field_keeping;
+#[cfg(doc)]
+use crate::io::triangulate::delaunay_xy;
+use crate::io::triangulate::drop_long;
 
 /// Longest edge, in the tile's spacings, beyond which a TIN triangle gets a splat of
 /// its own. With [`TIN_REACH`], terrain_utm / autzen_trim FLIP: 0.1191 / 0.1097 at
@@ -66,7 +68,8 @@ pub const TIN_REACH: Reach = Reach {
 };
 
 /// The splats of the first `own` of a terrain's `points` (the rest: the halo of a
-/// piece, [`crate::tree::out_of_core`]) from their TIN (see the module doc), into
+/// piece, [`crate::tree::out_of_core`]) from their TIN (see the module doc: their
+/// `delaunay` triangulation, [`delaunay_xy`], long triangles dropped), into
 /// `surfels` (one per point; `given` normals kept; `looks` for the long triangles'
 /// splats): returns the splats of the long triangles that the piece owns (the piece of
 /// their least corner, [`owner`]). None where the samples make no triangle, or lie
@@ -77,13 +80,16 @@ pub const TIN_REACH: Reach = Reach {
 /// triangle's splat reaches it, `super::isolated`; which ones a job's splats reach
 /// differs from the whole's).
 pub fn terrain_disks(
-    (points, scale): (&[Vec3], f32),
+    (points, delaunay, scale): (&[Vec3], Vec<[u32; 3]>, f32),
     (own, cover): (usize, &Cover),
     (given, looks): (Option<&[Vec3]>, Looks),
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
 ) -> Option<TinSplats> {
-    let mut triangles = height_field_keeping(points, |c, median| cover.covers(c, median));
+    let mut triangles = drop_long(points, &delaunay, |c, median| cover.covers(c, median));
+    drop(delaunay);
+    held_by_least_twins(points, &mut triangles);
+    in_canonical_order(&mut triangles);
     let spacing = median_horizontal_edge(points, &triangles).filter(|s| s.is_normal())?;
     triangles.par_iter_mut().for_each(|t| {
         let [a, b, c] = t.map(|v| points[v as usize]);
@@ -166,6 +172,45 @@ pub struct TinSplats {
     pub spacing: f32,
 }
 
+/// Makes each corner of `triangles` the least of the samples that share its x–y (a
+/// triangulation holds one of them, which one depending on how it was made).
+fn held_by_least_twins(points: &[Vec3], triangles: &mut [[u32; 3]]) {
+    let mut held = vec![false; points.len()];
+    for &v in triangles.iter().flatten() {
+        held[v as usize] = true;
+    }
+    // Adding +0 makes −0 +0, so that equal coordinates have equal bits.
+    let xy = |v: u32| {
+        let p = points[v as usize];
+        ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits())
+    };
+    let mut unheld: Vec<((u32, u32), u32)> = (0..points.len() as u32)
+        .filter(|&v| !held[v as usize])
+        .map(|v| (xy(v), v))
+        .collect();
+    if unheld.is_empty() {
+        return;
+    }
+    unheld.par_sort_unstable();
+    triangles.par_iter_mut().flatten().for_each(|v| {
+        let at = unheld.partition_point(|u| u.0 < xy(*v));
+        if let Some(&(key, twin)) = unheld.get(at) {
+            *v = (*v).min(if key == xy(*v) { twin } else { *v });
+        }
+    });
+}
+
+/// Turns each triangle to start at its least corner (its winding kept) and sorts them:
+/// the TIN's splats do not depend on the order a triangulation lists its triangles in
+/// (delaunator's, or [`super::tin_removal`]'s).
+fn in_canonical_order(triangles: &mut [[u32; 3]]) {
+    triangles.par_iter_mut().for_each(|t| {
+        let least = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+        t.rotate_left(least);
+    });
+    triangles.par_sort_unstable();
+}
+
 /// The median horizontal length of `triangles`' edges; None when there are none.
 fn median_horizontal_edge(points: &[Vec3], triangles: &[[u32; 3]]) -> Option<f32> {
     let mut edges: Vec<f32> = triangles
@@ -232,13 +277,14 @@ mod tests {
     use super::super::cloud::{Orientation, neighbour_disks};
     use super::super::covering::RadiusRule;
     use super::*;
+    use crate::io::triangulate::delaunay_xy;
 
     fn terrain_surfels(points: &[Vec3], scale: f32) -> Vec<Surfel> {
         let mut surfels: Vec<Surfel> = points.iter().map(|&p| Surfel::unsized_at(p)).collect();
         let mut stats = SurfelStats::default();
         let all = points.len();
         terrain_disks(
-            (points, scale),
+            (points, delaunay_xy(points), scale),
             (all, &Cover::none()),
             (None, (None, None)),
             &mut surfels,
