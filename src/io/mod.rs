@@ -7,6 +7,7 @@
 
 pub mod atomic;
 pub(crate) mod bounds;
+pub mod delaunay;
 pub mod format;
 pub mod formats;
 pub(crate) mod geometry;

@@ -15,6 +15,7 @@
 use glam::{DVec3, Vec3};
 
 use super::Geometry;
+use super::delaunay::delaunay_xy;
 
 /// Longest edge of a sensor-grid triangle, relative to its depth.
 pub const GRID_MAX_EDGE: f64 = 0.05;
@@ -111,22 +112,6 @@ pub fn height_field_keeping(
     keep_long: impl Fn(Vec3, f64) -> bool,
 ) -> Vec<[u32; 3]> {
     drop_long(positions, &delaunay_xy(positions), keep_long)
-}
-
-/// The Delaunay triangulation of `positions` in x–y, wound as delaunator winds it, long
-/// triangles kept. Of the samples that share an x–y it holds one.
-pub fn delaunay_xy(positions: &[Vec3]) -> Vec<[u32; 3]> {
-    let xy = |p: &Vec3| delaunator::Point {
-        x: p.x as f64,
-        y: p.y as f64,
-    };
-    let points: Vec<delaunator::Point> = positions.iter().map(xy).collect();
-    // Only the triangles are kept (their half-edges and hull would double the peak).
-    let delaunator::Triangulation { triangles, .. } = delaunator::triangulate(&points);
-    drop(points);
-    (triangles.chunks_exact(3))
-        .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
-        .collect()
 }
 
 /// `triangles` of `positions` without those with an edge (in x–y) longer than

@@ -85,7 +85,7 @@ pub enum Standing {
 
 /// What each of `positions` (the samples that one TIN holds: neither vegetation nor
 /// deck) stands on (the module doc), from `delaunay`, their Delaunay triangulation in
-/// x–y ([`delaunay_xy`](crate::io::triangulate::delaunay_xy), long triangles kept).
+/// x–y ([`delaunay_xy`](crate::io::delaunay::delaunay_xy), long triangles kept).
 pub fn free_standing(positions: &[Vec3], delaunay: &[[u32; 3]]) -> Vec<Standing> {
     let kept = short_or_kept(positions, delaunay, |_, _| false);
     let triangles = || (delaunay.iter().zip(&kept)).filter_map(|(t, &k)| k.then_some(t));
@@ -310,7 +310,7 @@ fn walled_tops(positions: &[Vec3], standing: &[(usize, usize)], spacing: f32) ->
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::triangulate::delaunay_xy;
+    use crate::io::delaunay::delaunay_xy;
 
     /// Ground 0.5 m apart over 20 × 12 m, a roof 6 × 6 m at `x0` standing `height`
     /// over it, and `wall` samples down its west edge (one per scan row, 1 m down).

@@ -20,10 +20,9 @@ use rayon::prelude::*;
 use super::cloud;
 use super::free_roofs::{self, Standing};
 use super::terrain::{self, Cover, TinSplats};
-use super::tin_removal;
 use super::{Surfel, SurfelStats};
 use crate::io::Geometry;
-use crate::io::triangulate::delaunay_xy;
+use crate::io::delaunay::{self, delaunay_xy};
 
 /// The layer a sample is drawn in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -91,7 +90,7 @@ pub struct FirstTin {
 impl FirstTin {
     /// The Delaunay triangulation (long triangles kept) of the samples of `g` that
     /// `labels` leaves on the ground (`which`, ascending), as indices into `which`:
-    /// this TIN less the samples taken off the ground ([`tin_removal::without`]), or
+    /// this TIN less the samples taken off the ground ([`delaunay::without`]), or
     /// a new one where that cannot be.
     pub fn ground(self, g: &Geometry, labels: &[Layer], which: &[u32]) -> Vec<[u32; 3]> {
         let positions = pick(&g.positions, &self.which);
@@ -103,7 +102,7 @@ impl FirstTin {
             .iter()
             .filter(|&&i| labels[i as usize] == Layer::Ground);
         let same = held.copied().eq(which.iter().copied());
-        let rest = same.then(|| tin_removal::without(&positions, self.delaunay, &removed));
+        let rest = same.then(|| delaunay::without(&positions, self.delaunay, &removed));
         let Some(Some(mut rest)) = rest else {
             return delaunay_xy(&pick(&g.positions, which));
         };

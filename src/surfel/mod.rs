@@ -27,7 +27,6 @@ pub(crate) mod ring;
 pub(crate) mod sets;
 pub mod shape;
 pub mod terrain;
-mod tin_removal;
 pub(crate) mod triangle;
 pub(crate) mod vegetation;
 pub(crate) mod walls;
@@ -37,7 +36,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::io::triangulate::delaunay_xy;
+use crate::io::delaunay::delaunay_xy;
 use crate::io::{Geometry, PointAttributes};
 use layers::Layer;
 use shape::SplatShape;

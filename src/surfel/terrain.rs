@@ -39,7 +39,7 @@ use rayon::prelude::*;
 use super::long_triangles::{self, Looks, Reach};
 use super::{Surfel, SurfelStats};
 #[cfg(doc)]
-use crate::io::triangulate::delaunay_xy;
+use crate::io::delaunay::delaunay_xy;
 use crate::io::triangulate::drop_long;
 
 /// Longest edge, in the tile's spacings, beyond which a TIN triangle gets a splat of
@@ -88,7 +88,6 @@ pub fn terrain_disks(
 ) -> Option<TinSplats> {
     let mut triangles = drop_long(points, &delaunay, |c, median| cover.covers(c, median));
     drop(delaunay);
-    held_by_least_twins(points, &mut triangles);
     in_canonical_order(&mut triangles);
     let spacing = median_horizontal_edge(points, &triangles).filter(|s| s.is_normal())?;
     triangles.par_iter_mut().for_each(|t| {
@@ -172,37 +171,9 @@ pub struct TinSplats {
     pub spacing: f32,
 }
 
-/// Makes each corner of `triangles` the least of the samples that share its x–y (a
-/// triangulation holds one of them, which one depending on how it was made).
-fn held_by_least_twins(points: &[Vec3], triangles: &mut [[u32; 3]]) {
-    let mut held = vec![false; points.len()];
-    for &v in triangles.iter().flatten() {
-        held[v as usize] = true;
-    }
-    // Adding +0 makes −0 +0, so that equal coordinates have equal bits.
-    let xy = |v: u32| {
-        let p = points[v as usize];
-        ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits())
-    };
-    let mut unheld: Vec<((u32, u32), u32)> = (0..points.len() as u32)
-        .filter(|&v| !held[v as usize])
-        .map(|v| (xy(v), v))
-        .collect();
-    if unheld.is_empty() {
-        return;
-    }
-    unheld.par_sort_unstable();
-    triangles.par_iter_mut().flatten().for_each(|v| {
-        let at = unheld.partition_point(|u| u.0 < xy(*v));
-        if let Some(&(key, twin)) = unheld.get(at) {
-            *v = (*v).min(if key == xy(*v) { twin } else { *v });
-        }
-    });
-}
-
 /// Turns each triangle to start at its least corner (its winding kept) and sorts them:
 /// the TIN's splats do not depend on the order a triangulation lists its triangles in
-/// (delaunator's, or [`super::tin_removal`]'s).
+/// ([`crate::io::delaunay`] makes them in more than one way).
 fn in_canonical_order(triangles: &mut [[u32; 3]]) {
     triangles.par_iter_mut().for_each(|t| {
         let least = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
@@ -277,7 +248,7 @@ mod tests {
     use super::super::cloud::{Orientation, neighbour_disks};
     use super::super::covering::RadiusRule;
     use super::*;
-    use crate::io::triangulate::delaunay_xy;
+    use crate::io::delaunay::delaunay_xy;
 
     fn terrain_surfels(points: &[Vec3], scale: f32) -> Vec<Surfel> {
         let mut surfels: Vec<Surfel> = points.iter().map(|&p| Surfel::unsized_at(p)).collect();

@@ -1,6 +1,6 @@
 //! The Delaunay triangulation (in x–y) of a sample set less some of its samples, made
 //! from the triangulation of the whole: a terrain's ground is triangulated once for
-//! [`super::free_roofs`], which takes the slabs and lone returns out of it, and the
+//! `surfel::free_roofs`, which takes the slabs and lone returns out of it, and the
 //! TIN that draws what is left is this one, not a second triangulation of the rest.
 //!
 //! Taking samples out keeps every triangle that none of them is a corner of: its
@@ -15,7 +15,7 @@
 //! edge of B's triangulation wound as the cavity's triangle wound it (delaunator winds
 //! every triangle the same way), by flooding across every edge that is not a border.
 //! B is a few samples around each cavity, so this costs a fraction of a new
-//! triangulation.
+//! triangulation ([`super::fill`]).
 //!
 //! Under ties (four samples on one circle) B's triangulation may pick another diagonal
 //! than the whole's did, so that a border edge is missing from it: then, and where a
@@ -23,19 +23,11 @@
 //! duplicate shares a removed one's x–y, [`without`] gives None and the caller
 //! triangulates anew.
 
-use delaunator::{EMPTY, Point, next_halfedge};
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// A directed edge (a, b) as one sortable key.
-fn key(a: u32, b: u32) -> u64 {
-    ((a as u64) << 32) | b as u64
-}
-
-/// The ends of an edge's key.
-fn ends(key: u64) -> (u32, u32) {
-    ((key >> 32) as u32, key as u32)
-}
+use super::fill::{AtHull, fill};
+use super::{doubled_areas, edge_key, ends, same_area, xy_key};
 
 /// The Delaunay triangulation of the `points` that `removed` does not mark, from
 /// `triangles`, the triangulation of all of them as delaunator made it (indices into
@@ -65,10 +57,11 @@ pub fn without(
         .collect();
     corners.par_sort_unstable();
     corners.dedup();
-    let filled = fill(points, &corners, &border)?;
-    let area = |ts: &[[u32; 3]]| ts.iter().map(|t| doubled_area(points, t)).sum::<f64>();
-    let (before, after) = (area(&cavities), area(&filled));
-    if (before - after).abs() > 1e-9 * before {
+    let filled = fill(points, &corners, &border, AtHull::Fails)?;
+    if !same_area(
+        doubled_areas(points, &cavities),
+        doubled_areas(points, &filled),
+    ) {
         return None;
     }
     triangles.extend(filled);
@@ -80,13 +73,13 @@ pub fn without(
 /// triangle shares).
 fn cavity_borders(cavities: &[[u32; 3]], removed: &[bool]) -> Option<Vec<u64>> {
     let mut sides: Vec<u64> = (cavities.iter())
-        .flat_map(|t| (0..3).map(move |k| key(t[k], t[(k + 1) % 3])))
+        .flat_map(|t| (0..3).map(move |k| edge_key(t[k], t[(k + 1) % 3])))
         .collect();
     sides.par_sort_unstable();
     let mut border = Vec::new();
     for &side in &sides {
         let (a, b) = ends(side);
-        if sides.binary_search(&key(b, a)).is_ok() {
+        if sides.binary_search(&edge_key(b, a)).is_ok() {
             continue;
         }
         if removed[a as usize] || removed[b as usize] {
@@ -97,55 +90,6 @@ fn cavity_borders(cavities: &[[u32; 3]], removed: &[bool]) -> Option<Vec<u64>> {
     Some(border)
 }
 
-/// The triangles of the triangulation of `corners` (the cavities' kept corners) that
-/// lie inside the `border` (sorted directed edges, the cavity on the side their
-/// triangles wind to); None where a border edge is missing from that triangulation or
-/// the flood reaches its hull.
-fn fill(points: &[Vec3], corners: &[u32], border: &[u64]) -> Option<Vec<[u32; 3]>> {
-    let xy: Vec<Point> = (corners.iter())
-        .map(|&v| points[v as usize])
-        .map(|p| Point {
-            x: p.x as f64,
-            y: p.y as f64,
-        })
-        .collect();
-    let dt = delaunator::triangulate(&xy);
-    let corner = |h: usize| corners[dt.triangles[h]];
-    let is_border = |h: usize| {
-        let side = key(corner(h), corner(next_halfedge(h)));
-        border.binary_search(&side).is_ok()
-    };
-    let mut inside = vec![false; dt.triangles.len() / 3];
-    let mut flood = Vec::new();
-    let mut found = 0;
-    for h in (0..dt.triangles.len()).filter(|&h| is_border(h)) {
-        found += 1;
-        if !std::mem::replace(&mut inside[h / 3], true) {
-            flood.push(h / 3);
-        }
-    }
-    if found != border.len() {
-        return None;
-    }
-    while let Some(t) = flood.pop() {
-        for h in (3 * t..3 * t + 3).filter(|&h| !is_border(h)) {
-            let across = dt.halfedges[h];
-            if across == EMPTY {
-                return None;
-            }
-            if !std::mem::replace(&mut inside[across / 3], true) {
-                flood.push(across / 3);
-            }
-        }
-    }
-    let filled = (0..inside.len()).filter(|&t| inside[t]);
-    Some(
-        filled
-            .map(|t| [0, 1, 2].map(|k| corner(3 * t + k)))
-            .collect(),
-    )
-}
-
 /// Whether a kept sample that `triangles` leaves out (delaunator keeps one of the
 /// samples that share an x–y) shares its x–y with a removed one: the triangulation of
 /// the rest would hold it.
@@ -154,8 +98,7 @@ fn skipped_twin_of_removed(points: &[Vec3], triangles: &[[u32; 3]], removed: &[b
     for &v in triangles.iter().flatten() {
         held[v as usize] = true;
     }
-    // Adding +0 makes −0 +0, so that equal coordinates have equal bits.
-    let xy = |v: usize| key((points[v].x + 0.0).to_bits(), (points[v].y + 0.0).to_bits());
+    let xy = |v: usize| xy_key(points[v]);
     let mut removed_xy: Vec<u64> = (0..points.len()).filter(|&v| removed[v]).map(xy).collect();
     removed_xy.sort_unstable();
     (0..points.len())
@@ -163,39 +106,11 @@ fn skipped_twin_of_removed(points: &[Vec3], triangles: &[[u32; 3]], removed: &[b
         .any(|v| removed_xy.binary_search(&xy(v)).is_ok())
 }
 
-/// Twice the x–y area of triangle `t`, in f64.
-fn doubled_area(points: &[Vec3], t: &[u32; 3]) -> f64 {
-    let [a, b, c] = t.map(|v| points[v as usize].truncate().as_dvec2());
-    (b - a).perp_dot(c - a).abs()
-}
-
 #[cfg(test)]
 mod tests {
+    use super::super::tests::{canonical, scattered};
+    use super::super::{delaunay_xy, edge_key};
     use super::*;
-    use crate::io::triangulate::delaunay_xy;
-    use proptest::prelude::Rng;
-
-    /// Each triangle turned to start at its least corner, sorted.
-    fn canonical(triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
-        let mut out: Vec<[u32; 3]> = (triangles.iter())
-            .map(|t| {
-                let k = (0..3).min_by_key(|&k| t[k]).unwrap();
-                [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
-            })
-            .collect();
-        out.sort_unstable();
-        out
-    }
-
-    fn scattered(n: usize, seed: u8) -> Vec<Vec3> {
-        let mut rng = proptest::test_runner::TestRng::from_seed(
-            proptest::test_runner::RngAlgorithm::ChaCha,
-            &[seed; 32],
-        );
-        (0..n)
-            .map(|_| Vec3::new(rng.random::<f32>() * 100.0, rng.random::<f32>() * 60.0, 0.0))
-            .collect()
-    }
 
     #[test]
     fn removing_samples_gives_the_triangulation_of_the_rest() {
@@ -257,13 +172,13 @@ mod tests {
     /// Whether each sample lies on the triangulation's hull (an edge of one triangle).
     fn hull_of(triangles: &[[u32; 3]], n: usize) -> Vec<bool> {
         let mut sides: Vec<u64> = (triangles.iter())
-            .flat_map(|t| (0..3).map(move |k| key(t[k], t[(k + 1) % 3])))
+            .flat_map(|t| (0..3).map(move |k| edge_key(t[k], t[(k + 1) % 3])))
             .collect();
         sides.sort_unstable();
         let mut hull = vec![false; n];
         for &s in &sides {
             let (a, b) = ends(s);
-            if sides.binary_search(&key(b, a)).is_err() {
+            if sides.binary_search(&edge_key(b, a)).is_err() {
                 (hull[a as usize], hull[b as usize]) = (true, true);
             }
         }
