@@ -93,78 +93,104 @@ pub fn free_standing(positions: &[Vec3], delaunay: &[[u32; 3]]) -> Vec<Standing>
     let Some(spacing) = median_length(positions, &edges) else {
         return vec![Standing::Joined; positions.len()];
     };
-    let drop = DROP_SPACINGS * spacing;
-    let (down, level): (Vec<_>, Vec<_>) = (edges.iter())
-        .map(|&(a, b)| (a as usize, b as usize))
-        .map(|(a, b)| {
-            if positions[a].z >= positions[b].z {
+    let fall = DROP_SPACINGS * spacing;
+    let (down, level): (Vec<Edge>, Vec<Edge>) = (edges.iter())
+        .map(|&(a, b)| {
+            if positions[a as usize].z >= positions[b as usize].z {
                 (a, b)
             } else {
                 (b, a)
             }
         })
-        .partition(|&(hi, lo)| positions[hi].z - positions[lo].z > drop);
-    let top = tops_joined(positions, &level);
-    let mut tops = held_tops(positions, &top, PLANAR_SPACINGS * spacing);
+        .partition(|&(hi, lo)| positions[hi as usize].z - positions[lo as usize].z > fall);
+    drop(edges);
+    let (top, firsts) = tops_joined(positions, &level);
+    drop(level);
+    let top = |k: u32| top[k as usize] as usize;
+    let mut tops = held_tops(positions, (&top, &firsts), PLANAR_SPACINGS * spacing);
     let mut above_a_drop = vec![false; positions.len()];
     for &(hi, lo) in &down {
-        above_a_drop[hi] = true;
-        tops[top[hi]].drops = true;
-        tops[top[lo]].rises = true;
+        above_a_drop[hi as usize] = true;
+        tops[top(hi)].drops = true;
+        tops[top(lo)].rises = true;
     }
     for &(hi, lo) in &down {
-        tops[top[hi]].steps |= above_a_drop[lo];
+        tops[top(hi)].steps |= above_a_drop[lo as usize];
     }
     for &(a, b) in &border {
-        tops[top[a as usize]].bordered = true;
-        tops[top[b as usize]].bordered = true;
+        tops[top(a)].bordered = true;
+        tops[top(b)].bordered = true;
     }
     for t in triangles() {
-        let [a, b, c] = t.map(|k| top[k as usize]);
+        let [a, b, c] = t.map(top);
         if a == b && b == c {
             tops[a].surface = true;
         }
     }
     // Only the tops that would stand free unwalled are looked at.
     let standing: Vec<(usize, usize)> = (down.iter())
-        .filter(|&&(hi, lo)| above_a_drop[lo] && top[lo] != top[hi])
-        .filter(|&&(hi, _)| tops[top[hi]].stands_free())
-        .map(|&(hi, lo)| (top[hi], lo))
+        .filter(|&&(hi, lo)| above_a_drop[lo as usize] && top(lo) != top(hi))
+        .filter(|&&(hi, _)| tops[top(hi)].stands_free())
+        .map(|&(hi, lo)| (top(hi), lo as usize))
         .collect();
     for t in walled_tops(positions, &standing, spacing) {
         tops[t].walled = true;
     }
-    top.iter().map(|&t| tops[t].standing()).collect()
+    (0..positions.len() as u32)
+        .map(|k| tops[top(k)].standing())
+        .collect()
 }
 
-/// Each sample's top, named by its least sample: the sets that the `level` edges join,
-/// with the samples that share an x–y (which the TIN leaves but one of) joined.
-fn tops_joined(positions: &[Vec3], level: &[(usize, usize)]) -> Vec<usize> {
+/// Each sample's top (numbered in the order of their least samples) and each top's
+/// least sample: the sets that the `level` edges join, with the samples that share an
+/// x–y (which the TIN leaves but one of) joined.
+fn tops_joined(positions: &[Vec3], level: &[Edge]) -> (Vec<u32>, Vec<u32>) {
     let mut sets = Sets::new(positions.len());
-    level.iter().for_each(|&(a, b)| sets.join(a, b));
-    let mut order: Vec<usize> = (0..positions.len()).collect();
-    let xy = |k: &usize| (positions[*k].x.to_bits(), positions[*k].y.to_bits());
+    (level.iter()).for_each(|&(a, b)| sets.join(a as usize, b as usize));
+    let mut order: Vec<u32> = (0..positions.len() as u32).collect();
+    let xy = |k: &u32| {
+        let p = positions[*k as usize];
+        (p.x.to_bits(), p.y.to_bits())
+    };
     order.par_sort_unstable_by_key(xy);
     for pair in order.windows(2).filter(|p| xy(&p[0]) == xy(&p[1])) {
-        sets.join(pair[0], pair[1]);
+        sets.join(pair[0] as usize, pair[1] as usize);
     }
-    (0..positions.len()).map(|k| sets.root(k)).collect()
+    drop(order);
+    // A set's least sample is its root, met first.
+    let (mut number, mut firsts) = (vec![u32::MAX; positions.len()], Vec::new());
+    let top = (0..positions.len())
+        .map(|k| {
+            let root = sets.root(k);
+            if number[root] == u32::MAX {
+                number[root] = firsts.len() as u32;
+                firsts.push(root as u32);
+            }
+            number[root]
+        })
+        .collect();
+    (top, firsts)
 }
 
-/// The tops (indexed by their names in `top`), their samples held and counted on their
-/// planes within `planar`.
-fn held_tops(positions: &[Vec3], top: &[usize], planar: f32) -> Vec<Top> {
-    let mut tops = vec![Top::default(); positions.len()];
-    let from_first = |k: usize| (positions[k] - positions[top[k]]).as_dvec3();
-    for k in 0..positions.len() {
-        tops[top[k]].hold(from_first(k));
+/// The tops (each sample's `top` and each top's first sample), their samples held and
+/// counted on their planes within `planar`.
+fn held_tops(
+    positions: &[Vec3],
+    (top, firsts): (&impl Fn(u32) -> usize, &[u32]),
+    planar: f32,
+) -> Vec<Top> {
+    let mut tops = vec![Top::default(); firsts.len()];
+    let from_first =
+        |k: u32| (positions[k as usize] - positions[firsts[top(k)] as usize]).as_dvec3();
+    for k in 0..positions.len() as u32 {
+        tops[top(k)].hold(from_first(k));
     }
     let planes: Vec<Option<DVec3>> = tops.iter().map(Top::plane).collect();
-    for k in 0..positions.len() {
+    for k in 0..positions.len() as u32 {
         let d = from_first(k);
         let off = |f: DVec3| (d.z - f.dot(DVec3::new(d.x, d.y, 1.0))).abs();
-        if planes[top[k]].is_some_and(|f| off(f) <= planar as f64) {
-            tops[top[k]].on_plane += 1;
+        if planes[top(k)].is_some_and(|f| off(f) <= planar as f64) {
+            tops[top(k)].on_plane += 1;
         }
     }
     tops
