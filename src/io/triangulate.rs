@@ -13,6 +13,7 @@
 //!   normals (`surfel::cloud::tin`).
 
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 use super::Geometry;
 use super::delaunay::delaunay_xy;
@@ -109,7 +110,7 @@ pub fn height_field(positions: &[Vec3]) -> Vec<[u32; 3]> {
 /// of the triangulation).
 pub fn height_field_keeping(
     positions: &[Vec3],
-    keep_long: impl Fn(Vec3, f64) -> bool,
+    keep_long: impl Fn(Vec3, f64) -> bool + Sync,
 ) -> Vec<[u32; 3]> {
     drop_long(positions, &delaunay_xy(positions), keep_long)
 }
@@ -120,7 +121,7 @@ pub fn height_field_keeping(
 pub fn drop_long(
     positions: &[Vec3],
     triangles: &[[u32; 3]],
-    keep_long: impl Fn(Vec3, f64) -> bool,
+    keep_long: impl Fn(Vec3, f64) -> bool + Sync,
 ) -> Vec<[u32; 3]> {
     let kept = short_or_kept(positions, triangles, keep_long);
     (triangles.iter().zip(kept))
@@ -132,15 +133,14 @@ pub fn drop_long(
 pub fn short_or_kept(
     positions: &[Vec3],
     triangles: &[[u32; 3]],
-    keep_long: impl Fn(Vec3, f64) -> bool,
+    keep_long: impl Fn(Vec3, f64) -> bool + Sync,
 ) -> Vec<bool> {
     let length = |a: u32, b: u32| {
         let (p, q) = (&positions[a as usize], &positions[b as usize]);
         DVec3::new((p.x - q.x) as f64, (p.y - q.y) as f64, 0.0).length()
     };
-    let mut edges: Vec<f64> = (triangles.iter())
-        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
-        .map(|(a, b)| length(a, b))
+    let mut edges: Vec<f64> = (triangles.par_iter())
+        .flat_map_iter(|t| (0..3).map(move |k| length(t[k], t[(k + 1) % 3])))
         .collect();
     if edges.is_empty() {
         return Vec::new();
@@ -148,7 +148,7 @@ pub fn short_or_kept(
     let mid = edges.len() / 2;
     let median = *edges.select_nth_unstable_by(mid, f64::total_cmp).1;
     drop(edges);
-    (triangles.iter())
+    (triangles.par_iter())
         .map(|t| {
             let short = (0..3).all(|k| length(t[k], t[(k + 1) % 3]) <= TERRAIN_MAX_EDGE * median);
             let centroid = || t.iter().map(|&v| positions[v as usize]).sum::<Vec3>() / 3.0;

@@ -14,7 +14,6 @@
 //! - the rest (ground, roofs, walls, whatever else) keeps the TIN ([`super::terrain`]).
 
 use glam::Vec3;
-
 use rayon::prelude::*;
 
 use super::cloud;
@@ -147,8 +146,8 @@ impl Layers {
 
 /// The TIN's surfels of the samples `which` (of which the first `own` are the model's
 /// own) among themselves, into `surfels` (one per sample of `g`), from their `delaunay`
-/// triangulation (made here where None), keeping the long triangles under `cover`; their long triangles' splats and spacing. None where they
-/// make no triangle.
+/// triangulation (made here where None), keeping the long triangles under `cover`;
+/// their long triangles' splats and spacing. None where they make no triangle.
 pub fn tin_among(
     (g, scale): (&Geometry, f32),
     (which, own): (&[u32], usize),

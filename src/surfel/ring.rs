@@ -351,21 +351,22 @@ pub fn clip_at_border(points: &[Vec3], triangles: &[[u32; 3]], surfels: &mut [Su
         on_border[a as usize] = true;
         on_border[b as usize] = true;
     }
+    // Each corner inside the border opposite a border edge, in the triangles' order.
+    let facing: Vec<[u32; 3]> = (triangles.par_iter())
+        .flat_map_iter(|t| (0..3).map(move |k| [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]))
+        .filter(|&[v, a, b]| {
+            !on_border[v as usize] && border_edges.binary_search(&key(a, b)).is_ok()
+        })
+        .collect();
     let mut nearest: Vec<Option<Clip>> = vec![None; surfels.len()];
-    for t in triangles {
-        for k in 0..3 {
-            let (v, a, b) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            if on_border[v as usize] || border_edges.binary_search(&key(a, b)).is_err() {
-                continue;
-            }
-            let line = edge_clip(&surfels[v as usize], points[a as usize], points[b as usize]);
-            let offset = |c: &Option<Clip>| match c {
-                Some(Clip::Line { offset, .. }) => *offset,
-                _ => f64::INFINITY,
-            };
-            if offset(&line) < offset(&nearest[v as usize]) {
-                nearest[v as usize] = line;
-            }
+    for [v, a, b] in facing {
+        let line = edge_clip(&surfels[v as usize], points[a as usize], points[b as usize]);
+        let offset = |c: &Option<Clip>| match c {
+            Some(Clip::Line { offset, .. }) => *offset,
+            _ => f64::INFINITY,
+        };
+        if offset(&line) < offset(&nearest[v as usize]) {
+            nearest[v as usize] = line;
         }
     }
     let mut clipped = 0;

@@ -38,8 +38,6 @@ use rayon::prelude::*;
 
 use super::long_triangles::{self, Looks, Reach};
 use super::{Surfel, SurfelStats};
-#[cfg(doc)]
-use crate::io::delaunay::delaunay_xy;
 use crate::io::triangulate::drop_long;
 
 /// Longest edge, in the tile's spacings, beyond which a TIN triangle gets a splat of
@@ -69,7 +67,8 @@ pub const TIN_REACH: Reach = Reach {
 
 /// The splats of the first `own` of a terrain's `points` (the rest: the halo of a
 /// piece, [`crate::tree::out_of_core`]) from their TIN (see the module doc: their
-/// `delaunay` triangulation, [`delaunay_xy`], long triangles dropped), into
+/// `delaunay` triangulation, [`delaunay_xy`](crate::io::delaunay::delaunay_xy), long
+/// triangles dropped), into
 /// `surfels` (one per point; `given` normals kept; `looks` for the long triangles'
 /// splats): returns the splats of the long triangles that the piece owns (the piece of
 /// their least corner, [`owner`]). None where the samples make no triangle, or lie
