@@ -1,4 +1,4 @@
-//! Surfels of a point cloud from its k nearest neighbours (kiddo's k-d tree), made to
+//! Surfels of a point cloud from its k nearest neighbours (a uniform grid, [`cells`]), made to
 //! hold on real sampling: scan lines, quantised coordinates, rows of an RGB-D frame
 //! sparser than its columns, stray samples.
 //!
@@ -23,6 +23,7 @@
 //! whose neighbours all coincide with it takes the median radius of the others
 //! ([`fallback_radius`]).
 
+mod cells;
 mod orientation;
 mod search;
 mod smoothed;
@@ -108,7 +109,7 @@ pub fn neighbour_disks(
         );
     }
     // Each wall with its sample's index in `which`, ascending (none but on a terrain).
-    let walls = if orientation == Orientation::Up && search.tree.is_some() {
+    let walls = if orientation == Orientation::Up && !search.is_empty() {
         let queries: Vec<Vec3> = which.iter().map(|&i| points[i as usize] * scale).collect();
         walls::terrain_walls(&search.coords, &queries)
     } else {
@@ -172,7 +173,7 @@ fn disks(
     given_normal: &(dyn Fn(u32) -> Vec3 + Sync),
     stats: &mut SurfelStats,
 ) -> Vec<(Vec3, Covering)> {
-    if search.tree.is_none() {
+    if search.is_empty() {
         vec![(Vec3::Z, covering(Vec3::ZERO, Vec3::Z, &[], rule)); which.len()]
     } else if let Some(steps) = Steps::of(search, scale, orientation) {
         let disks = smoothed_disks(search, (points, scale), which, (rule, steps), given_normal);
@@ -201,7 +202,7 @@ fn disks(
 /// surface ([`super::covering::samples_no_surface`]).
 pub fn scattered(points: &[Vec3], scale: f32) -> Vec<bool> {
     let search = Search::new(points, scale);
-    if search.tree.is_none() {
+    if search.is_empty() {
         return vec![false; points.len()];
     }
     let distinct: Vec<u32> = (0..search.coords.len() as u32).collect();
@@ -283,7 +284,7 @@ fn within_pixels(
     disks: &mut [(Vec3, Covering)],
     stats: &mut SurfelStats,
 ) {
-    if search.tree.is_none() {
+    if search.is_empty() {
         return;
     }
     if let Some(pitch) = sensor_pitch(search, (points, scale), which, sensor) {

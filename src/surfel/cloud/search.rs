@@ -1,22 +1,20 @@
-//! The k nearest neighbours of a cloud's samples: a k-d tree (kiddo's) over its
-//! distinct positions, searched in the samples' own order with each search bounded by
-//! the last one's.
+//! The k nearest neighbours of a cloud's samples, among its distinct positions, from a
+//! uniform grid over them ([`Cells`]).
 
 use std::num::NonZero;
 
 use arrayvec::ArrayVec;
 use glam::Vec3;
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use super::K;
+use super::cells::Cells;
 
-/// The distinct positions of a cloud, unit-scaled and sorted by [`position_key`], and
-/// the k-d tree its neighbourhoods are searched in.
+/// The distinct positions of a cloud, unit-scaled and sorted by cell, and the grid
+/// its neighbourhoods are searched in.
 pub(super) struct Search {
     pub coords: Vec<[f32; 3]>,
-    /// `None` when no tree could be built: every disk is left to the fallbacks.
-    pub tree: Option<ImmutableKdTree<f32, 3>>,
+    cells: Cells,
     /// [`K`], or fewer when the cloud has fewer distinct positions.
     k: NonZero<usize>,
 }
@@ -28,25 +26,39 @@ fn position_key(c: &[f32; 3]) -> [u32; 3] {
 
 impl Search {
     /// The distinct positions among `points`, scaled by `scale`. Searching among
-    /// distinct positions keeps each query O(log n) however many samples coincide (10⁵
-    /// copies of one point would otherwise make the search quadratic), and coinciding
+    /// distinct positions keeps each neighbourhood's size however many samples
+    /// coincide (10⁵ copies of one point would otherwise fill one cell), and coinciding
     /// samples add nothing to a neighbourhood's shape.
     pub fn new(points: &[Vec3], scale: f32) -> Search {
         // Scaled coordinates stay within ±2⁶⁰ (`super::unit_scale`): squared distances fit f32.
-        let mut coords: Vec<[f32; 3]> =
-            points.par_iter().map(|p| (*p * scale).to_array()).collect();
-        coords.par_sort_unstable_by_key(position_key);
-        coords.dedup_by_key(|c| position_key(c));
-        let tree = ImmutableKdTree::<f32, 3>::new_from_slice(&coords).ok();
+        let scaled: Vec<[f32; 3]> = points.par_iter().map(|p| (*p * scale).to_array()).collect();
+        let mut cells = Cells::over(&scaled);
+        let mut keyed: Vec<(u64, [u32; 3], [f32; 3])> = (scaled.into_par_iter())
+            .map(|c| (cells.key(Vec3::from(c)), position_key(&c), c))
+            .collect();
+        keyed.par_sort_unstable_by_key(|&(cell, position, _)| (cell, position));
+        keyed.dedup_by_key(|&mut (cell, position, _)| (cell, position));
+        let keys: Vec<u64> = keyed.iter().map(|k| k.0).collect();
+        cells.index(&keys);
+        let coords: Vec<[f32; 3]> = keyed.into_iter().map(|k| k.2).collect();
         let k = NonZero::new(K.min(coords.len())).unwrap_or(NonZero::<usize>::MIN);
-        Search { coords, tree, k }
+        Search { coords, cells, k }
+    }
+
+    /// Whether the cloud has no position to search.
+    pub fn is_empty(&self) -> bool {
+        self.coords.is_empty()
     }
 
     /// The index among the distinct positions of the scaled position `p`.
     pub fn index_of(&self, p: Vec3) -> Option<u32> {
         let key = position_key(&p.to_array());
-        let found = self.coords.binary_search_by_key(&key, position_key);
-        found.ok().map(|i| i as u32)
+        let members = self.cells.members(p);
+        let start = members.start;
+        let found = self.coords[members]
+            .iter()
+            .position(|c| position_key(c) == key);
+        found.map(|i| (start + i) as u32)
     }
 
     pub fn point(&self, i: u32) -> Vec3 {
@@ -60,93 +72,70 @@ impl Search {
         position: &'s (dyn Fn(&Q) -> Vec3 + Sync),
     ) -> impl ParallelIterator<Item = (&'s Q, ArrayVec<u32, K>)> + 's {
         queries.par_chunks(QUERY_BLOCK).flat_map_iter(move |block| {
-            let found = self
-                .tree
-                .as_ref()
-                .map(|tree| nearest_in_order(tree, self.k, block.iter().map(position)));
-            block.iter().zip(found.into_iter().flatten())
+            let positions: Vec<Vec3> = block.iter().map(position).collect();
+            let found = if self.is_empty() {
+                Vec::new()
+            } else {
+                self.cells.nearest(&self.coords, self.k, &positions)
+            };
+            block.iter().zip(found)
         })
     }
 }
 
-/// Queries walked in order, in blocks of this many: each block's first query searches
-/// the whole tree, the others within the bound that their predecessor gives. Fixed
-/// blocks keep the result independent of how rayon splits the work.
-const QUERY_BLOCK: usize = 1024;
-
-/// The k nearest positions' indices (nearest first) of each of `queries`, taken in
-/// order. Consecutive queries of a scan's or a generator's order lie near each other:
-/// by the triangle inequality the k-th neighbour of p lies within r + |p − q| of p,
-/// where r is the k-th neighbour's distance from the previous query q, so each search
-/// after the first prunes from its first step.
-fn nearest_in_order<'t>(
-    tree: &'t ImmutableKdTree<f32, 3>,
-    k: NonZero<usize>,
-    queries: impl Iterator<Item = Vec3> + 't,
-) -> impl Iterator<Item = ArrayVec<u32, K>> + 't {
-    let mut scratch = tree.create_scratch::<SquaredEuclidean<f32>>();
-    let mut last: Option<(Vec3, f32)> = None;
-    queries.map(move |p| {
-        // The relative margin absorbs f32 rounding of the distances (unit-scaled model).
-        let bound = last.map_or(f32::INFINITY, |(q, r)| (r + p.distance(q)) * (1.0 + 1e-5));
-        let mut search = |bound: f32| {
-            tree.query(&p.to_array())
-                .nearest_n::<SquaredEuclidean<f32>>(k)
-                .within(bound * bound)
-                .with_scratch(&mut scratch)
-                .execute()
-        };
-        let mut found = search(bound);
-        if found.len() < k.get() {
-            found = search(f32::INFINITY);
-        }
-        last = found.last().map(|f| (p, f.distance.sqrt()));
-        found.iter().map(|f| f.item).take(K).collect()
-    })
-}
+/// Queries answered together, in blocks of this many: the queries of one cell within
+/// a block share its candidates. Consecutive samples of a scan's or a generator's
+/// order lie near each other, so a block's queries fall in few cells.
+const QUERY_BLOCK: usize = 2048;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
     #[test]
-    fn bounded_queries_find_the_same_neighbourhoods_as_unbounded_ones() {
-        // A wavy sheet on a jittered grid (proptest's seeded generator), queried in its
-        // own order and in a shuffled one (far consecutive queries: loose bounds).
+    fn the_grid_finds_the_k_d_tree_s_neighbourhoods() {
+        // A wavy sheet on a jittered grid (proptest's seeded generator) with a few
+        // stray samples far off it, queried in its own order and in a shuffled one.
         use proptest::prelude::Rng;
         let mut rng = proptest::test_runner::TestRng::deterministic_rng(
             proptest::test_runner::RngAlgorithm::ChaCha,
         );
         let mut next = || rng.random::<f32>();
-        let coords: Vec<[f32; 3]> = (0..4096)
+        let mut points: Vec<Vec3> = (0..4096)
             .map(|i| {
                 let (x, y) = ((i % 64) as f32 + next(), (i / 64) as f32 + next());
-                [x / 64.0, y / 64.0, 0.05 * (x * 0.3).sin() * (y * 0.2).cos()]
+                Vec3::new(x / 64.0, y / 64.0, 0.05 * (x * 0.3).sin() * (y * 0.2).cos())
             })
             .collect();
-        let tree = ImmutableKdTree::<f32, 3>::new_from_slice(&coords).unwrap();
+        points.extend([
+            Vec3::splat(3.0),
+            Vec3::new(-5.0, 0.5, 0.0),
+            Vec3::new(0.5, 0.5, 9.0),
+        ]);
+        let search = Search::new(&points, 1.0);
+        let tree = ImmutableKdTree::<f32, 3>::new_from_slice(&search.coords).unwrap();
         let k = NonZero::new(K).unwrap();
         let distances = |p: Vec3, found: &[u32]| -> Vec<f32> {
-            found
-                .iter()
-                .map(|&f| p.distance(Vec3::from(coords[f as usize])))
-                .collect()
+            found.iter().map(|&f| p.distance(search.point(f))).collect()
         };
-        let shuffled: Vec<usize> = (0..coords.len()).map(|i| i * 1237 % coords.len()).collect();
-        for order in [(0..coords.len()).collect::<Vec<_>>(), shuffled] {
-            let queries: Vec<Vec3> = order.iter().map(|&i| Vec3::from(coords[i])).collect();
-            for (p, found) in
-                queries
-                    .iter()
-                    .zip(nearest_in_order(&tree, k, queries.iter().copied()))
-            {
+        let shuffled: Vec<Vec3> = (0..points.len())
+            .map(|i| points[i * 1237 % points.len()])
+            .collect();
+        for queries in [&points, &shuffled] {
+            let found: Vec<_> = search.neighbourhoods(queries, &|p| *p).collect();
+            for (p, found) in found {
                 let all = tree
                     .query(&p.to_array())
                     .nearest_n::<SquaredEuclidean<f32>>(k)
                     .execute();
                 let plain: Vec<u32> = all.iter().map(|f| f.item).collect();
                 assert_eq!(distances(*p, &found), distances(*p, &plain), "at {p}");
+                assert_eq!(search.point(found[0]), *p);
             }
+        }
+        for (i, p) in search.coords.iter().enumerate() {
+            assert_eq!(search.index_of(Vec3::from(*p)), Some(i as u32));
         }
     }
 }

@@ -73,8 +73,8 @@ pub(super) fn smoothed_disks(
     (rule, steps): (RadiusRule, Steps),
     given_normal: &(dyn Fn(u32) -> Vec3 + Sync),
 ) -> Vec<(Vec3, Vec3, Covering)> {
-    // Every sample's neighbourhood, halo included, in the samples' own order (which
-    // keeps `nearest_in_order`'s bounds tight); its nearest is its own position.
+    // Every sample's neighbourhood, halo included, in the samples' own order (whose
+    // blocks fall in few cells); its nearest is its own position.
     let neighbourhoods: Vec<ArrayVec<u32, K>> = search
         .neighbourhoods(points, &|p| *p * scale)
         .map(|(_, found)| found)
