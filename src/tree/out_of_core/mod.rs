@@ -63,6 +63,13 @@ pub const BYTES_PER_JOB_POINT: u64 = 320;
 /// an f16 (at most 65,504) with room for a tree's depth of sums.
 pub const SCALE_SLACK: f32 = 64.0;
 
+/// Jobs that [`build_file`] builds at once, and that [`Options::for_memory`] sizes the
+/// jobs to fit the budget together. A job's serial stretches (its triangulations'
+/// merges, its file's read and write) leave cores idle that a second job fills: on
+/// 2 cores one job at a time kept 1.5 of them busy. Fixed, not taken from the core
+/// count, so that every machine plans the same jobs.
+pub const LANES: usize = 2;
+
 /// How an out-of-core build runs.
 #[derive(Debug, Clone)]
 pub struct Options {
@@ -75,12 +82,13 @@ pub struct Options {
 }
 
 impl Options {
-    /// The options for a budget of `memory` bytes: jobs of half the budget over
-    /// [`BYTES_PER_JOB_POINT`] (at least 2¹⁶ points), an eighth of it for the spill's
-    /// buffers, the rest for the grid, the parts' roots and the page cache.
+    /// The options for a budget of `memory` bytes: [`LANES`] jobs together in half the
+    /// budget over [`BYTES_PER_JOB_POINT`] (at least 2¹⁶ points each), an eighth of
+    /// it for the spill's buffers, the rest for the grid, the parts' roots and the page
+    /// cache.
     pub fn for_memory(memory: u64, temp_dir: std::path::PathBuf) -> Options {
         Options {
-            job_points: (memory / 2 / BYTES_PER_JOB_POINT).max(1 << 16),
+            job_points: (memory / 2 / LANES as u64 / BYTES_PER_JOB_POINT).max(1 << 16),
             spill_buffers: memory / 8,
             temp_dir,
         }
@@ -128,13 +136,41 @@ pub fn build_file(
     loop {
         let manifest = Manifest::read(dir.path())?;
         progress.stage("build", manifest.input.points);
-        for (j, job) in manifest.jobs.iter().enumerate() {
-            run_job::run(dir.path(), &manifest, j)?;
-            progress.advance(job.points);
-        }
+        run_jobs(dir.path(), &manifest, progress)?;
         progress.stage("write", 0);
         if let Joined::Written(built) = join::join(dir.path(), output)? {
             return Ok(built);
         }
     }
+}
+
+/// Runs every job of `manifest` (in `dir`), [`LANES`] at a time: each lane takes the
+/// next job not yet taken. The jobs' parallel work shares the one thread pool; a
+/// lane's serial work runs on its own thread. The first error stops the lanes from
+/// taking more jobs and is returned.
+fn run_jobs(dir: &Path, manifest: &Manifest, progress: &dyn Progress) -> anyhow::Result<()> {
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    let (next, failed) = (AtomicUsize::new(0), AtomicBool::new(false));
+    let lane = || -> anyhow::Result<()> {
+        while !failed.load(Ordering::Relaxed) {
+            let j = next.fetch_add(1, Ordering::Relaxed);
+            let Some(job) = manifest.jobs.get(j) else {
+                return Ok(());
+            };
+            if let Err(e) = run_job::run(dir, manifest, j) {
+                failed.store(true, Ordering::Relaxed);
+                return Err(e);
+            }
+            progress.advance(job.points);
+        }
+        Ok(())
+    };
+    let results: Vec<anyhow::Result<()>> = std::thread::scope(|scope| {
+        let lanes: Vec<_> = (0..LANES).map(|_| scope.spawn(lane)).collect();
+        lanes
+            .into_iter()
+            .map(|l| l.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+            .collect()
+    });
+    results.into_iter().collect()
 }
