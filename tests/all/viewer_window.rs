@@ -303,7 +303,7 @@ fn the_window_can_be_resized_while_drawing() {
             "--spin",
             "3",
             "--frames",
-            "30",
+            "90",
             "--hide-panel",
         ])
         .arg("--screenshot")
@@ -320,14 +320,22 @@ fn the_window_can_be_resized_while_drawing() {
             .output()
             .expect("xdotool")
     };
-    // This viewer's window, not another test's.
+    // This viewer's window, not another test's. Asked again until it shows: a search
+    // walks every window of the display, and fails when another test's closes under it.
     let pid = viewer.id().to_string();
-    let found = xdotool(&["search", "--sync", "--pid", &pid]);
-    let window = String::from_utf8_lossy(&found.stdout)
-        .lines()
-        .next()
-        .expect("the viewer's window")
-        .to_string();
+    let window = (0..200)
+        .find_map(|_| {
+            let found = xdotool(&["search", "--pid", &pid]);
+            let line = String::from_utf8_lossy(&found.stdout)
+                .lines()
+                .next()
+                .map(str::to_string);
+            if line.is_none() {
+                std::thread::sleep(std::time::Duration::from_millis(50));
+            }
+            line
+        })
+        .expect("the viewer's window within 10 s");
     xdotool(&["windowsize", &window, "400", "300"]);
     let out = viewer.wait_with_output().expect("spt view ends");
     let err = String::from_utf8_lossy(&out.stderr);
