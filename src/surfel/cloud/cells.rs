@@ -202,7 +202,7 @@ type Fingers = [usize; 9];
 /// there.
 fn first_at_least(keys: &[u64], finger: &mut usize, key: u64) -> usize {
     let mut low = *finger;
-    if low > keys.len() || (low > 0 && keys[low - 1] >= key) {
+    if low > 0 && keys[low - 1] >= key {
         low = 0;
     }
     let mut step = 1;
@@ -281,15 +281,16 @@ fn cell_edge(coords: &[[f32; 3]]) -> f64 {
         .filter_map(|(i, c)| picked(i).then_some(*c))
         .collect();
     let others = (K - 1) / 8;
-    let extent = coords
-        .iter()
-        .fold(0f32, |m, c| c.iter().fold(m, |m, x| m.max(x.abs())));
-    let whole = 4.0 * extent.max(1.0) as f64;
+    // One cell for all: only where no edge can be measured (a small or degenerate set).
+    let whole = || {
+        let extent = (coords.iter()).fold(0f32, |m, c| c.iter().fold(m, |m, x| m.max(x.abs())));
+        4.0 * extent.max(1.0) as f64
+    };
     let (Ok(tree), Some(n)) = (
         ImmutableKdTree::<f32, 3>::new_from_slice(&sample),
         NonZero::new(others + 1).filter(|n| sample.len() > n.get()),
     ) else {
-        return whole;
+        return whole();
     };
     let step = sample.len().div_ceil(QUERIES);
     let mut distances: Vec<f32> = (sample.iter().step_by(step))
@@ -303,7 +304,7 @@ fn cell_edge(coords: &[[f32; 3]]) -> f64 {
         .filter(|d| *d > 0.0 && d.is_finite())
         .collect();
     if distances.is_empty() {
-        return whole;
+        return whole();
     }
     let at = (distances.len() * EDGE_QUANTILE / 100).min(distances.len() - 1);
     *distances.select_nth_unstable_by(at, f32::total_cmp).1 as f64
