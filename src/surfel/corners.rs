@@ -16,12 +16,29 @@ use rayon::prelude::*;
 /// reads all the corners.
 const MAX_RANGES: usize = 8;
 
+/// Each vertex's corners of a triangle mesh (see the module doc).
+pub struct Rings {
+    start: Vec<u32>,
+    corners: Vec<u32>,
+}
+
+impl Rings {
+    /// The rows of `triangles`' corners, for vertices `0..vertex_count`.
+    pub fn of(vertex_count: usize, triangles: &[[u32; 3]]) -> Rings {
+        assert!(triangles.len() < (u32::MAX / 3) as usize, "corners fit u32");
+        let (start, corners) = corners_by_vertex(vertex_count, triangles);
+        Rings { start, corners }
+    }
+
+    /// Vertex `v`'s corners, each 3 t + k for corner k of triangle t, in triangle order.
+    pub fn of_vertex(&self, v: usize) -> &[u32] {
+        &self.corners[self.start[v] as usize..self.start[v + 1] as usize]
+    }
+}
+
 /// The rows of `triangles`' corners by vertex (see the module doc): `(start, corners)`,
 /// `start` of length `vertex_count + 1`.
-pub(super) fn corners_by_vertex(
-    vertex_count: usize,
-    triangles: &[[u32; 3]],
-) -> (Vec<u32>, Vec<u32>) {
+fn corners_by_vertex(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
     let flat = triangles.as_flattened();
     let ranges = rayon::current_num_threads().clamp(1, MAX_RANGES);
     let bounds: Vec<usize> = (0..=ranges).map(|r| r * vertex_count / ranges).collect();

@@ -24,6 +24,7 @@ use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::clip::Clip;
+use super::corners::Rings;
 use super::field::{fit_color_field, fit_field, unit_rgb};
 use super::mesh::face_disks;
 use super::ring::{clip_at_border, ring_shapes};
@@ -61,13 +62,14 @@ pub fn disks(
         .for_each(|&v| in_short[v as usize] = true);
     // The vertices keep their own colours, without fields: fitted over a ring cut at a
     // step's edge, a field ran on across the step in saturated specks.
-    let normals = ring_shapes(points, scale, &short, surfels, false);
+    let rings = Rings::of(points.len(), &short);
+    let normals = ring_shapes(points, scale, (&short, &rings), surfels, false);
     for (v, s) in surfels.iter_mut().enumerate() {
         if !in_short[v] && s.radius > 0.0 {
             s.radius = s.radius.min(lone_radius(s.position));
         }
     }
-    stats.clipped_boundaries += clip_at_border(points, &short, surfels);
+    stats.clipped_boundaries += clip_at_border(points, (&short, &rings), surfels);
     Split {
         isolated,
         long,

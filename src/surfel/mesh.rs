@@ -151,7 +151,8 @@ pub fn vertex_disks(
             }
         }
     };
-    let normals = super::ring::ring_shapes(points, scale, triangles, surfels, colored);
+    let rings = super::corners::Rings::of(points.len(), triangles);
+    let normals = super::ring::ring_shapes(points, scale, (triangles, &rings), surfels, colored);
     let redundant = super::isolated::redundant(points, scale, &isolated, surfels);
     stats.redundant_vertices = redundant.len() as u64;
     MeshDisks {

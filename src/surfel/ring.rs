@@ -30,7 +30,7 @@ use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::Surfel;
-use super::corners::corners_by_vertex;
+use super::corners::Rings;
 use super::field::{fit_color_field, fit_field, unit_rgb};
 use super::shape::{Clip, Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
 use super::triangle::{RADIUS_MARGIN, triangle_terms};
@@ -207,13 +207,13 @@ fn covering_radius(frame: &RingFrame, (shape, minor): (&Shape, DVec3), corners: 
 /// model with colours), also its colour field ([`fit_color_field`]).
 /// `points` are the model's positions, `scale` its unit scale; the vertex normals are
 /// read from `surfels`, and returned. Each vertex gathers over its own corners
-/// ([`corners_by_vertex`]), in parallel, and everything it needs is its own: one pass,
+/// (`rings`, of `triangles`), in parallel, and everything it needs is its own: one pass,
 /// with no per-vertex temporaries (on the Lucy-size model they were 1.7 GB of fresh
 /// pages to fault in).
 pub fn ring_shapes(
     points: &[Vec3],
     scale: f32,
-    triangles: &[[u32; 3]],
+    (triangles, rings): (&[[u32; 3]], &Rings),
     surfels: &mut [Surfel],
     colored: bool,
 ) -> Vec<Vec3> {
@@ -226,17 +226,7 @@ pub fn ring_shapes(
     } else {
         Vec::new()
     };
-    assert!(triangles.len() < (u32::MAX / 3) as usize, "corners fit u32");
-    let (start, corners) = corners_by_vertex(points.len(), triangles);
-    // Vertex v's corners as (triangle, its next vertex, its previous vertex).
-    let ring = |v: usize| {
-        corners[start[v] as usize..start[v + 1] as usize]
-            .iter()
-            .map(|&c| {
-                let (t, k) = (&triangles[c as usize / 3], c as usize % 3);
-                (t, t[(k + 1) % 3], t[(k + 2) % 3])
-            })
-    };
+    let ring = |v: usize| ring_of(triangles, rings, v);
     surfels
         .par_iter_mut()
         .enumerate()
@@ -272,6 +262,19 @@ pub fn ring_shapes(
             },
         );
     normals
+}
+
+/// Vertex v's corners (`rings` of `triangles`) as (triangle, its next vertex, its
+/// previous vertex), in triangle order.
+fn ring_of<'a>(
+    triangles: &'a [[u32; 3]],
+    rings: &'a Rings,
+    v: usize,
+) -> impl Iterator<Item = (&'a [u32; 3], u32, u32)> + Clone {
+    rings.of_vertex(v).iter().map(|&c| {
+        let (t, k) = (&triangles[c as usize / 3], c as usize % 3);
+        (t, t[(k + 1) % 3], t[(k + 2) % 3])
+    })
 }
 
 /// Vertex v's one-ring ellipse (see the module doc): its major semi-axis (unit-scaled)
@@ -331,54 +334,55 @@ where
 /// at its fan ([`border_fan`]), but its neighbour's ellipse, which covers the ring's
 /// triangles, reaches past the border edge opposite it: along every hole and outline of
 /// a sensor frame (`super::grid`) that made a rim a pixel wide that the reference leaves empty. Where a ring
-/// holds several border edges, the nearest one's line clips. Edges are counted by
-/// sorting them (a hash map over kinect_rgb's 1.5 M edges took 0.3 s).
-pub fn clip_at_border(points: &[Vec3], triangles: &[[u32; 3]], surfels: &mut [Surfel]) -> u64 {
-    let key = |a: u32, b: u32| (a.min(b), a.max(b));
-    let mut edges: Vec<(u32, u32)> = triangles
-        .par_iter()
-        .flat_map_iter(|t| (0..3).map(move |k| key(t[k], t[(k + 1) % 3])))
-        .collect();
-    edges.par_sort_unstable();
-    // Sorted: an edge of one triangle is a run of one.
-    let border_edges: Vec<(u32, u32)> = edges
-        .chunk_by(|a, b| a == b)
-        .filter(|run| run.len() == 1)
-        .map(|run| run[0])
-        .collect();
-    let mut on_border = vec![false; surfels.len()];
-    for &(a, b) in &border_edges {
-        on_border[a as usize] = true;
-        on_border[b as usize] = true;
-    }
-    // Each corner inside the border opposite a border edge, in the triangles' order.
-    let facing: Vec<[u32; 3]> = (triangles.par_iter())
-        .flat_map_iter(|t| (0..3).map(move |k| [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]))
-        .filter(|&[v, a, b]| {
-            !on_border[v as usize] && border_edges.binary_search(&key(a, b)).is_ok()
+/// holds several border edges, the nearest one's line clips (the first in triangle
+/// order among equals). Each vertex reads only its own ring and its neighbours'
+/// (`rings`, of `triangles`), in parallel: an edge (a, b) is a border edge when one
+/// triangle of a's ring holds b.
+pub fn clip_at_border(
+    points: &[Vec3],
+    (triangles, rings): (&[[u32; 3]], &Rings),
+    surfels: &mut [Surfel],
+) -> u64 {
+    let shared = |a: u32, b: u32| {
+        let ring = ring_of(triangles, rings, a as usize);
+        ring.filter(|&(_, next, previous)| next == b || previous == b)
+            .count()
+    };
+    let on_border = |v: u32| {
+        ring_of(triangles, rings, v as usize)
+            .any(|(_, next, previous)| shared(v, next) == 1 || shared(v, previous) == 1)
+    };
+    surfels
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(1 << 12)
+        .map(|(v, s)| {
+            if on_border(v as u32) {
+                return 0;
+            }
+            let offset = |c: &Option<Clip>| match c {
+                Some(Clip::Line { offset, .. }) => *offset,
+                _ => f64::INFINITY,
+            };
+            let mut nearest = None;
+            for (_, a, b) in ring_of(triangles, rings, v) {
+                if shared(a, b) != 1 {
+                    continue;
+                }
+                let line = edge_clip(s, points[a as usize], points[b as usize]);
+                if offset(&line) < offset(&nearest) {
+                    nearest = line;
+                }
+            }
+            match nearest {
+                Some(c @ Clip::Line { offset, .. }) if offset < 1.0 => {
+                    s.shape.clip = Clip::pack(Some(c));
+                    1
+                }
+                _ => 0,
+            }
         })
-        .collect();
-    let mut nearest: Vec<Option<Clip>> = vec![None; surfels.len()];
-    for [v, a, b] in facing {
-        let line = edge_clip(&surfels[v as usize], points[a as usize], points[b as usize]);
-        let offset = |c: &Option<Clip>| match c {
-            Some(Clip::Line { offset, .. }) => *offset,
-            _ => f64::INFINITY,
-        };
-        if offset(&line) < offset(&nearest[v as usize]) {
-            nearest[v as usize] = line;
-        }
-    }
-    let mut clipped = 0;
-    for (s, clip) in surfels.iter_mut().zip(nearest) {
-        if let Some(c @ Clip::Line { offset, .. }) = clip
-            && offset < 1.0
-        {
-            s.shape.clip = Clip::pack(Some(c));
-            clipped += 1;
-        }
-    }
-    clipped
+        .sum()
 }
 
 /// The line through `a` and `b` as a clip of splat `s` (kept: its centre's side), in
@@ -435,7 +439,8 @@ mod tests {
                 ..Surfel::zeroed()
             })
             .collect();
-        ring_shapes(points, 1.0, triangles, &mut surfels, false);
+        let rings = Rings::of(points.len(), triangles);
+        ring_shapes(points, 1.0, (triangles, &rings), &mut surfels, false);
         for (i, s) in surfels.iter().enumerate() {
             let (x, y) = ((i % 4) as f64, (i / 4) as f64);
             let border = x == 0.0 || x == 3.0 || y == 0.0 || y == 3.0;
@@ -503,7 +508,11 @@ mod tests {
             })
             .collect();
         assert!(surfels[4].covers(Vec3::new(1.25, 0.0, 0.0)));
-        assert_eq!(clip_at_border(&points, &triangles, &mut surfels), 1);
+        let rings = Rings::of(points.len(), &triangles);
+        assert_eq!(
+            clip_at_border(&points, (&triangles, &rings), &mut surfels),
+            1
+        );
         let kept = |x: f32, y: f32| surfels[4].covers(Vec3::new(x, y, 0.0));
         assert!(kept(0.0, 0.0) && kept(0.9, 0.0) && kept(-0.9, 0.0) && kept(0.0, 0.9));
         let past = [(1.1, 0.0), (-1.1, 0.0), (0.0, 1.1), (0.0, -1.1)];
