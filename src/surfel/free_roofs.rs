@@ -43,6 +43,7 @@ use std::collections::HashMap;
 use glam::{DMat3, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
+use super::corners::Rings;
 use super::sets::Sets;
 use crate::io::triangulate::short_or_kept;
 
@@ -88,8 +89,11 @@ pub enum Standing {
 /// x–y ([`delaunay_xy`](crate::io::delaunay::delaunay_xy), long triangles kept).
 pub fn free_standing(positions: &[Vec3], delaunay: &[[u32; 3]]) -> Vec<Standing> {
     let kept = short_or_kept(positions, delaunay, |_, _| false);
-    let triangles = || (delaunay.iter().zip(&kept)).filter_map(|(t, &k)| k.then_some(t));
-    let (edges, border) = tin_edges(triangles());
+    let triangles: Vec<[u32; 3]> = (delaunay.iter().zip(&kept))
+        .filter_map(|(t, &k)| k.then_some(*t))
+        .collect();
+    drop(kept);
+    let (edges, border) = tin_edges(positions.len(), &triangles);
     let Some(spacing) = median_length(positions, &edges) else {
         return vec![Standing::Joined; positions.len()];
     };
@@ -121,7 +125,7 @@ pub fn free_standing(positions: &[Vec3], delaunay: &[[u32; 3]]) -> Vec<Standing>
         tops[top(a)].bordered = true;
         tops[top(b)].bordered = true;
     }
-    for t in triangles() {
+    for t in &triangles {
         let [a, b, c] = t.map(top);
         if a == b && b == c {
             tops[a].surface = true;
@@ -262,24 +266,36 @@ impl Top {
 /// A TIN edge by its ends, the lesser first.
 type Edge = (u32, u32);
 
-/// The edges of the samples' TIN (long triangles dropped), each once, lesser end first;
-/// and those of its border (of one triangle only: its hull, and around the holes where
-/// it left long triangles out).
-fn tin_edges<'a>(triangles: impl Iterator<Item = &'a [u32; 3]>) -> (Vec<Edge>, Vec<Edge>) {
-    let mut sides: Vec<Edge> = triangles
-        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
-        .map(|(a, b)| (a.min(b), a.max(b)))
+/// The edges of the samples' TIN (`triangles`, long ones dropped, over `vertex_count`
+/// samples), each once, lesser end first, in order; and those of its border (of one
+/// triangle only: its hull, and around the holes where it left long triangles out).
+/// Each vertex lists its greater neighbours from its own ring of corners, in parallel:
+/// an edge is a border edge when one triangle of the ring holds it.
+fn tin_edges(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<Edge>, Vec<Edge>) {
+    let rings = Rings::of(vertex_count, triangles);
+    let chunks: Vec<Vec<(Edge, bool)>> = (0..vertex_count)
+        .into_par_iter()
+        .chunks(1 << 12)
+        .map(|vertices| {
+            let (mut out, mut greater) = (Vec::new(), Vec::new());
+            for v in vertices {
+                greater.clear();
+                for &c in rings.of_vertex(v) {
+                    let (t, k) = (&triangles[c as usize / 3], c as usize % 3);
+                    let ends = [t[(k + 1) % 3], t[(k + 2) % 3]];
+                    greater.extend(ends.into_iter().filter(|&w| w as usize > v));
+                }
+                greater.sort_unstable();
+                for run in greater.chunk_by(|a, b| a == b) {
+                    out.push(((v as u32, run[0]), run.len() == 1));
+                }
+            }
+            out
+        })
         .collect();
-    sides.par_sort_unstable();
-    let mut border = Vec::new();
-    for (k, side) in sides.iter().enumerate() {
-        let shared = (k > 0 && sides[k - 1] == *side) || sides.get(k + 1) == Some(side);
-        if !shared {
-            border.push(*side);
-        }
-    }
-    sides.dedup();
-    (sides, border)
+    let all = chunks.iter().flatten();
+    let border = all.clone().filter(|(_, b)| *b).map(|(e, _)| *e).collect();
+    (all.map(|(e, _)| *e).collect(), border)
 }
 
 /// The median horizontal length of `edges`; None where there are none.
