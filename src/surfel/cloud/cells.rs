@@ -77,14 +77,16 @@ impl Cells {
         if inside(cell) { key_of(cell) } else { u64::MAX }
     }
 
-    /// Records the occupied cells from the sorted positions' `keys` (ascending).
+    /// Records the occupied cells from the sorted positions' `keys` (ascending): where
+    /// each starts, found in parallel.
     pub fn index(&mut self, keys: &[u64]) {
-        for (i, &key) in keys.iter().enumerate() {
-            if key != u64::MAX && self.keys.last() != Some(&key) {
-                self.keys.push(key);
-                self.starts.push(i as u32);
-            }
-        }
+        let first = |i: usize| keys[i] != u64::MAX && (i == 0 || keys[i - 1] != keys[i]);
+        self.starts = (0..keys.len())
+            .into_par_iter()
+            .filter(|&i| first(i))
+            .map(|i| i as u32)
+            .collect();
+        self.keys = self.starts.par_iter().map(|&i| keys[i as usize]).collect();
         let end = keys.partition_point(|&k| k != u64::MAX);
         self.starts.push(end as u32);
         self.count = keys.len();

@@ -38,9 +38,9 @@ impl Search {
             .collect();
         keyed.par_sort_unstable_by_key(|&(cell, position, _)| (cell, position));
         keyed.dedup_by_key(|&mut (cell, position, _)| (cell, position));
-        let keys: Vec<u64> = keyed.iter().map(|k| k.0).collect();
+        let keys: Vec<u64> = keyed.par_iter().map(|k| k.0).collect();
         cells.index(&keys);
-        let coords: Vec<[f32; 3]> = keyed.into_iter().map(|k| k.2).collect();
+        let coords: Vec<[f32; 3]> = keyed.par_iter().map(|k| k.2).collect();
         let k = NonZero::new(K.min(coords.len())).unwrap_or(NonZero::<usize>::MIN);
         Search { coords, cells, k }
     }
