@@ -122,7 +122,7 @@ pub fn neighbour_disks(
         let at = walls.binary_search_by_key(&k, |(j, _)| *j).ok();
         at.map(|at| &walls[at].1)
     };
-    let placed: Vec<(Vec3, Option<(f32, SplatShape, bool)>)> = (which.par_iter())
+    let placed: Vec<(Vec3, Option<Grown>)> = (which.par_iter())
         .zip(&disks)
         .enumerate()
         .map(|(k, (&i, (normal, c)))| {
@@ -175,6 +175,9 @@ pub fn neighbour_disks(
     stats.wall_splats += walls.len() as u64;
     walls
 }
+
+/// A surfel's new radius and shape, and whether the shape is clipped.
+type Grown = (f32, SplatShape, bool);
 
 /// Each of the points `which`'s normal (given, or fitted to its neighbourhood and, on a
 /// quantised frame, smoothed: [`Steps`], which turns its fits before their means) and
