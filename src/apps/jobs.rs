@@ -11,6 +11,7 @@ use clap::Subcommand;
 use crate::apps::convert_large::{Bars, options, summary};
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::count;
+use crate::tree::out_of_core::in_lanes;
 use crate::tree::out_of_core::join::{Joined, join};
 use crate::tree::out_of_core::manifest::Manifest;
 use crate::tree::out_of_core::plan::{Planned, plan};
@@ -41,8 +42,8 @@ pub enum JobsCommand {
         #[arg(long, value_name = "MIB")]
         memory: Option<u64>,
     },
-    /// Builds jobs of DIR's plan (all, when none is named), each into its part file
-    /// `jobN.part` and record `jobN.part.json`, written atomically. A job already built
+    /// Builds jobs of DIR's plan (all, when none is named), two at a time, each into its
+    /// part file `jobN.part` and record `jobN.part.json`, written atomically. A job already built
     /// for this plan, whole, is kept; a job's input that differs from its checksum is
     /// refused. The same job gives the same bytes wherever it runs.
     Build {
@@ -100,7 +101,8 @@ fn run_plan(input: &Path, dir: &Path, memory: Option<u64>) -> anyhow::Result<()>
 fn run_build(dir: &Path, jobs: &[usize]) -> anyhow::Result<()> {
     let m = Manifest::read(dir)?;
     let all: Vec<usize> = (0..m.jobs.len()).collect();
-    for &j in if jobs.is_empty() { &all[..] } else { jobs } {
+    let named = if jobs.is_empty() { &all[..] } else { jobs };
+    in_lanes(named, &|j| {
         let start = Instant::now();
         let (how, record) = match run_job(dir, &m, j)? {
             Ran::Built(r) => ("built", r),
@@ -113,7 +115,8 @@ fn run_build(dir: &Path, jobs: &[usize]) -> anyhow::Result<()> {
             record.file.bytes as f64 / 1e6,
             start.elapsed().as_secs_f64()
         );
-    }
+        Ok(())
+    })?;
     if let Some(b) = peak_memory_bytes() {
         println!("peak memory {:.2} GiB", b as f64 / (1u64 << 30) as f64);
     }

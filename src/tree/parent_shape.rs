@@ -27,6 +27,7 @@
 //! wherever the children do. Knot, ε = 1 px, 8 views (`--example quality`): 0.0465
 //! with one colour per inner node, 0.0449 with the field (leaves only: 0.0421).
 
+use arrayvec::ArrayVec;
 use glam::{DVec2, DVec3};
 
 use super::errors::{DIRECTION_TABLE, Disk};
@@ -52,40 +53,85 @@ pub struct Child {
     pub color: DVec3,
 }
 
-/// Centre and rim samples of a child: (position, normal direction), rim points last.
-/// A rim point's direction is its child's field there before normalizing
-/// ([`Shape::field_at`]): the fit reads only its tilt, a ratio of its components.
-fn samples(child: &Child, parent_normal: DVec3) -> [(DVec3, DVec3); RIM_SAMPLES + 1] {
-    let Child { disk, shape, .. } = child;
-    let sign = if disk.n.dot(parent_normal) < 0.0 {
-        -1.0
-    } else {
-        1.0
-    };
-    let minor = shape.minor_axis(disk.n);
-    let mut out = [(disk.p, disk.n * sign); RIM_SAMPLES + 1];
-    for (sample, &(c, s)) in out[1..].iter_mut().zip(&DIRECTION_TABLE) {
-        let (x, y) = (c, s * shape.ratio);
-        let q = disk.p + (shape.axis * x + minor * y) * disk.r;
-        let m = shape.field_at(disk.n, minor, (x, y));
-        *sample = (q, if m.is_finite() { m } else { disk.n } * sign);
-    }
-    out
+/// A child's samples seen from its parent: its centre and its rim points, at plane
+/// coordinates (x, y) = (cos θ, sin θ · ratio) of its ellipse for θ in the errors'
+/// direction table. Each sample's position and normal direction are linear in (x, y):
+/// the position p + r (x u + y v), the direction n + u g₁ + v g₂ with (g₁, g₂) = G (x,
+/// y) ([`Shape::field_at`]; u, v the child's axes). So the child's vectors are projected
+/// on the parent's axes once, and each sample combines the projections.
+struct Seen {
+    /// In the parent's tangent frame: the centre's offset, r u and r v.
+    offset: DVec2,
+    along: DVec2,
+    across: DVec2,
+    /// The normal's, u's and v's coordinates in the parent's frame and along its normal
+    /// (an orthonormal basis, so lengths are kept), signed (turned toward the parent's
+    /// normal).
+    n: DVec3,
+    u: DVec3,
+    v: DVec3,
+    /// The child's own field G (a, b, c), and its rim points' (x, y).
+    gradient: [f64; 3],
+    ratio: f64,
 }
 
-/// The tangent of a sample's tilt from the parent's normal `n` in the parent's frame
-/// `frame`, for the sample's normal direction `m` (any length): frame(m) / (m·n), its
-/// cosine m·n / |m| taken as at least [`MIN_COS_TILT`]. One division, and a root only
-/// where the cosine is clamped.
-fn tilt(m: DVec3, n: DVec3, frame: impl Fn(DVec3) -> DVec2) -> DVec2 {
-    let (along, length2) = (m.dot(n), m.length_squared());
+impl Seen {
+    /// The child as its parent (centre `at`, normal `normal`, frame (t1, t2)) sees it.
+    fn of(child: &Child, (at, normal): (DVec3, DVec3), (t1, t2): (DVec3, DVec3)) -> Seen {
+        let Child { disk, shape, .. } = child;
+        let sign = if disk.n.dot(normal) < 0.0 { -1.0 } else { 1.0 };
+        let minor = shape.minor_axis(disk.n);
+        let frame = |d: DVec3| DVec2::new(d.dot(t1), d.dot(t2));
+        let local = |d: DVec3| DVec3::new(d.dot(t1), d.dot(t2), d.dot(normal)) * sign;
+        let (n, u, v) = (disk.n, shape.axis, minor);
+        Seen {
+            offset: frame(disk.p - at),
+            along: frame(u * disk.r),
+            across: frame(v * disk.r),
+            n: local(n),
+            u: local(u),
+            v: local(v),
+            gradient: shape.gradient,
+            ratio: shape.ratio,
+        }
+    }
+
+    /// Rim sample `k`'s plane coordinates in the child's ellipse.
+    fn rim_xy(&self, k: usize) -> (f64, f64) {
+        let (c, s) = DIRECTION_TABLE[k];
+        (c, s * self.ratio)
+    }
+
+    /// The sample at plane coordinates (x, y) as the fit takes it: its offset in the
+    /// parent's frame, and the tangent of its tilt ([`tilt`]).
+    fn sample(&self, (x, y): (f64, f64)) -> (DVec2, DVec2) {
+        let [a, b, c] = self.gradient;
+        let (g1, g2) = (a * x + b * y, b * x + c * y);
+        // A field that is not finite leaves the child's normal.
+        let (g1, g2) = if g1.is_finite() && g2.is_finite() {
+            (g1, g2)
+        } else {
+            (0.0, 0.0)
+        };
+        let m = self.n + self.u * g1 + self.v * g2;
+        let offset = self.offset + self.along * x + self.across * y;
+        (offset, tilt(m))
+    }
+}
+
+/// The tangent of a sample's tilt from the parent's normal, for its direction `m` (any
+/// length; x, y in the parent's frame, z along its normal): m_xy / m_z, its cosine
+/// m_z / |m| taken as at least [`MIN_COS_TILT`]. One division, and a root only where
+/// the cosine is clamped.
+fn tilt(m: DVec3) -> DVec2 {
+    let (along, length2) = (m.z, m.length_squared());
     let unclamped = along > 0.0 && along * along >= MIN_COS_TILT * MIN_COS_TILT * length2;
     let denominator = if unclamped {
         along
     } else {
         MIN_COS_TILT * length2.sqrt()
     };
-    frame(m) * denominator.recip()
+    m.truncate() * denominator.recip()
 }
 
 /// The parent's shape and major semi-axis, given its disk `parent` (centre, normal and
@@ -98,16 +144,19 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
         children.len()
     );
     let (t1, t2) = tangent_frame(parent.n);
-    let frame = |d: DVec3| DVec2::new(d.dot(t1), d.dot(t2));
+    let mut seen: ArrayVec<Seen, MAX_CHILDREN> = ArrayVec::new();
     let mut fit = Fit::default();
-    let mut rims = [[(DVec3::ZERO, DVec3::ZERO); RIM_SAMPLES + 1]; MAX_CHILDREN];
-    for (child, rim) in children.iter().zip(&mut rims) {
-        *rim = samples(child, parent.n);
-        for &(q, m) in rim.iter() {
-            // The field's normal is normalize(n + G d): G d must be the sample's
-            // tangential part over its normal part, tan of its tilt (not its sine).
-            fit.add(frame(q - parent.p), tilt(m, parent.n, frame));
+    for child in children {
+        let s = Seen::of(child, (parent.p, parent.n), (t1, t2));
+        // The field's normal is normalize(n + G d): G d must be the sample's
+        // tangential part over its normal part, tan of its tilt (not its sine).
+        let (d, t) = s.sample((0.0, 0.0));
+        fit.add(d, t);
+        for k in 0..RIM_SAMPLES {
+            let (d, t) = s.sample(s.rim_xy(k));
+            fit.add(d, t);
         }
+        seen.push(s);
     }
     let (dir, l1, l2) = fit.axes();
     let ratio = if l1 > 0.0 {
@@ -123,15 +172,18 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
         clip: None,
         color: [DVec3::ZERO; 2],
     };
-    let minor = shape.minor_axis(parent.n);
+    // The ellipse's axes in the frame: each sample's offset along them.
+    let (u, v) = (dir, dir.perp());
     let grow = 1.0 / (std::f64::consts::PI / RIM_SAMPLES as f64).cos();
     // The largest ρ², then one root (√ is monotone and correctly rounded: the same
     // value as the largest root).
     let (mut major2, stretch) = (0.0f64, ratio.recip());
-    for (child, rim) in children.iter().zip(&rims) {
-        for (q, _) in &rim[1..] {
-            let d = child.disk.p + (*q - child.disk.p) * grow - parent.p;
-            let (x, y) = (d.dot(shape.axis), d.dot(minor) * stretch);
+    for s in &seen {
+        let (centre, along, across) = (s.offset, s.along * grow, s.across * grow);
+        for k in 0..RIM_SAMPLES {
+            let (x, y) = s.rim_xy(k);
+            let d = centre + along * x + across * y;
+            let (x, y) = (d.dot(u), d.dot(v) * stretch);
             major2 = major2.max(x * x + y * y);
         }
     }
@@ -141,20 +193,20 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
         major = parent.r;
     }
     shape.gradient = shape.gradient.map(|g| g * major);
-    shape.color = color_field(parent, (&shape, major), children, &rims);
+    shape.color = color_field((u, v), major, children, &seen);
     (shape, major)
 }
 
 /// The parent's colour field: the least squares ([`field::color_field`]) of its
 /// children's colours (each its colour plus its own field) at their centres and rim
-/// points (`rims`, as [`samples`] placed them), in the parent's ellipse frame (major
-/// radii), each child weighing its ellipse's area r² · ratio. Zero where the samples do
-/// not span the plane.
+/// points (`seen`), in the parent's ellipse frame (its axes `u`, `v` in its tangent
+/// frame; major radii), each child weighing its ellipse's area r² · ratio. Zero where
+/// the samples do not span the plane.
 fn color_field(
-    parent: &Disk,
-    (shape, major): (&Shape, f64),
+    (u, v): (DVec2, DVec2),
+    major: f64,
     children: &[Child],
-    rims: &[[(DVec3, DVec3); RIM_SAMPLES + 1]],
+    seen: &[Seen],
 ) -> [DVec3; 2] {
     // One colour and no field over every child (every node of a model without colours)
     // is a constant: its least squares has no slope.
@@ -165,24 +217,19 @@ fn color_field(
     {
         return [DVec3::ZERO; 2];
     }
-    let (u, v) = (shape.axis, shape.minor_axis(parent.n));
-    let points = children.iter().zip(rims).flat_map(|(child, rim)| {
+    let points = children.iter().zip(seen).flat_map(|(child, s)| {
         let Child {
             disk,
             shape: own,
             color,
         } = child;
         let w = disk.r * disk.r * own.ratio;
-        // The samples' coordinates in the child's own frame, in its radii.
-        let at = DIRECTION_TABLE.iter().map(|&(c, s)| (c, s * own.ratio));
-        std::iter::once((0.0, 0.0))
-            .chain(at)
-            .zip(rim)
-            .map(move |((x, y), (q, _))| {
-                let d = *q - parent.p;
-                let xy = DVec2::new(d.dot(u), d.dot(v)) / major;
-                (xy, *color + own.color[0] * x + own.color[1] * y, w)
-            })
+        let rim = (0..RIM_SAMPLES).map(|k| s.rim_xy(k));
+        std::iter::once((0.0, 0.0)).chain(rim).map(move |(x, y)| {
+            let d = s.offset + s.along * x + s.across * y;
+            let xy = DVec2::new(d.dot(u), d.dot(v)) / major;
+            (xy, *color + own.color[0] * x + own.color[1] * y, w)
+        })
     });
     field::color_field(points).map_or([DVec3::ZERO; 2], |(_, field)| field)
 }

@@ -34,7 +34,7 @@ use rayon::prelude::*;
 
 use super::covering::{Covering, RadiusRule, covering};
 use super::pca::plane_normal;
-use super::shape::{Clip, Shape, SplatShape};
+use super::shape::{Clip, Shape};
 use super::{Surfel, SurfelStats};
 use super::{footprint, walls};
 pub use orientation::{NormalsTurned, Orientation};
@@ -116,42 +116,28 @@ pub fn neighbour_disks(
         Vec::new()
     };
     drop(search);
-    // Each listed point's normal, and its radius and shape where they grow its own; in
-    // parallel, then written in `which`'s order.
-    let wall_of = |k: usize| {
-        let at = walls.binary_search_by_key(&k, |(j, _)| *j).ok();
-        at.map(|at| &walls[at].1)
-    };
-    let placed: Vec<(Vec3, Option<Grown>)> = (which.par_iter())
-        .zip(&disks)
-        .enumerate()
-        .map(|(k, (&i, (normal, c)))| {
-            let s = &surfels[i as usize];
-            let normal = match given_normal(i) == Vec3::ZERO {
-                true => orientation.apply(s.position, *normal),
-                false => *normal,
-            };
-            let radius = c.radius / scale;
-            let grown = (radius >= s.radius).then(|| {
-                let n = normal.as_dvec3();
-                let mut shape = Shape::ellipse(n, c.axis.as_dvec3(), c.ratio as f64);
-                let p = points[i as usize] * scale;
-                shape.clip = match wall_of(k) {
-                    Some(w) => w.clip_of(p, (&shape, n, c.radius)),
-                    None => c.open.map(|d| boundary_clip(&shape, n, d)),
-                };
-                (radius, shape.pack(), shape.clip.is_some())
-            });
-            (normal, grown)
-        })
-        .collect();
-    for ((&i, (_, c)), (normal, grown)) in which.iter().zip(&disks).zip(placed) {
+    let mut next_wall = walls.iter().peekable();
+    for (k, (&i, (normal, c))) in which.iter().zip(disks).enumerate() {
+        let wall = next_wall.next_if(|(j, _)| *j == k).map(|(_, w)| w);
         let s = &mut surfels[i as usize];
-        s.normal = normal;
-        if let Some((radius, shape, clipped)) = grown {
+        let estimated = given_normal(i) == Vec3::ZERO;
+        s.normal = if estimated {
+            orientation.apply(s.position, normal)
+        } else {
+            normal
+        };
+        let radius = c.radius / scale;
+        if radius >= s.radius {
             s.radius = radius;
-            s.shape = shape;
-            stats.clipped_boundaries += clipped as u64;
+            let n = s.normal.as_dvec3();
+            let mut shape = Shape::ellipse(n, c.axis.as_dvec3(), c.ratio as f64);
+            let p = points[i as usize] * scale;
+            shape.clip = match wall {
+                Some(w) => w.clip_of(p, (&shape, n, c.radius)),
+                None => c.open.map(|d| boundary_clip(&shape, n, d)),
+            };
+            stats.clipped_boundaries += shape.clip.is_some() as u64;
+            s.shape = shape.pack();
         }
         stats.capped_radii += c.capped as u64;
     }
@@ -175,9 +161,6 @@ pub fn neighbour_disks(
     stats.wall_splats += walls.len() as u64;
     walls
 }
-
-/// A surfel's new radius and shape, and whether the shape is clipped.
-type Grown = (f32, SplatShape, bool);
 
 /// Each of the points `which`'s normal (given, or fitted to its neighbourhood and, on a
 /// quantised frame, smoothed: [`Steps`], which turns its fits before their means) and

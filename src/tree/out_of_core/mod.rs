@@ -144,24 +144,35 @@ pub fn build_file(
     }
 }
 
-/// Runs every job of `manifest` (in `dir`), [`LANES`] at a time: each lane takes the
-/// next job not yet taken. The jobs' parallel work shares the one thread pool; a
-/// lane's serial work runs on its own thread. The first error stops the lanes from
-/// taking more jobs and is returned.
+/// Runs every job of `manifest` (in `dir`), [`LANES`] at a time ([`in_lanes`]).
 fn run_jobs(dir: &Path, manifest: &Manifest, progress: &dyn Progress) -> anyhow::Result<()> {
+    let all: Vec<usize> = (0..manifest.jobs.len()).collect();
+    in_lanes(&all, &|j| {
+        run_job::run(dir, manifest, j)?;
+        progress.advance(manifest.jobs[j].points);
+        Ok(())
+    })
+}
+
+/// Runs `work` on each of `jobs`, [`LANES`] at a time: each lane takes the next job
+/// not yet taken. The jobs' parallel work shares the one thread pool; a lane's serial
+/// work runs on its own thread. The first error stops the lanes from taking more jobs
+/// and is returned.
+pub fn in_lanes(
+    jobs: &[usize],
+    work: &(dyn Fn(usize) -> anyhow::Result<()> + Sync),
+) -> anyhow::Result<()> {
     use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     let (next, failed) = (AtomicUsize::new(0), AtomicBool::new(false));
     let lane = || -> anyhow::Result<()> {
         while !failed.load(Ordering::Relaxed) {
-            let j = next.fetch_add(1, Ordering::Relaxed);
-            let Some(job) = manifest.jobs.get(j) else {
+            let Some(&j) = jobs.get(next.fetch_add(1, Ordering::Relaxed)) else {
                 return Ok(());
             };
-            if let Err(e) = run_job::run(dir, manifest, j) {
+            if let Err(e) = work(j) {
                 failed.store(true, Ordering::Relaxed);
                 return Err(e);
             }
-            progress.advance(job.points);
         }
         Ok(())
     };
