@@ -335,29 +335,38 @@ where
 /// triangles, reaches past the border edge opposite it: along every hole and outline of
 /// a sensor frame (`super::grid`) that made a rim a pixel wide that the reference leaves empty. Where a ring
 /// holds several border edges, the nearest one's line clips (the first in triangle
-/// order among equals). Each vertex reads only its own ring and its neighbours'
-/// (`rings`, of `triangles`), in parallel: an edge (a, b) is a border edge when one
-/// triangle of a's ring holds b.
+/// order among equals). Each vertex reads its own ring (`rings`, of `triangles`), in
+/// parallel, first to tell whether it is on the border (a neighbour that one triangle
+/// of the ring holds), then, inside it, to find the border edges opposite it: an edge
+/// (a, b) whose ends are both on the border and that one triangle of a's ring holds.
 pub fn clip_at_border(
     points: &[Vec3],
     (triangles, rings): (&[[u32; 3]], &Rings),
     surfels: &mut [Surfel],
 ) -> u64 {
+    let on_border: Vec<bool> = (0..surfels.len())
+        .into_par_iter()
+        .with_min_len(1 << 12)
+        .map_init(Vec::new, |ends, v| {
+            ends.clear();
+            ends.extend(ring_of(triangles, rings, v).flat_map(|(_, n, p)| [n, p]));
+            ends.sort_unstable();
+            ends.chunk_by(|a, b| a == b).any(|run| run.len() == 1)
+        })
+        .collect();
     let shared = |a: u32, b: u32| {
         let ring = ring_of(triangles, rings, a as usize);
         ring.filter(|&(_, next, previous)| next == b || previous == b)
             .count()
     };
-    let on_border = |v: u32| {
-        ring_of(triangles, rings, v as usize)
-            .any(|(_, next, previous)| shared(v, next) == 1 || shared(v, previous) == 1)
-    };
+    let border_edge =
+        |a: u32, b: u32| on_border[a as usize] && on_border[b as usize] && shared(a, b) == 1;
     surfels
         .par_iter_mut()
         .enumerate()
         .with_min_len(1 << 12)
         .map(|(v, s)| {
-            if on_border(v as u32) {
+            if on_border[v] {
                 return 0;
             }
             let offset = |c: &Option<Clip>| match c {
@@ -366,7 +375,7 @@ pub fn clip_at_border(
             };
             let mut nearest = None;
             for (_, a, b) in ring_of(triangles, rings, v) {
-                if shared(a, b) != 1 {
+                if !border_edge(a, b) {
                     continue;
                 }
                 let line = edge_clip(s, points[a as usize], points[b as usize]);
