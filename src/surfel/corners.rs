@@ -34,6 +34,19 @@ impl Rings {
     pub fn of_vertex(&self, v: usize) -> &[u32] {
         &self.corners[self.start[v] as usize..self.start[v + 1] as usize]
     }
+
+    /// Vertex `v`'s corners of `triangles` (those these rows were made of) as
+    /// (triangle, its next vertex, its previous vertex), in triangle order.
+    pub fn ring<'a>(
+        &'a self,
+        triangles: &'a [[u32; 3]],
+        v: usize,
+    ) -> impl Iterator<Item = (&'a [u32; 3], u32, u32)> + Clone {
+        self.of_vertex(v).iter().map(|&c| {
+            let (t, k) = (&triangles[c as usize / 3], c as usize % 3);
+            (t, t[(k + 1) % 3], t[(k + 2) % 3])
+        })
+    }
 }
 
 /// The rows of `triangles`' corners by vertex (see the module doc): `(start, corners)`,

@@ -280,11 +280,8 @@ fn tin_edges(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<Edge>, Vec<Edg
             let (mut out, mut greater) = (Vec::new(), Vec::new());
             for v in vertices {
                 greater.clear();
-                for &c in rings.of_vertex(v) {
-                    let (t, k) = (&triangles[c as usize / 3], c as usize % 3);
-                    let ends = [t[(k + 1) % 3], t[(k + 2) % 3]];
-                    greater.extend(ends.into_iter().filter(|&w| w as usize > v));
-                }
+                let ends = rings.ring(triangles, v).flat_map(|(_, n, p)| [n, p]);
+                greater.extend(ends.filter(|&w| w as usize > v));
                 greater.sort_unstable();
                 for run in greater.chunk_by(|a, b| a == b) {
                     out.push(((v as u32, run[0]), run.len() == 1));

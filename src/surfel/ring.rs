@@ -226,7 +226,7 @@ pub fn ring_shapes(
     } else {
         Vec::new()
     };
-    let ring = |v: usize| ring_of(triangles, rings, v);
+    let ring = |v: usize| rings.ring(triangles, v);
     surfels
         .par_iter_mut()
         .enumerate()
@@ -262,19 +262,6 @@ pub fn ring_shapes(
             },
         );
     normals
-}
-
-/// Vertex v's corners (`rings` of `triangles`) as (triangle, its next vertex, its
-/// previous vertex), in triangle order.
-fn ring_of<'a>(
-    triangles: &'a [[u32; 3]],
-    rings: &'a Rings,
-    v: usize,
-) -> impl Iterator<Item = (&'a [u32; 3], u32, u32)> + Clone {
-    rings.of_vertex(v).iter().map(|&c| {
-        let (t, k) = (&triangles[c as usize / 3], c as usize % 3);
-        (t, t[(k + 1) % 3], t[(k + 2) % 3])
-    })
 }
 
 /// Vertex v's one-ring ellipse (see the module doc): its major semi-axis (unit-scaled)
@@ -349,13 +336,13 @@ pub fn clip_at_border(
         .with_min_len(1 << 12)
         .map_init(Vec::new, |ends, v| {
             ends.clear();
-            ends.extend(ring_of(triangles, rings, v).flat_map(|(_, n, p)| [n, p]));
+            ends.extend(rings.ring(triangles, v).flat_map(|(_, n, p)| [n, p]));
             ends.sort_unstable();
             ends.chunk_by(|a, b| a == b).any(|run| run.len() == 1)
         })
         .collect();
     let shared = |a: u32, b: u32| {
-        let ring = ring_of(triangles, rings, a as usize);
+        let ring = rings.ring(triangles, a as usize);
         ring.filter(|&(_, next, previous)| next == b || previous == b)
             .count()
     };
@@ -374,7 +361,7 @@ pub fn clip_at_border(
                 _ => f64::INFINITY,
             };
             let mut nearest = None;
-            for (_, a, b) in ring_of(triangles, rings, v) {
+            for (_, a, b) in rings.ring(triangles, v) {
                 if !border_edge(a, b) {
                     continue;
                 }

@@ -96,6 +96,12 @@ impl Seen {
         }
     }
 
+    /// The offset in the parent's frame of the child's point at plane coordinates
+    /// (x, y), its ellipse `grow` times as large.
+    fn offset_at(&self, (x, y): (f64, f64), grow: f64) -> DVec2 {
+        self.offset + self.along * grow * x + self.across * grow * y
+    }
+
     /// Rim sample `k`'s plane coordinates in the child's ellipse.
     fn rim_xy(&self, k: usize) -> (f64, f64) {
         let (c, s) = DIRECTION_TABLE[k];
@@ -114,8 +120,7 @@ impl Seen {
             (0.0, 0.0)
         };
         let m = self.n + self.u * g1 + self.v * g2;
-        let offset = self.offset + self.along * x + self.across * y;
-        (offset, tilt(m))
+        (self.offset_at((x, y), 1.0), tilt(m))
     }
 }
 
@@ -179,10 +184,8 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
     // value as the largest root).
     let (mut major2, stretch) = (0.0f64, ratio.recip());
     for s in &seen {
-        let (centre, along, across) = (s.offset, s.along * grow, s.across * grow);
         for k in 0..RIM_SAMPLES {
-            let (x, y) = s.rim_xy(k);
-            let d = centre + along * x + across * y;
+            let d = s.offset_at(s.rim_xy(k), grow);
             let (x, y) = (d.dot(u), d.dot(v) * stretch);
             major2 = major2.max(x * x + y * y);
         }
@@ -226,7 +229,7 @@ fn color_field(
         let w = disk.r * disk.r * own.ratio;
         let rim = (0..RIM_SAMPLES).map(|k| s.rim_xy(k));
         std::iter::once((0.0, 0.0)).chain(rim).map(move |(x, y)| {
-            let d = s.offset + s.along * x + s.across * y;
+            let d = s.offset_at((x, y), 1.0);
             let xy = DVec2::new(d.dot(u), d.dot(v)) / major;
             (xy, *color + own.color[0] * x + own.color[1] * y, w)
         })
