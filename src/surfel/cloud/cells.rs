@@ -158,12 +158,15 @@ impl Cells {
         let mut found = vec![ArrayVec::new(); queries.len()];
         let mut candidates = Candidates::default();
         let mut fingers = [0; 9];
+        let mut last: Option<f32> = None;
         for group in order.chunk_by(|a, b| a.0 == b.0) {
             let cell = group[0].0;
             candidates.gather(coords, self.block(cell, &mut fingers));
             for &(_, q) in group {
                 let p = queries[q as usize];
-                let nearest = candidates.nearest(p, k.get());
+                let within = last.map_or(f32::INFINITY, |reach| reach * NEXT_REACH);
+                let nearest = candidates.nearest(p, k.get(), within);
+                last = nearest.last().map(|n| n.0.sqrt());
                 let exact = inside(cell)
                     && nearest.len() == k.get()
                     && nearest
@@ -195,6 +198,11 @@ impl Cells {
     }
 }
 
+/// The reach within which a query's k nearest are first sought, in the last query's
+/// k-th distance: neighbouring queries' k-th distances differ by a few per cent on a
+/// scan, and a query whose k-th lies further is answered from all its candidates.
+const NEXT_REACH: f32 = 1.25;
+
 /// Where each of a block's nine columns was last searched in the occupied cells'
 /// keys. Queries taken in their cells' order search each column at ascending keys.
 type Fingers = [usize; 9];
@@ -224,6 +232,7 @@ struct Candidates {
     y: Vec<f32>,
     z: Vec<f32>,
     id: Vec<u32>,
+    squared: Vec<f32>,
     ranked: Vec<u64>,
 }
 
@@ -234,12 +243,11 @@ impl Candidates {
         self.z.clear();
         self.id.clear();
         for run in runs {
-            for (i, c) in coords[run.clone()].iter().enumerate() {
-                self.x.push(c[0]);
-                self.y.push(c[1]);
-                self.z.push(c[2]);
-                self.id.push((run.start + i) as u32);
-            }
+            let run_coords = &coords[run.clone()];
+            self.x.extend(run_coords.iter().map(|c| c[0]));
+            self.y.extend(run_coords.iter().map(|c| c[1]));
+            self.z.extend(run_coords.iter().map(|c| c[2]));
+            self.id.extend(run.map(|i| i as u32));
         }
     }
 
@@ -247,14 +255,33 @@ impl Candidates {
     /// equally distant ones, the first gathered. Each candidate is ranked by one
     /// integer, its squared distance's bits (which order as the distances do, all
     /// being ≥ 0) above its place among the candidates.
-    fn nearest(&mut self, p: Vec3, k: usize) -> ArrayVec<(f32, u32), K> {
-        self.ranked.clear();
+    ///
+    /// Only candidates within `within` of `p` are ranked when at least `k` are: then
+    /// the block's k-th nearest lies within it, and the k least ranks are those of the
+    /// whole block. Otherwise all are. The bound is any guess ([`NEXT_REACH`] times the
+    /// last query's k-th distance): it changes only how many are ranked.
+    fn nearest(&mut self, p: Vec3, k: usize, within: f32) -> ArrayVec<(f32, u32), K> {
         let squared = (self.x.iter().zip(&self.y).zip(&self.z))
             .map(|((x, y), z)| (x - p.x).powi(2) + (y - p.y).powi(2) + (z - p.z).powi(2));
-        let ranks = squared
-            .enumerate()
-            .map(|(i, d)| (u64::from(d.to_bits()) << 32) | i as u64);
-        self.ranked.extend(ranks);
+        self.squared.clear();
+        self.squared.extend(squared);
+        let rank = |(i, d): (usize, &f32)| (u64::from(d.to_bits()) << 32) | i as u64;
+        let bound = within * within;
+        self.ranked.resize(self.squared.len(), 0);
+        // Branch-free compaction: every rank is written, the next one overwrites it
+        // unless it lies within the bound.
+        let mut kept = 0;
+        for (i, d) in self.squared.iter().enumerate() {
+            self.ranked[kept] = rank((i, d));
+            kept += (*d <= bound) as usize;
+        }
+        if kept >= k {
+            self.ranked.truncate(kept);
+        } else {
+            self.ranked.clear();
+            self.ranked
+                .extend(self.squared.iter().enumerate().map(rank));
+        }
         let k = k.min(self.ranked.len());
         if k < self.ranked.len() {
             self.ranked.select_nth_unstable(k);
