@@ -6,7 +6,10 @@
 # 200 M points with colours (LAS, tools/gen_cloud.rs). Lucy is converted in memory (the
 # default where it fits) and out of core (--out-of-core --memory LUCY_MEMORY_MIB, 1024
 # by default). Runs alternate spt and Potree on one machine; wall time and peak resident
-# memory from GNU time. Prints a Markdown table.
+# memory from GNU time. Where Open3D is installed (pip install open3d), its normal
+# estimation alone on the Lucy-size cloud (tools/open3d_normals.py, k = 24) runs in the
+# same rotation: the neighbour search and fit that any splat needs, without the rest of
+# a conversion. Prints a Markdown table.
 #
 #   tools/bench_convert_scale.sh          # RUNS=3 on Lucy, 1 on the 200 M tile
 #   POINTS=50000000 tools/bench_convert_scale.sh   # a smaller tile
@@ -44,6 +47,10 @@ for i in $(seq "$runs"); do
   timed spt_cloud ./target/release/spt convert "$cloud" "$logs/lucy.spt"
   rm -rf "$logs/potree_out"
   timed potree_cloud "$potree" "${cloud%.ply}.las" -o "$logs/potree_out"
+  if python3 -c "import open3d" 2> /dev/null; then
+    timed open3d_cloud python3 tools/open3d_normals.py "$cloud" 24
+    cat "$logs/open3d_cloud.out" >> "$logs/open3d_cloud.fits"
+  fi
 done
 cp "$logs/spt_cloud.out" "$logs/spt_cloud.stages"
 cp "$logs/spt_lucy_ooc.out" "$logs/spt_lucy_ooc.stages"
@@ -78,6 +85,11 @@ for label, n, a, b in [("Lucy-size mesh, in memory", 14028800, "spt_lucy", "potr
     cell = lambda r: "–" if r is None else f"{r[0]:.1f} s, {r[1]:.2f} GiB ({n / r[0] / 1e6:.2f} M points/s, {r[2]} run{'s' if r[2] > 1 else ''})"
     ratio = lambda k: "–" if p is None else f"{s[k] / p[k]:.2f}"
     print(f"| {label} | {n:,} | {cell(s)} | {cell(p)} | {ratio(0)} | {ratio(1)} |")
+peer, potree = runs("open3d_cloud"), runs("potree_cloud")
+if peer is not None:
+    fits = [l.strip() for l in open(os.path.join(logs, "open3d_cloud.fits")) if l.strip()]
+    print(f"\nOpen3D's normals alone on the Lucy-size cloud (read and fit, median of {peer[2]}): {peer[0]:.1f} s, {peer[1]:.2f} GiB,")
+    print(f"{peer[0] / potree[0]:.2f}× PotreeConverter's whole conversion of the same points. Its runs: " + "; ".join(fits) + ".")
 for name, what in [("spt_lucy_ooc", "the Lucy-size mesh out of core (last run)"), ("spt_cloud", "the Lucy-size cloud (last run)"), ("spt_city", "the city tile")]:
     path = os.path.join(logs, name + ".stages")
     if os.path.exists(path):
