@@ -81,7 +81,7 @@ pub fn join(dir: &Path, output: &Path) -> anyhow::Result<Joined> {
         Some(why)
     } else if turn != m.build.turn {
         m.build.turn = turn;
-        Some("the whole mesh's orientation vote differs from the first job's".to_owned())
+        Some("the parts' orientation vote differs from the plan's".to_owned())
     } else {
         None
     };

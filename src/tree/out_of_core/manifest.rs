@@ -65,7 +65,7 @@ pub struct Input {
     pub mesh: bool,
     /// The mesh's mean vertex relative to the origin: the centre of its orientation vote.
     pub vote_centre: [f64; 3],
-    /// The orientation the parts were first built with (the first job's vote).
+    /// The orientation the parts were first built with (the plan's whole vote).
     pub turn_guess: bool,
 }
 

@@ -3,11 +3,12 @@
 //!
 //! A mesh's normals turn outward by a vote of all its vertices
 //! ([`crate::surfel::mesh::orient_outward`]), and a vertex's ellipse and shading field
-//! are fitted to its oriented normals. So a job is built ([`build`]) with an
-//! orientation given (the first job's vote, [`flux`], as a guess), and returns its own
-//! vertices' terms of the vote with its part: if the model's vote disagrees with the
-//! guess, the jobs are built again. Otherwise a job is built as a cloud's is: leaf
-//! surfels of its own vertices, tree with the model's error scale, chunks, part file.
+//! are fitted to its oriented normals. So the plan takes the whole vote first, from
+//! every job's terms ([`flux`]: each vertex's normal and radius from its faces, cheap
+//! beside a build), and a job is built ([`build`]) with that orientation given. It
+//! returns its own vertices' terms with its part, and the join checks that they add up
+//! to the same decision. Otherwise a job is built as a cloud's is: leaf surfels of its
+//! own vertices, tree with the model's error scale, chunks, part file.
 
 use std::path::Path;
 

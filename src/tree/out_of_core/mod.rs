@@ -108,8 +108,8 @@ pub struct Built {
     /// finds its own samples' walls among its samples and halo, so near a job's border
     /// they may differ from an in-memory build's.
     pub walls: u64,
-    /// A mesh's jobs were built twice: the first job's guess of the orientation was
-    /// not the whole model's vote ([`mesh_job`]).
+    /// A mesh's jobs were built twice: the parts' orientation vote did not decide as
+    /// the plan's had ([`mesh_job`]).
     pub rebuilt: bool,
 }
 

@@ -4,6 +4,7 @@
 //! size and checksum.
 
 use std::path::Path;
+use std::sync::OnceLock;
 
 use glam::IVec3;
 
@@ -11,8 +12,9 @@ use super::checksums::{self, FileEntry};
 use super::job::Model;
 use super::manifest::{self, BuildParams, Input, JobEntry, Manifest};
 use super::spill::{self, GRID, Grid, JobBox, Scan, Split};
-use super::{Options, Progress, mesh_job, mesh_spill, record};
+use super::{Options, Progress, in_lanes, mesh_job, mesh_spill, record};
 use crate::io::formats::ModelStream;
+use crate::surfel::outward::Vote;
 
 /// What [`plan`] did.
 #[derive(Debug, Clone, PartialEq)]
@@ -217,8 +219,8 @@ impl Spilling<'_> {
     }
 
     /// A mesh's spill: each job's vertices, the halo its surfels read and its
-    /// triangles; also the first job's orientation vote, the guess the parts are
-    /// first built with ([`mesh_job`]).
+    /// triangles; also whether the whole mesh's orientation vote turns its normals,
+    /// the orientation the parts are built with ([`mesh_job`]).
     fn mesh(&self) -> anyhow::Result<(Vec<Vec<FileEntry>>, bool)> {
         anyhow::ensure!(
             self.jobs.len() < mesh_spill::NO_JOB as usize,
@@ -240,15 +242,32 @@ impl Spilling<'_> {
             |n| self.progress.advance(n),
         )?;
         drop(own);
-        let c = self.scan.mean - self.model.origin;
-        let first = (&*files.own[0], &*files.halo[0], &*files.triangles[0]);
-        let guess = mesh_job::flux(self.model, first, c)?.turns();
+        let turn = self.whole_vote(&files)?.turns();
         let roles = [
             ("own", &files.own[..]),
             ("halo", &files.halo[..]),
             ("tri", &files.triangles[..]),
         ];
-        Ok((self.entries(&roles)?, guess))
+        Ok((self.entries(&roles)?, turn))
+    }
+
+    /// The whole mesh's orientation vote about its mean vertex: every job's terms
+    /// ([`mesh_job::flux`]), read back from its spill files, [`in_lanes`], added in the
+    /// jobs' order as the join adds them.
+    fn whole_vote(&self, files: &mesh_spill::MeshFiles) -> anyhow::Result<Vote> {
+        let c = self.scan.mean - self.model.origin;
+        let terms: Vec<OnceLock<Vote>> = files.own.iter().map(|_| OnceLock::new()).collect();
+        let jobs: Vec<usize> = (0..terms.len()).collect();
+        self.progress.stage("vote", self.scan.count);
+        let (model, boxes, progress) = (self.model, self.jobs, self.progress);
+        in_lanes(&jobs, &|j| {
+            let job = (&*files.own[j], &*files.halo[j], &*files.triangles[j]);
+            let _ = terms[j].set(mesh_job::flux(model, job, c)?);
+            progress.advance(boxes[j].points);
+            Ok(())
+        })?;
+        let each = terms.iter().map(|t| t.get().copied().unwrap_or_default());
+        Ok(each.fold(Vote::default(), Vote::plus))
     }
 }
 
