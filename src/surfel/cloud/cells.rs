@@ -199,8 +199,10 @@ impl Cells {
 }
 
 /// The reach within which a query's k nearest are first sought, in the last query's
-/// k-th distance: neighbouring queries' k-th distances differ by a few per cent on a
-/// scan, and a query whose k-th lies further is answered from all its candidates.
+/// k-th distance; a query with fewer than k candidates within it ranks them all. On
+/// the Lucy-size cloud 38 of a block's 136 candidates lie within it on average, and
+/// 0.5 % of the queries rank them all. The cloud_surfels bench took 318 ms at 1.25,
+/// 327 ms at 1.1 and 348 ms at 1.5.
 const NEXT_REACH: f32 = 1.25;
 
 /// Where each of a block's nine columns was last searched in the occupied cells'
