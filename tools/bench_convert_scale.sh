@@ -33,6 +33,8 @@ city=data/large/city_$((points / 1000000))m.las
 [ -f "${cloud%.ply}.las" ] || python3 tools/ply_to_las.py "$cloud" "${cloud%.ply}.las"
 [ "$city_wanted" = 0 ] || [ -f "$city" ] || ./target/release/examples/gen_cloud --points "$points" --out "$city"
 logs=$(mktemp -d)
+open3d=0
+python3 -c "import open3d" 2> /dev/null && open3d=1
 # One timed run: "seconds peak_kib" appended to $logs/$1.
 timed() {
   local name=$1; shift
@@ -47,7 +49,7 @@ for i in $(seq "$runs"); do
   timed spt_cloud ./target/release/spt convert "$cloud" "$logs/lucy.spt"
   rm -rf "$logs/potree_out"
   timed potree_cloud "$potree" "${cloud%.ply}.las" -o "$logs/potree_out"
-  if python3 -c "import open3d" 2> /dev/null; then
+  if [ "$open3d" = 1 ]; then
     timed open3d_cloud python3 tools/open3d_normals.py "$cloud" 24
     cat "$logs/open3d_cloud.out" >> "$logs/open3d_cloud.fits"
   fi

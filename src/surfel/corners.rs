@@ -47,6 +47,25 @@ impl Rings {
             (t, t[(k + 1) % 3], t[(k + 2) % 3])
         })
     }
+
+    /// Vertex `v`'s neighbours that `keep` passes, as runs of equal ends of its
+    /// corners' edges in ascending order, sorted in `ends`: an edge (v, w) that one
+    /// triangle of the ring holds (a border edge) makes a run of one.
+    pub fn neighbour_runs<'e>(
+        &self,
+        triangles: &[[u32; 3]],
+        v: usize,
+        keep: impl Fn(u32) -> bool,
+        ends: &'e mut Vec<u32>,
+    ) -> impl Iterator<Item = &'e [u32]> + 'e {
+        ends.clear();
+        let all = self
+            .ring(triangles, v)
+            .flat_map(|(_, next, previous)| [next, previous]);
+        ends.extend(all.filter(|&w| keep(w)));
+        ends.sort_unstable();
+        ends.chunk_by(|a, b| a == b)
+    }
 }
 
 /// The rows of `triangles`' corners by vertex (see the module doc): `(start, corners)`,

@@ -277,15 +277,10 @@ fn tin_edges(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<Edge>, Vec<Edg
         .into_par_iter()
         .chunks(1 << 12)
         .map(|vertices| {
-            let (mut out, mut greater) = (Vec::new(), Vec::new());
+            let (mut out, mut ends) = (Vec::new(), Vec::new());
             for v in vertices {
-                greater.clear();
-                let ends = rings.ring(triangles, v).flat_map(|(_, n, p)| [n, p]);
-                greater.extend(ends.filter(|&w| w as usize > v));
-                greater.sort_unstable();
-                for run in greater.chunk_by(|a, b| a == b) {
-                    out.push(((v as u32, run[0]), run.len() == 1));
-                }
+                let greater = rings.neighbour_runs(triangles, v, |w| w as usize > v, &mut ends);
+                out.extend(greater.map(|run| ((v as u32, run[0]), run.len() == 1)));
             }
             out
         })

@@ -335,10 +335,8 @@ pub fn clip_at_border(
         .into_par_iter()
         .with_min_len(1 << 12)
         .map_init(Vec::new, |ends, v| {
-            ends.clear();
-            ends.extend(rings.ring(triangles, v).flat_map(|(_, n, p)| [n, p]));
-            ends.sort_unstable();
-            ends.chunk_by(|a, b| a == b).any(|run| run.len() == 1)
+            let mut runs = rings.neighbour_runs(triangles, v, |_| true, ends);
+            runs.any(|run| run.len() == 1)
         })
         .collect();
     let shared = |a: u32, b: u32| {
