@@ -14,6 +14,7 @@ pub mod chunks;
 pub mod errors;
 pub(crate) mod hierarchy;
 pub mod instances;
+mod internal;
 pub mod out_of_core;
 pub(crate) mod parent_shape;
 pub mod record;
@@ -25,7 +26,6 @@ pub mod spt_write;
 pub mod up;
 pub mod validate;
 
-use arrayvec::ArrayVec;
 use glam::{DVec3, Vec3};
 use half::f16;
 use rayon::prelude::*;
@@ -37,12 +37,9 @@ use crate::surfel::LeafSurfels;
 use crate::surfel::NormalsTurned;
 use crate::surfel::Surfel;
 use crate::surfel::cloud::Orientation;
-use crate::surfel::field::unit_rgb;
-use crate::surfel::shape::{Shape, SplatShape};
+use crate::surfel::shape::SplatShape;
 use chunks::Chunk;
-use errors::{Disk, Splat, node_error, parent_disk};
-use hierarchy::{Hierarchy, MAX_CHILDREN};
-use parent_shape::{Child, parent_shape};
+use hierarchy::Hierarchy;
 pub use record::NodeRecord;
 use record::encode_up;
 use report::{Finished, Report, Silent, Step};
@@ -196,81 +193,6 @@ pub fn error_scale(surfels: &[Surfel]) -> f32 {
     if e > 0.0 && e.is_finite() { e } else { 1.0 }
 }
 
-/// The record and shape of an internal node from its children's (already computed):
-/// the parent disk and colour, its ellipse and normal field ([`parent_shape()`]), its
-/// radius (the ellipse's major semi-axis) rounded up from f64 so that it still reaches
-/// every child, and its error rounded up and never below a child's.
-fn internal_record(
-    node: &hierarchy::Internal,
-    (records, shapes): (&[NodeRecord], &[SplatShape]),
-    scale: f32,
-    oriented: bool,
-) -> (NodeRecord, SplatShape) {
-    let k = node.child_count as usize;
-    let mut disks = [Disk::new(Vec3::ZERO, Vec3::Z, 0.0); MAX_CHILDREN];
-    let mut colors = [[0u8; 4]; MAX_CHILDREN];
-    let mut children_max = 0;
-    for (j, &c) in node.children().iter().enumerate() {
-        let r = &records[c as usize];
-        disks[j] = Disk::new(r.position(), r.normal(), r.radius());
-        colors[j] = r.color;
-        children_max = children_max.max(r.error);
-    }
-    let (disks, colors) = (&disks[..k], &colors[..k]);
-    let (disk, color) = parent_disk(disks, colors, oriented);
-    let mut children = [Child {
-        disk,
-        shape: Shape::circle(disk.n),
-        color: DVec3::ZERO,
-    }; MAX_CHILDREN];
-    for (((child, &c), d), rgba) in children
-        .iter_mut()
-        .zip(node.children())
-        .zip(disks)
-        .zip(colors)
-    {
-        *child = Child {
-            disk: *d,
-            shape: shapes[c as usize].unpack(d.n),
-            color: unit_rgb(*rgba),
-        };
-    }
-    let (shape, major) = parent_shape(&disk, &children[..k]);
-    let splat = |disk: Disk, shape: &Shape| Splat {
-        disk,
-        axis: shape.axis,
-        ratio: shape.ratio,
-    };
-    let splats: ArrayVec<Splat, MAX_CHILDREN> = children[..k]
-        .iter()
-        .map(|c| splat(c.disk, &c.shape))
-        .collect();
-    let mut rec = NodeRecord::new(disk.p.as_vec3(), major as f32, disk.n.as_vec3(), color);
-    if (rec.radius() as f64) < major {
-        rec.radius = f32::from_bits(rec.radius).next_up().to_bits();
-    }
-    let e = node_error(&splat(Disk { r: major, ..disk }, &shape), &splats);
-    rec.error = encode_up(e, scale).max(children_max);
-    (rec, shape.pack())
-}
-
-/// The attributes of an internal node from its children's, each weighed by its splat's
-/// area r² · ratio ([`attributes::parent_attributes`]).
-fn internal_attributes(
-    node: &hierarchy::Internal,
-    records: &[NodeRecord],
-    shapes: &[SplatShape],
-    attributes: &[PointAttributes],
-) -> PointAttributes {
-    let mut children = [(PointAttributes::default(), 0.0); MAX_CHILDREN];
-    for (slot, &c) in children.iter_mut().zip(node.children()) {
-        let r = records[c as usize].radius() as f64;
-        let ratio = f16::from_bits(shapes[c as usize].ratio).to_f64();
-        *slot = (attributes[c as usize], r * r * ratio);
-    }
-    attributes::parent_attributes(&children[..node.child_count as usize])
-}
-
 /// Top-down: each node's parent error (a bit copy), δ rounded up and level; parents
 /// read from a snapshot of the internal nodes (ids `n..`) so that every node is
 /// written in parallel.
@@ -312,51 +234,8 @@ pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Rep
     build_records_scaled(leaves, hierarchy, scale, report)
 }
 
-/// The records, shapes and attributes (when `attributes` is not empty) of the internal
-/// nodes of `hierarchy` from those of its leaves, which the slices hold first: one
-/// level at a time, deepest first. `report` hears internal nodes done.
-fn fill_internal(
-    hierarchy: &Hierarchy,
-    levels: &[u16],
-    (records, shapes, attributes): (&mut [NodeRecord], &mut [SplatShape], &mut [PointAttributes]),
-    (scale, oriented): (f32, bool),
-    report: &dyn Report,
-) {
-    let n = hierarchy.leaf_count as usize;
-    let depth = levels.iter().copied().max().unwrap_or(0);
-    // Internal nodes grouped by level, deepest first.
-    let mut by_level: Vec<Vec<u32>> = vec![Vec::new(); depth as usize + 1];
-    for k in 0..hierarchy.internal.len() {
-        let id = (n + k) as u32;
-        by_level[levels[id as usize] as usize].push(id);
-    }
-    // One buffer for every level's results (fresh pages per level cost more than the
-    // scatter).
-    let mut done: Vec<(NodeRecord, SplatShape)> = Vec::new();
-    for ids in by_level.iter().rev() {
-        ids.par_iter()
-            .with_min_len(256)
-            .map(|&id| {
-                let node = &hierarchy.internal[id as usize - n];
-                internal_record(node, (records, shapes), scale, oriented)
-            })
-            .collect_into_vec(&mut done);
-        for (&id, &(rec, shape)) in ids.iter().zip(&done) {
-            records[id as usize] = rec;
-            shapes[id as usize] = shape;
-        }
-        if !attributes.is_empty() {
-            for &id in ids {
-                let node = &hierarchy.internal[id as usize - n];
-                attributes[id as usize] = internal_attributes(node, records, shapes, attributes);
-            }
-        }
-        report.advance(ids.len() as u64);
-    }
-}
-
 /// Grows the leaves' records, shapes and attributes (empty when the model has none) to
-/// the hierarchy's nodes, fills the internal ones ([`fill_internal`]) and links every
+/// the hierarchy's nodes, fills the internal ones ([`internal::fill_internal`]) and links every
 /// node to its parent ([`link_parents`]); returns each node's level and parent id.
 fn complete_internal(
     hierarchy: &Hierarchy,
@@ -377,7 +256,7 @@ fn complete_internal(
     }
     let levels = hierarchy.levels();
     let slices = (&mut records[..], &mut shapes[..], &mut attributes[..]);
-    fill_internal(hierarchy, &levels, slices, (scale, oriented), report);
+    internal::fill_internal(hierarchy, slices, (scale, oriented), report);
     let parent_ids = hierarchy.parents();
     link_parents(records, &parent_ids, &levels, n, scale);
     (levels, parent_ids)
