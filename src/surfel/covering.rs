@@ -265,6 +265,12 @@ fn ring_axes(offsets: &[Vec3], m: Metric) -> Option<Metric> {
 /// The least metric distance of `offsets` (at least one) within which, taken nearest
 /// first, they leave no angular gap wider than [`MAX_GAP`]; when even all of them do,
 /// their widest gap (its start, counter-clockwise, and width; radians in the metric).
+///
+/// Most points are surrounded by their few nearest (on the Lucy-size cloud by the 4th
+/// to 6th of 23), so the [`FIRST_RANKED`] nearest are selected and sorted first, and the
+/// rest only when those do not surround the point. Neither result depends on how equal
+/// distances are ordered: the ring closes at the same distance whichever of them comes
+/// first, and the widest gap is that of the same angles.
 fn surrounding_distance(offsets: &[Vec3], m: &Metric) -> Result<f32, (f32, f32)> {
     let mut mapped: ArrayVec<(f32, Vec2), MAX_NEIGHBOURS> = offsets
         .iter()
@@ -273,26 +279,65 @@ fn surrounding_distance(offsets: &[Vec3], m: &Metric) -> Result<f32, (f32, f32)>
             (d2, xy)
         })
         .collect();
-    mapped.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-    let mut angles: ArrayVec<f32, MAX_NEIGHBOURS> = ArrayVec::new();
-    // The widest gap (its start, counter-clockwise, and width) once three angles are in:
-    // an angle outside it leaves it whole, so only one inside it can close the ring.
-    let mut widest: Option<(f32, f32)> = None;
-    for (d2, xy) in mapped {
-        let angle = angle(xy);
-        let at = angles.partition_point(|a| *a < angle);
-        angles.insert(at, angle);
-        let inside = widest
-            .is_none_or(|(start, width)| (angle - start).rem_euclid(std::f32::consts::TAU) < width);
-        if angles.len() >= 3 && inside {
-            let gap = widest_gap(&angles);
-            if gap.1 <= MAX_GAP {
-                return Ok(d2.sqrt());
-            }
-            widest = Some(gap);
-        }
+    let nearer = |a: &(f32, Vec2), b: &(f32, Vec2)| a.0.total_cmp(&b.0);
+    let first = FIRST_RANKED.min(mapped.len());
+    if first < mapped.len() {
+        mapped.select_nth_unstable_by(first - 1, nearer);
     }
-    Err(widest.unwrap_or_else(|| widest_gap(&angles)))
+    let mut gaps = Gaps::default();
+    mapped[..first].sort_unstable_by(nearer);
+    if let Some(r) = mapped[..first]
+        .iter()
+        .find_map(|&(d2, xy)| gaps.add(d2, xy))
+    {
+        return Ok(r);
+    }
+    mapped[first..].sort_unstable_by(nearer);
+    if let Some(r) = mapped[first..]
+        .iter()
+        .find_map(|&(d2, xy)| gaps.add(d2, xy))
+    {
+        return Ok(r);
+    }
+    Err(gaps.widest())
+}
+
+/// Neighbours ranked before the others in [`surrounding_distance`].
+const FIRST_RANKED: usize = 8;
+
+/// The sorted angles of the neighbours taken so far, and their widest gap (its start,
+/// counter-clockwise, and width) once three are in: an angle outside it leaves it
+/// whole, so only one inside it can close the ring.
+#[derive(Default)]
+struct Gaps {
+    angles: ArrayVec<f32, MAX_NEIGHBOURS>,
+    widest: Option<(f32, f32)>,
+}
+
+impl Gaps {
+    /// Takes the neighbour at squared metric distance `d2` and plane coordinates `xy`;
+    /// its distance when the neighbours taken leave no gap wider than [`MAX_GAP`].
+    fn add(&mut self, d2: f32, xy: Vec2) -> Option<f32> {
+        let angle = angle(xy);
+        let at = self.angles.partition_point(|a| *a < angle);
+        self.angles.insert(at, angle);
+        let inside = self
+            .widest
+            .is_none_or(|(start, width)| (angle - start).rem_euclid(std::f32::consts::TAU) < width);
+        if self.angles.len() >= 3 && inside {
+            let gap = widest_gap(&self.angles);
+            if gap.1 <= MAX_GAP {
+                return Some(d2.sqrt());
+            }
+            self.widest = Some(gap);
+        }
+        None
+    }
+
+    /// The widest gap of every neighbour taken (at least one).
+    fn widest(&self) -> (f32, f32) {
+        self.widest.unwrap_or_else(|| widest_gap(&self.angles))
+    }
 }
 
 /// Which of the [`SECTORS`] = 6 sectors of 60° around the origin holds `xy`: 0–2 above
