@@ -96,8 +96,8 @@ pub enum RadiusRule {
     Ranked,
 }
 
-/// A splat's ellipse in its tangent plane.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A splat's ellipse in its tangent plane (by default: none, a zero radius).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Covering {
     /// The major semi-axis; 0 when every neighbour coincides with the point.
     pub radius: f32,

@@ -183,17 +183,15 @@ fn disks(
             .map(|(normal, _, covering)| (normal, covering))
             .collect()
     } else {
-        search
-            .neighbourhoods(which, &|&i| points[i as usize] * scale)
-            .map(|(&i, found)| {
-                let near: ArrayVec<Vec3, K> = found.iter().map(|&f| search.point(f)).collect();
-                let normal = Some(given_normal(i))
-                    .filter(|n| *n != Vec3::ZERO)
-                    .unwrap_or_else(|| plane_normal(near.iter().copied()));
-                let p = points[i as usize] * scale;
-                (normal, covering(p, normal, &near, rule))
-            })
-            .collect()
+        let disk = |&i: &u32, found: &[u32]| {
+            let near: ArrayVec<Vec3, K> = found.iter().map(|&f| search.point(f)).collect();
+            let normal = Some(given_normal(i))
+                .filter(|n| *n != Vec3::ZERO)
+                .unwrap_or_else(|| plane_normal(near.iter().copied()));
+            let p = points[i as usize] * scale;
+            (normal, covering(p, normal, &near, rule))
+        };
+        search.map_neighbourhoods(which, &|&i| points[i as usize] * scale, &disk)
     }
 }
 
@@ -206,10 +204,10 @@ pub fn scattered(points: &[Vec3], scale: f32) -> Vec<bool> {
         return vec![false; points.len()];
     }
     let distinct: Vec<u32> = (0..search.coords.len() as u32).collect();
-    let neighbourhoods: Vec<ArrayVec<u32, K>> = search
-        .neighbourhoods(&distinct, &|&i| search.point(i))
-        .map(|(_, found)| found)
-        .collect();
+    let neighbourhoods: Vec<ArrayVec<u32, K>> =
+        search.map_neighbourhoods(&distinct, &|&i| search.point(i), &|_, found| {
+            found.iter().copied().collect()
+        });
     let seeds: Vec<bool> = (neighbourhoods.par_iter().enumerate())
         .map(|(i, found)| {
             let p = search.point(i as u32);

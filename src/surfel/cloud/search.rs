@@ -81,6 +81,32 @@ impl Search {
             block.iter().zip(found)
         })
     }
+
+    /// `f` of each of `queries` and its neighbourhood (nearest first), in the queries'
+    /// order: written in place, block by block ([`QUERY_BLOCK`]), where collecting
+    /// [`Search::neighbourhoods`] gathers the blocks' results and copies them once more.
+    pub fn map_neighbourhoods<Q: Sync, T: Send + Default>(
+        &self,
+        queries: &[Q],
+        position: &(dyn Fn(&Q) -> Vec3 + Sync),
+        f: &(dyn Fn(&Q, &[u32]) -> T + Sync),
+    ) -> Vec<T> {
+        let mut out: Vec<T> = Vec::with_capacity(queries.len());
+        out.par_extend((0..queries.len()).into_par_iter().map(|_| T::default()));
+        (out.par_chunks_mut(QUERY_BLOCK)
+            .zip(queries.par_chunks(QUERY_BLOCK)))
+        .for_each(|(slots, block)| {
+            let positions: Vec<Vec3> = block.iter().map(position).collect();
+            if self.is_empty() {
+                return;
+            }
+            let found = self.cells.nearest(&self.coords, self.k, &positions);
+            for ((slot, q), found) in slots.iter_mut().zip(block).zip(found) {
+                *slot = f(q, &found);
+            }
+        });
+        out
+    }
 }
 
 /// Queries answered together, in blocks of this many: the queries of one cell within

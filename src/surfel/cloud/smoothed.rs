@@ -75,10 +75,10 @@ pub(super) fn smoothed_disks(
 ) -> Vec<(Vec3, Vec3, Covering)> {
     // Every sample's neighbourhood, halo included, in the samples' own order (whose
     // blocks fall in few cells); its nearest is its own position.
-    let neighbourhoods: Vec<ArrayVec<u32, K>> = search
-        .neighbourhoods(points, &|p| *p * scale)
-        .map(|(_, found)| found)
-        .collect();
+    let neighbourhoods: Vec<ArrayVec<u32, K>> =
+        search.map_neighbourhoods(points, &|p| *p * scale, &|_, found| {
+            found.iter().copied().collect()
+        });
     let near = |i: usize| neighbourhoods[i].iter().map(|&f| search.point(f));
     let fitted = fitted_normals(&search.coords, &neighbourhoods, steps);
     which
