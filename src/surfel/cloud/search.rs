@@ -93,8 +93,12 @@ impl Search {
     ) -> Vec<T> {
         let mut out: Vec<T> = Vec::with_capacity(queries.len());
         out.par_extend((0..queries.len()).into_par_iter().map(|_| T::default()));
+        // One block per job: left to split adaptively, a thread on two cores kept up to
+        // an eighth of the blocks on its own while the other one waited (0.5 s on the
+        // Lucy-size cloud).
         (out.par_chunks_mut(QUERY_BLOCK)
             .zip(queries.par_chunks(QUERY_BLOCK)))
+        .with_max_len(1)
         .for_each(|(slots, block)| {
             let positions: Vec<Vec3> = block.iter().map(position).collect();
             if self.is_empty() {
