@@ -226,8 +226,8 @@ fn link_parents(
     });
 }
 
-/// Stage 2: node disks and errors bottom-up, one level at a time (nodes of a level are
-/// independent), then each node's parent error, δ and level top-down. `report` hears
+/// Stage 2: node disks and errors bottom-up, subtrees in parallel
+/// ([`internal::fill_internal`]), then each node's parent error, δ and level top-down. `report` hears
 /// internal nodes done. Errors are stored relative to the size of the leaves' box.
 pub fn build_records(leaves: LeafSurfels, hierarchy: Hierarchy, report: &dyn Report) -> NodeSet {
     let scale = error_scale(&leaves.surfels);

@@ -93,17 +93,16 @@ impl Search {
     ) -> Vec<T> {
         let mut out: Vec<T> = Vec::with_capacity(queries.len());
         out.par_extend((0..queries.len()).into_par_iter().map(|_| T::default()));
-        // One block per job: left to split adaptively, a thread on two cores kept up to
-        // an eighth of the blocks on its own while the other one waited (0.5 s on the
-        // Lucy-size cloud).
+        // One block per job: split adaptively, one of two threads ran its last share
+        // alone for 0.5 s on the Lucy-size cloud while the other one waited.
         (out.par_chunks_mut(QUERY_BLOCK)
             .zip(queries.par_chunks(QUERY_BLOCK)))
         .with_max_len(1)
         .for_each(|(slots, block)| {
-            let positions: Vec<Vec3> = block.iter().map(position).collect();
             if self.is_empty() {
                 return;
             }
+            let positions: Vec<Vec3> = block.iter().map(position).collect();
             let found = self.cells.nearest(&self.coords, self.k, &positions);
             for ((slot, q), found) in slots.iter_mut().zip(block).zip(found) {
                 *slot = f(q, &found);
