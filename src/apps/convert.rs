@@ -118,8 +118,7 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
 
     let bytes = file_bytes(&set.meta, &set.chunks);
     let stage = Stage::start("write", bytes, "bytes");
-    write_ordered(output, &set, &|n| stage.advance(n))
-        .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", output.display()))?;
+    write_ordered(output, &set, &|n| stage.advance(n))?;
     stage.finish(&format!(
         "{} ({:.1} MB, {:.0} MB/s)",
         output.display(),

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use clap::Args;
 use glam::DVec3;
 
@@ -165,7 +165,6 @@ fn write_scene(scene: &Path, base: &Path, models: &[PathBuf], table: &Path) -> a
         "instances": [{"model": 0}, {"file": named(table)?}],
     });
     let bytes = serde_json::to_vec_pretty(&text)?;
-    crate::io::atomic::write_atomically(scene, |w| w.write_all(&bytes))
-        .with_context(|| format!("{}: cannot write the scene", scene.display()))?;
+    crate::io::atomic::write_atomically(scene, |w| w.write_all(&bytes))?;
     Ok(())
 }

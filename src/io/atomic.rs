@@ -2,7 +2,8 @@
 //! synced and renamed over the target only when complete. A failure at any point leaves
 //! no file under the final name, and an existing file there untouched. The
 //! temporary file is written to disk as it grows ([`SyncingFile`]), so that the final
-//! sync has little left to wait for.
+//! sync has little left to wait for. Every error names the target: "cannot write
+//! PATH: " and the cause (a full disk, a missing directory, or the closure's own).
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -48,10 +49,10 @@ pub fn write_atomically_seekable<T>(
         std::fs::rename(&tmp, path)?;
         Ok(value)
     })();
-    if result.is_err() {
+    result.map_err(|e: std::io::Error| {
         let _ = std::fs::remove_file(&tmp);
-    }
-    result
+        std::io::Error::new(e.kind(), format!("cannot write {}: {e}", path.display()))
+    })
 }
 
 /// Calls `write` on a buffered writer to a temporary file, then renames it to `path`.

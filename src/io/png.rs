@@ -22,5 +22,5 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> anyhow::R
         .map_err(std::io::Error::other)?;
         w.write_all(&bytes)
     })
-    .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))
+    .map_err(anyhow::Error::from)
 }

@@ -163,14 +163,27 @@ fn a_failed_write_leaves_no_file_and_keeps_the_old_one() {
         .expect_err("the injected failure")
     };
     // No file before: none after, and no temporary left behind.
+    // The error names the file it was writing, and keeps its cause.
     let err = fail(&path);
-    assert!(err.to_string().contains("injected"));
+    let message = err.to_string();
+    assert!(message.contains("injected"), "{message}");
+    assert!(message.contains(&path.display().to_string()), "{message}");
     assert!(!path.exists() && !temporary_path(&path).exists());
     // An existing file: untouched.
     std::fs::write(&path, b"the previous version").unwrap();
     fail(&path);
     assert_eq!(std::fs::read(&path).unwrap(), b"the previous version");
     assert!(!temporary_path(&path).exists());
+}
+
+#[test]
+fn a_write_into_a_missing_folder_names_the_file() {
+    let dir = common::temp_dir();
+    let path = dir.path().join("no such folder").join("out.spt");
+    let err = write_spt(&path, &default_list()).expect_err("no folder to write in");
+    let message = err.to_string();
+    assert!(message.contains(&path.display().to_string()), "{message}");
+    assert_eq!(err.kind(), std::io::ErrorKind::NotFound, "{message}");
 }
 
 #[test]

@@ -153,8 +153,7 @@ pub fn write_csv(path: &Path, env: &Environment, rows: &[Row]) -> anyhow::Result
 }
 
 pub fn write_text(path: &Path, text: &str) -> anyhow::Result<()> {
-    write_atomically(path, |w| w.write_all(text.as_bytes()))
-        .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))
+    Ok(write_atomically(path, |w| w.write_all(text.as_bytes()))?)
 }
 
 /// The Markdown summary: one table per camera path, then the random-subset comparison

@@ -227,7 +227,6 @@ fn write_results(
     }
     let write = |name: &str, text: &str| {
         crate::io::atomic::write_atomically(&out.join(name), |w| w.write_all(text.as_bytes()))
-            .with_context(|| format!("{}: cannot write", out.join(name).display()))
     };
     write("results.csv", &csv)?;
     write("summary.md", &md)?;

@@ -84,7 +84,6 @@ pub fn write_instances(path: &Path, instances: &[Instance]) -> anyhow::Result<()
         }
         bytes.extend_from_slice(&i.model.to_le_bytes());
     }
-    write_atomically(path, |w| w.write_all(&bytes))
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    write_atomically(path, |w| w.write_all(&bytes))?;
     Ok(())
 }

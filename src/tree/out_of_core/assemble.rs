@@ -12,6 +12,7 @@
 
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
+use std::path::Path;
 
 use glam::Vec3;
 
@@ -101,20 +102,47 @@ fn top_tree(split: &Split, parts: &[Part], model: &Model, oriented: bool) -> Top
 /// Nodes per slab streamed from a part file.
 const SLAB: usize = 1 << 20;
 
+/// An open part file and its path, which its read errors name.
+struct PartFile<'a> {
+    file: File,
+    path: &'a Path,
+}
+
+impl<'a> PartFile<'a> {
+    fn open(part: &'a Part) -> std::io::Result<PartFile<'a>> {
+        let path = part.path.as_path();
+        let file = File::open(path).map_err(|e| cannot_read(path, e))?;
+        Ok(PartFile { file, path })
+    }
+
+    /// Fills `into` from byte `at` on.
+    fn read_at(&mut self, at: Option<u64>, into: &mut [u8]) -> std::io::Result<()> {
+        if let Some(at) = at {
+            (self.file.seek(SeekFrom::Start(at))).map_err(|e| cannot_read(self.path, e))?;
+        }
+        (self.file.read_exact(into)).map_err(|e| cannot_read(self.path, e))
+    }
+}
+
+/// `e` of reading `path`, naming it.
+fn cannot_read(path: &Path, e: std::io::Error) -> std::io::Error {
+    std::io::Error::new(e.kind(), format!("cannot read {}: {e}", path.display()))
+}
+
 /// Streams `count` records of `T` from `file` at `at`, each slab changed by `fix`
 /// (given the index of its first record) before it is written.
 fn stream<T: bytemuck::Pod>(
-    file: &mut File,
+    file: &mut PartFile,
     (at, count): (u64, usize),
     out: &mut Hashed,
     mut fix: impl FnMut(usize, &mut [T]),
 ) -> std::io::Result<()> {
-    file.seek(SeekFrom::Start(at))?;
     let mut slab = vec![T::zeroed(); SLAB.min(count)];
     let mut done = 0;
     while done < count {
         let n = SLAB.min(count - done);
-        file.read_exact(bytemuck::cast_slice_mut(&mut slab[..n]))?;
+        let from = (done == 0).then_some(at);
+        file.read_at(from, bytemuck::cast_slice_mut(&mut slab[..n]))?;
         fix(done, &mut slab[..n]);
         out.put(bytemuck::cast_slice(&slab[..n]))?;
         done += n;
@@ -219,10 +247,9 @@ fn part_tables(parts: &[Part], has_attributes: bool) -> std::io::Result<Vec<Vec<
     parts
         .iter()
         .map(|p| {
-            let mut f = File::open(&p.path)?;
-            f.seek(SeekFrom::Start(part_offsets(p.nodes, has_attributes).3))?;
+            let at = part_offsets(p.nodes, has_attributes).3;
             let mut table = vec![<Chunk as bytemuck::Zeroable>::zeroed(); p.chunks as usize];
-            f.read_exact(bytemuck::cast_slice_mut(&mut table))?;
+            PartFile::open(p)?.read_at(Some(at), bytemuck::cast_slice_mut(&mut table))?;
             Ok(table)
         })
         .collect()
@@ -266,10 +293,7 @@ fn write_sections(
     top: &Top,
     (chunks, has_attributes): (&[Chunk], bool),
 ) -> std::io::Result<()> {
-    let mut files: Vec<File> = parts
-        .iter()
-        .map(|p| File::open(&p.path))
-        .collect::<Result<_, _>>()?;
+    let mut files: Vec<PartFile> = parts.iter().map(PartFile::open).collect::<Result<_, _>>()?;
     let offsets: Vec<_> = parts
         .iter()
         .map(|p| part_offsets(p.nodes, has_attributes))

@@ -127,8 +127,7 @@ impl Manifest {
     pub fn write(&self, dir: &Path) -> anyhow::Result<()> {
         let text = serde_json::to_string_pretty(self)?;
         let path = Manifest::path(dir);
-        write_atomically(&path, |w| w.write_all(text.as_bytes()))
-            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+        Ok(write_atomically(&path, |w| w.write_all(text.as_bytes()))?)
     }
 
     /// The split as a tree, checked: every job once.

@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
-use super::spill::{Grid, Scan, job_paths, writers};
+use super::spill::{Grid, Scan, job_paths, spill_failed, writers};
 use crate::io::formats::ModelStream;
 
 /// `own` of a vertex that belongs to no job (one the scan drops: its triangles are
@@ -153,7 +153,7 @@ fn ring_pairs(input: &ModelStream, own: &[u16]) -> anyhow::Result<Pairs> {
 fn route_triangles(
     input: &ModelStream,
     (own, ring): (&[u16], &Pairs),
-    files: &mut [BufWriter<File>],
+    (files, dir): (&mut [BufWriter<File>], &Path),
 ) -> anyhow::Result<Pairs> {
     let mut halo = Pairs::new(own.len());
     let mut failed = None;
@@ -182,7 +182,7 @@ fn route_triangles(
         }
     })?;
     if let Some(e) = failed {
-        return Err(e.into());
+        return Err(spill_failed(dir, e));
     }
     halo.compact();
     Ok(halo)
@@ -193,7 +193,7 @@ fn spill_vertices(
     input: &ModelStream,
     (own, halo): (&[u16], &Pairs),
     origin: DVec3,
-    (own_files, halo_files): (&mut [BufWriter<File>], &mut [BufWriter<File>]),
+    (own_files, halo_files, dir): (&mut [BufWriter<File>], &mut [BufWriter<File>], &Path),
     mut progress: impl FnMut(u64),
 ) -> anyhow::Result<()> {
     let mut failed = None;
@@ -225,7 +225,7 @@ fn spill_vertices(
         progress(b.xyz.len() as u64);
     })?;
     match failed {
-        Some(e) => Err(e.into()),
+        Some(e) => Err(spill_failed(dir, e)),
         None => Ok(()),
     }
 }
@@ -248,18 +248,18 @@ pub fn spill(
     };
     let ring = ring_pairs(input, own)?;
     let mut tri_files = writers(&files.triangles, buffer_bytes)?;
-    let halo = route_triangles(input, (own, &ring), &mut tri_files)?;
+    let halo = route_triangles(input, (own, &ring), (&mut tri_files, dir))?;
     drop(ring);
     for w in &mut tri_files {
-        w.flush()?;
+        w.flush().map_err(|e| spill_failed(dir, e))?;
     }
     drop(tri_files);
     let mut own_files = writers(&files.own, buffer_bytes)?;
     let mut halo_files = writers(&files.halo, buffer_bytes)?;
-    let out = (&mut own_files[..], &mut halo_files[..]);
+    let out = (&mut own_files[..], &mut halo_files[..], dir);
     spill_vertices(input, (own, &halo), origin, out, progress)?;
     for w in own_files.iter_mut().chain(halo_files.iter_mut()) {
-        w.flush()?;
+        w.flush().map_err(|e| spill_failed(dir, e))?;
     }
     Ok(files)
 }

@@ -48,8 +48,7 @@ impl PartRecord {
     pub fn write(&self, dir: &Path) -> anyhow::Result<()> {
         let text = serde_json::to_string(self)?;
         let path = record_path(dir, self.job);
-        write_atomically(&path, |w| w.write_all(text.as_bytes()))
-            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+        Ok(write_atomically(&path, |w| w.write_all(text.as_bytes()))?)
     }
 
     /// The record of job `j` in `dir`; `None` when it has none.

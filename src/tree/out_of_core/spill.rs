@@ -399,12 +399,18 @@ pub fn spill(
         progress(b.xyz.len() as u64);
     })?;
     if let Some(e) = failed {
-        return Err(e.into());
+        return Err(spill_failed(dir, e));
     }
     for w in [own, halo, own_n, halo_n].iter_mut().flatten() {
-        w.flush()?;
+        w.flush().map_err(|e| spill_failed(dir, e))?;
     }
     Ok(files)
+}
+
+/// A failed write of the spill files in `dir` (most often a full disk), naming the
+/// folder: a buffered write may fail for any of its files.
+pub fn spill_failed(dir: &Path, e: std::io::Error) -> anyhow::Error {
+    anyhow::anyhow!("{}: cannot write the spill files: {e}", dir.display())
 }
 
 /// The spill file of each of `jobs` jobs for records of `kind`: `dir/job{j}.{kind}`.
