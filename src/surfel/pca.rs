@@ -79,16 +79,14 @@ pub fn plane_normal(points: impl Iterator<Item = Vec3> + Clone) -> Vec3 {
     vectors.col(k).as_vec3().try_normalize().unwrap_or(Vec3::Z)
 }
 
-/// The least eigenvalue of the symmetric `m` in closed form ([`least_axis`]'s), and
-/// its trace; `None` where m has a NaN. Every eigenvalue is the mean of the diagonal
-/// where m is a multiple of I.
-pub fn least_eigenvalue(m: DMat3) -> Option<(f64, f64)> {
-    let trace = m.x_axis.x + m.y_axis.y + m.z_axis.z;
-    match Cubic::of(m) {
-        Some(cubic) => Some((cubic.least, trace)),
-        None if trace.is_nan() => None,
-        None => Some((trace / 3.0, trace)),
-    }
+/// Whether every eigenvalue of the symmetric `m` exceeds `t`: m − tI is positive
+/// definite, which Sylvester's criterion reads from its leading principal minors
+/// (no root, no trigonometry). False where m has a NaN.
+pub fn eigenvalues_exceed(m: DMat3, t: f64) -> bool {
+    let shifted = m - DMat3::from_diagonal(DVec3::splat(t));
+    let (a, b) = (shifted.x_axis, shifted.y_axis);
+    let leading = a.x * b.y - a.y * b.x;
+    a.x > 0.0 && leading > 0.0 && shifted.determinant() > 0.0
 }
 
 /// The trigonometric solution of a symmetric 3×3 matrix's characteristic cubic (Smith
@@ -142,7 +140,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_least_eigenvalue_in_closed_form_is_jacobi_s() {
+    fn eigenvalues_exceed_a_bound_as_jacobi_s_do() {
         let cases = [
             [[4.0, 1.0, -2.0], [1.0, 2.0, 0.5], [-2.0, 0.5, 3.0]],
             [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1e-9]],
@@ -151,16 +149,15 @@ mod tests {
         ];
         for case in cases {
             let m = DMat3::from_cols_array_2d(&case);
-            let (values, _) = symmetric_eigen(m);
-            let jacobi = values.min_element();
-            let (least, trace) = least_eigenvalue(m).unwrap();
-            assert!(
-                (least - jacobi).abs() < 1e-12,
-                "{case:?}: {least} against {jacobi}"
-            );
-            assert!((trace - values.element_sum()).abs() < 1e-12);
+            let least = symmetric_eigen(m).0.min_element();
+            for t in [-1.0, 0.0, 0.5 * least, least - 1e-6, least + 1e-6, 10.0] {
+                assert_eq!(eigenvalues_exceed(m, t), least > t, "{case:?} against {t}");
+            }
         }
-        assert!(least_eigenvalue(DMat3::from_diagonal(DVec3::splat(f64::NAN))).is_none());
+        assert!(!eigenvalues_exceed(
+            DMat3::from_diagonal(DVec3::splat(f64::NAN)),
+            0.0
+        ));
     }
 
     #[test]

@@ -44,10 +44,12 @@
 //!   surface ends ([`Covering::open`]), and the cloud's splat may be clipped there
 //!   (`cloud::boundary_clip`).
 
-use arrayvec::ArrayVec;
-use glam::{DVec2, Vec2, Vec3};
+mod axes;
 
-use super::shape::{Fit, MIN_RATIO};
+use arrayvec::ArrayVec;
+use glam::{Vec2, Vec3};
+
+use axes::{Columns, Metric, axes};
 
 /// Most neighbours a covering looks at (more are ignored).
 pub const MAX_NEIGHBOURS: usize = 64;
@@ -78,7 +80,6 @@ pub const MAX_GAP_SPACINGS: f32 = 8.0;
 pub const SCATTER: f64 = 0.2;
 /// Angular sectors of the ring.
 pub const SECTORS: usize = 6;
-const _: () = assert!(SECTORS == 6, "sector() splits by the lines at ±60°");
 /// A ring whose axes differ by less than this ratio is taken as round.
 pub const ROUND_ENOUGH: f32 = 0.9;
 /// Fewest filled sectors of a ring whose axes are taken (fewer: a line, kept round).
@@ -116,39 +117,6 @@ pub struct Covering {
     pub spacing: f32,
 }
 
-/// The ellipse's metric: offsets in (major, minor / ratio, normal) coordinates.
-#[derive(Debug, Clone, Copy)]
-struct Metric {
-    u: Vec3,
-    v: Vec3,
-    n: Vec3,
-    ratio: f32,
-}
-
-impl Metric {
-    fn circle(n: Vec3) -> Metric {
-        let (u, v) = n.any_orthonormal_pair();
-        Metric {
-            u,
-            v,
-            n,
-            ratio: 1.0,
-        }
-    }
-
-    /// The offset's in-plane coordinates, minor one stretched, and its squared metric
-    /// length.
-    fn map(&self, o: Vec3) -> (Vec2, f32) {
-        let xy = Vec2::new(o.dot(self.u), o.dot(self.v) / self.ratio);
-        (xy, xy.length_squared() + o.dot(self.n).powi(2))
-    }
-
-    /// The unit tangent direction at `angle` in the metric's plane coordinates.
-    fn direction(&self, angle: f32) -> Vec3 {
-        (self.u * angle.cos() + self.v * (self.ratio * angle.sin())).normalize_or(self.u)
-    }
-}
-
 /// The covering of the point `p` of unit `normal` among its neighbours `near` (sorted
 /// nearest first, `p` and its duplicates included; the first [`MAX_NEIGHBOURS`]) by
 /// `rule` (see the module doc).
@@ -181,10 +149,11 @@ pub fn covering(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> Cover
         return round(SURROUND_GROWTH * spacing, true, spacing);
     }
     let cap = MAX_SPACINGS * spacing;
-    let metric = axes(&offsets, circle);
+    let columns = Columns::of(&offsets);
+    let metric = axes(&offsets, &columns, circle);
     let closes_a_gap =
         |r: &f32| SURROUND_GROWTH * r * metric.ratio.sqrt() <= MAX_GAP_SPACINGS * spacing;
-    match (nearest <= cap).then(|| surrounding_distance(&offsets, &metric)) {
+    match (nearest <= cap).then(|| surrounding_distance(&columns, &metric)) {
         Some(Ok(r)) if closes_a_gap(&r) => Covering {
             radius: SURROUND_GROWTH * r,
             axis: metric.u,
@@ -204,6 +173,9 @@ pub fn covering(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> Cover
 /// Whether the neighbourhood `offsets` scatters in three dimensions rather than lying
 /// on a surface: the variance along its least principal axis is more than
 /// [`SCATTER`] times the mean of the other two.
+///
+/// With λ₁ + λ₂ = trace − λ₀ and s = SCATTER / 2: λ₀ > s (trace − λ₀) ⇔ λ₀ > trace ·
+/// s / (1 + s), a bound on the least eigenvalue ([`super::pca::eigenvalues_exceed`]).
 pub fn samples_no_surface(offsets: &[Vec3]) -> bool {
     if offsets.len() < 3 {
         return false;
@@ -211,55 +183,9 @@ pub fn samples_no_surface(offsets: &[Vec3]) -> bool {
     let Some(cov) = super::pca::scatter_matrix(offsets.iter().copied()) else {
         return false;
     };
-    // λ₁ + λ₂ = trace − λ₀: the least eigenvalue is all the test needs.
-    let Some((least, trace)) = super::pca::least_eigenvalue(cov) else {
-        return false;
-    };
-    least > SCATTER * 0.5 * (trace - least)
-}
-
-/// The ellipse's axes from [`AXIS_ROUNDS`] rings, starting from `circle`; a ring found
-/// round ([`ROUND_ENOUGH`]) or spanning no plane ends the search.
-fn axes(offsets: &[Vec3], circle: Metric) -> Metric {
-    let mut m = circle;
-    for _ in 0..AXIS_ROUNDS {
-        match ring_axes(offsets, m) {
-            Some(next) if next.ratio < ROUND_ENOUGH => m = next,
-            Some(_) => return circle,
-            None => return m,
-        }
-    }
-    m
-}
-
-/// The axes of the ring of `offsets` found in the metric `m` (module doc); `None`
-/// when the ring spans no plane or fills fewer than [`MIN_RING`] sectors.
-fn ring_axes(offsets: &[Vec3], m: Metric) -> Option<Metric> {
-    let mut ring = [None::<(f32, Vec3)>; SECTORS];
-    for &o in offsets {
-        let (xy, d2) = m.map(o);
-        let slot = &mut ring[sector(xy)];
-        if slot.is_none_or(|(best, _)| d2 < best) {
-            *slot = Some((d2, o));
-        }
-    }
-    let (t1, t2) = (m.u, m.n.cross(m.u));
-    let mut fit = Fit::default();
-    for (_, o) in ring.iter().flatten() {
-        let d = DVec2::new(o.dot(t1) as f64, o.dot(t2) as f64);
-        fit.add(d, DVec2::ZERO);
-    }
-    let (dir, l1, l2) = fit.axes();
-    if l1 <= 0.0 || l2 <= 0.0 || ring.iter().flatten().count() < MIN_RING {
-        return None;
-    }
-    let u = (t1 * dir.x as f32 + t2 * dir.y as f32).normalize_or(t1);
-    Some(Metric {
-        u,
-        v: m.n.cross(u),
-        n: m.n,
-        ratio: ((l2 / l1).sqrt() as f32).clamp(MIN_RATIO as f32, 1.0),
-    })
+    let trace = cov.x_axis.x + cov.y_axis.y + cov.z_axis.z;
+    let s = 0.5 * SCATTER;
+    super::pca::eigenvalues_exceed(cov, trace * s / (1.0 + s))
 }
 
 /// The least metric distance of `offsets` (at least one) within which, taken nearest
@@ -271,14 +197,10 @@ fn ring_axes(offsets: &[Vec3], m: Metric) -> Option<Metric> {
 /// rest only when those do not surround the point. Neither result depends on how equal
 /// distances are ordered: the ring closes at the same distance whichever of them comes
 /// first, and the widest gap is that of the same angles.
-fn surrounding_distance(offsets: &[Vec3], m: &Metric) -> Result<f32, (f32, f32)> {
-    let mut mapped: ArrayVec<(f32, Vec2), MAX_NEIGHBOURS> = offsets
-        .iter()
-        .map(|&o| {
-            let (xy, d2) = m.map(o);
-            (d2, xy)
-        })
-        .collect();
+fn surrounding_distance(offsets: &Columns, m: &Metric) -> Result<f32, (f32, f32)> {
+    let lanes = offsets.map(m);
+    let mut mapped: ArrayVec<(f32, Vec2), MAX_NEIGHBOURS> =
+        (0..lanes.len).map(|k| lanes.get(k)).collect();
     let nearer = |a: &(f32, Vec2), b: &(f32, Vec2)| a.0.total_cmp(&b.0);
     let first = FIRST_RANKED.min(mapped.len());
     if first < mapped.len() {
@@ -338,21 +260,6 @@ impl Gaps {
     fn widest(&self) -> (f32, f32) {
         self.widest.unwrap_or_else(|| widest_gap(&self.angles))
     }
-}
-
-/// Which of the [`SECTORS`] = 6 sectors of 60° around the origin holds `xy`: 0–2 above
-/// the x axis counter-clockwise from it, 3–5 below, by the lines at ±60° (y = ±√3 x).
-fn sector(xy: Vec2) -> usize {
-    let s = 3f32.sqrt() * xy.x;
-    let (above, y) = (xy.y >= 0.0, xy.y.abs());
-    let side = if y < s {
-        0
-    } else if y < -s {
-        2
-    } else {
-        1
-    };
-    if above { side } else { 3 + side }
 }
 
 /// The angle of `xy` from the x axis, in [−π, π], within 10⁻⁵ rad (a polynomial for
@@ -616,23 +523,6 @@ mod tests {
             }
         }
         assert_eq!(angle(Vec2::ZERO), 0.0);
-    }
-
-    #[test]
-    fn sectors_are_sixty_degrees_wide() {
-        for k in 0..360 {
-            let t = (k as f32 + 0.5).to_radians();
-            let expected = if k < 180 {
-                k / 60
-            } else {
-                3 + (360 - k - 1) / 60
-            };
-            assert_eq!(
-                sector(Vec2::new(t.cos(), t.sin())),
-                expected as usize,
-                "{k}°"
-            );
-        }
     }
 
     #[test]
