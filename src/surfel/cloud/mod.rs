@@ -304,14 +304,12 @@ fn sensor_pitch(
 ) -> Option<f32> {
     let stride = which.len().div_ceil(PITCH_SAMPLE).max(1);
     let sample: Vec<u32> = which.iter().step_by(stride).copied().collect();
-    let pairs: Vec<(Vec3, Vec3)> = search
-        .neighbourhoods(&sample, &|&i| points[i as usize] * scale)
-        .filter_map(|(&i, found)| {
-            let nearest = found.get(1)?;
-            Some((points[i as usize] * scale, search.point(*nearest)))
-        })
-        .collect();
-    footprint::angular_pitch(sensor, pairs.into_iter())
+    let pair = |&i: &u32, found: &[u32]| {
+        let nearest = found.get(1)?;
+        Some((points[i as usize] * scale, search.point(*nearest)))
+    };
+    let pairs = search.map_neighbourhoods(&sample, &|&i| points[i as usize] * scale, &pair);
+    footprint::angular_pitch(sensor, pairs.into_iter().flatten())
 }
 
 /// How many samples [`sensor_pitch`] measures.
