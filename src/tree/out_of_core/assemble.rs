@@ -115,7 +115,8 @@ impl<'a> PartFile<'a> {
         Ok(PartFile { file, path })
     }
 
-    /// Fills `into` from byte `at` on.
+    /// Fills `into` from byte `at` on, or from where the last read ended when `at` is
+    /// `None`.
     fn read_at(&mut self, at: Option<u64>, into: &mut [u8]) -> std::io::Result<()> {
         if let Some(at) = at {
             (self.file.seek(SeekFrom::Start(at))).map_err(|e| cannot_read(self.path, e))?;
