@@ -161,7 +161,7 @@ impl Cells {
             .collect();
         order.sort_unstable();
         let mut found = vec![ArrayVec::new(); queries.len()];
-        let mut candidates = Candidates::default();
+        let (mut candidates, mut far) = (Candidates::default(), Candidates::default());
         // Where each of the block's nine columns was last searched in the occupied cells'
         // keys: queries taken in their cells' order search each column at ascending keys.
         let mut fingers = [0; 9];
@@ -174,9 +174,10 @@ impl Cells {
                 let within = last.map_or(f32::INFINITY, |reach| reach * NEXT_REACH);
                 let nearest = candidates.nearest(p, k.get(), within);
                 last = nearest.last().map(|n| n.0.sqrt());
-                found[q as usize] = match self.exact(&nearest, k, p, (cell, 1)) {
-                    true => nearest.iter().map(|n| n.1).collect(),
-                    false => self.searched(coords, k, p, cell),
+                found[q as usize] = if self.exact(&nearest, k, p, (cell, 1)) {
+                    nearest.iter().map(|n| n.1).collect()
+                } else {
+                    self.searched(coords, k, (p, cell), &mut far)
                 };
             }
         }
@@ -198,18 +199,18 @@ impl Cells {
     }
 
     /// The `k` nearest of `coords` to `p` (in `cell`) whose 3 × 3 × 3 block does not
-    /// hold them: from blocks reaching up to [`FARTHEST_REACH`] cells out, then from the
-    /// k-d tree.
+    /// hold them: from blocks reaching up to [`FARTHEST_REACH`] cells out, gathered
+    /// into `candidates` (the caller's buffer, kept between queries), then from the k-d
+    /// tree.
     fn searched(
         &self,
         coords: &[[f32; 3]],
         k: NonZero<usize>,
-        p: Vec3,
-        cell: Cell,
+        (p, cell): (Vec3, Cell),
+        candidates: &mut Candidates,
     ) -> ArrayVec<u32, K> {
-        let mut candidates = Candidates::default();
         for reach in 2..=FARTHEST_REACH {
-            let mut fingers = vec![0; (2 * reach as usize + 1).pow(2)];
+            let mut fingers = [0; FARTHEST_COLUMNS];
             candidates.gather(coords, self.block((cell, reach), &mut fingers));
             let nearest = candidates.nearest(p, k.get(), f32::INFINITY);
             if self.exact(&nearest, k, p, (cell, reach)) {
@@ -234,6 +235,8 @@ impl Cells {
 /// block does not, before the k-d tree does. On the Lucy-size cloud the tree, built for
 /// 0.5 % of the queries, took 1.7 s; the blocks answer all of them.
 const FARTHEST_REACH: i64 = 3;
+/// Columns (x, y) of the farthest block: its fingers' count.
+const FARTHEST_COLUMNS: usize = (2 * FARTHEST_REACH as usize + 1).pow(2);
 
 /// The reach within which a query's k nearest are first sought, in the last query's
 /// k-th distance; a query with fewer than k candidates within it ranks them all. On
