@@ -12,8 +12,9 @@
 //!   and sparse across them puts few ring members on the row, so u runs across the rows.
 //!   A ring of fewer than [`MIN_RING`] sectors (the neighbourhood is one scan line, with
 //!   nothing seen across it) says nothing of the other direction: the splat stays round.
-//!   The sectors and distances are taken again in the metric of the last estimate,
-//!   [`AXIS_ROUNDS`] times, which sharpens the ratio toward the sampling's own.
+//!   The sectors and distances are taken again in the metric of the last estimate, up
+//!   to [`AXIS_ROUNDS`] times, which sharpens the ratio toward the sampling's own; a
+//!   ring that repeats the one before has reached it.
 //! * **size**: in the ellipse's metric m(o) = √((o·u)² + (o·v / ratio)² + (o·n)²)
 //!   (v = n × u; the plain distance when ratio = 1), the *surrounding distance* r_s is
 //!   the least m within which the distinct neighbours, taken nearest first, leave no
@@ -84,7 +85,7 @@ pub const SECTORS: usize = 6;
 pub const ROUND_ENOUGH: f32 = 0.9;
 /// Fewest filled sectors of a ring whose axes are taken (fewer: a line, kept round).
 pub const MIN_RING: usize = 5;
-/// Estimates of the axes, each in the metric of the one before.
+/// Most estimates of the axes, each in the metric of the one before.
 pub const AXIS_ROUNDS: usize = 3;
 
 /// How a covering is found.
