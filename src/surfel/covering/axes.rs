@@ -138,23 +138,27 @@ impl Mapped {
 /// the same sum, so its axes are the metric it was found in (a fixed point, up to the
 /// rounding of another tangent frame), and every later round would find it again. On
 /// the Lucy-size cloud the second ring is the first's for 94.5 % of the points.
-pub(super) fn axes(offsets: &[Vec3], columns: &Columns, circle: Metric) -> Metric {
+/// Returns the axes and the offsets mapped by them (most often the last round's map).
+pub(super) fn axes(offsets: &[Vec3], columns: &Columns, circle: Metric) -> (Metric, Mapped) {
     let mut m = circle;
     let mut last_members = None;
-    for _ in 0..AXIS_ROUNDS {
-        let ring = columns.map(&m).ring();
+    for round in 0..AXIS_ROUNDS {
+        let mapped = columns.map(&m);
+        let ring = mapped.ring();
         let members = Some(members(&ring));
         if members == last_members {
-            return m;
+            return (m, mapped);
         }
         last_members = members;
         match ring_axes(offsets, &ring, m) {
             Some(next) if next.ratio < ROUND_ENOUGH => m = next,
-            Some(_) => return circle,
-            None => return m,
+            // The first round's map is the circle's.
+            Some(_) if round == 0 => return (circle, mapped),
+            Some(_) => return (circle, columns.map(&circle)),
+            None => return (m, mapped),
         }
     }
-    m
+    (m, columns.map(&m))
 }
 
 /// The ring's members as a set: bit k for offset k.

@@ -50,7 +50,7 @@ mod axes;
 use arrayvec::ArrayVec;
 use glam::{Vec2, Vec3};
 
-use axes::{Columns, Metric, axes};
+use axes::{Columns, Mapped, Metric, axes};
 
 /// Most neighbours a covering looks at (more are ignored).
 pub const MAX_NEIGHBOURS: usize = 64;
@@ -151,10 +151,10 @@ pub fn covering(p: Vec3, normal: Vec3, near: &[Vec3], rule: RadiusRule) -> Cover
     }
     let cap = MAX_SPACINGS * spacing;
     let columns = Columns::of(&offsets);
-    let metric = axes(&offsets, &columns, circle);
+    let (metric, mapped) = axes(&offsets, &columns, circle);
     let closes_a_gap =
         |r: &f32| SURROUND_GROWTH * r * metric.ratio.sqrt() <= MAX_GAP_SPACINGS * spacing;
-    match (nearest <= cap).then(|| surrounding_distance(&columns, &metric)) {
+    match (nearest <= cap).then(|| surrounding_distance(&mapped)) {
         Some(Ok(r)) if closes_a_gap(&r) => Covering {
             radius: SURROUND_GROWTH * r,
             axis: metric.u,
@@ -189,8 +189,8 @@ pub fn samples_no_surface(offsets: &[Vec3]) -> bool {
     super::pca::eigenvalues_exceed(cov, trace * s / (1.0 + s))
 }
 
-/// The least metric distance of `offsets` (at least one) within which, taken nearest
-/// first, they leave no angular gap wider than [`MAX_GAP`]; when even all of them do,
+/// The least metric distance of the offsets (at least one; `lanes`, mapped by the
+/// ellipse's metric) within which, taken nearest first, they leave no angular gap wider than [`MAX_GAP`]; when even all of them do,
 /// their widest gap (its start, counter-clockwise, and width; radians in the metric).
 ///
 /// Most points are surrounded by their few nearest (on the Lucy-size cloud by the 4th
@@ -198,8 +198,7 @@ pub fn samples_no_surface(offsets: &[Vec3]) -> bool {
 /// rest only when those do not surround the point. Neither result depends on how equal
 /// distances are ordered: the ring closes at the same distance whichever of them comes
 /// first, and the widest gap is that of the same angles.
-fn surrounding_distance(offsets: &Columns, m: &Metric) -> Result<f32, (f32, f32)> {
-    let lanes = offsets.map(m);
+fn surrounding_distance(lanes: &Mapped) -> Result<f32, (f32, f32)> {
     let mut mapped: ArrayVec<(f32, Vec2), MAX_NEIGHBOURS> =
         (0..lanes.len).map(|k| lanes.get(k)).collect();
     let nearer = |a: &(f32, Vec2), b: &(f32, Vec2)| a.0.total_cmp(&b.0);
