@@ -13,6 +13,7 @@ pub mod formats;
 pub(crate) mod geometry;
 pub mod las;
 pub mod model;
+pub mod parallel;
 pub mod ply;
 pub mod png;
 pub mod rebase;

@@ -17,6 +17,7 @@ use rayon::prelude::*;
 
 use super::Geometry;
 use super::delaunay::delaunay_xy;
+use super::parallel;
 
 /// Longest edge of a sensor-grid triangle, relative to its depth.
 pub const GRID_MAX_EDGE: f64 = 0.05;
@@ -124,9 +125,7 @@ pub fn drop_long(
     keep_long: impl Fn(Vec3, f64) -> bool + Sync,
 ) -> Vec<[u32; 3]> {
     let kept = short_or_kept(positions, triangles, keep_long);
-    (triangles.iter().zip(kept))
-        .filter_map(|(t, kept)| kept.then_some(*t))
-        .collect()
+    parallel::filtered(triangles, |k| kept[k])
 }
 
 /// Whether [`drop_long`] keeps each of `triangles`.
@@ -139,9 +138,12 @@ pub fn short_or_kept(
         let (p, q) = (&positions[a as usize], &positions[b as usize]);
         DVec3::new((p.x - q.x) as f64, (p.y - q.y) as f64, 0.0).length()
     };
-    let mut edges: Vec<f64> = (triangles.par_iter())
-        .flat_map_iter(|t| (0..3).map(move |k| length(t[k], t[(k + 1) % 3])))
-        .collect();
+    let mut edges = vec![0.0; 3 * triangles.len()];
+    (edges.par_chunks_mut(3).zip(triangles)).for_each(|(lengths, t)| {
+        for (k, slot) in lengths.iter_mut().enumerate() {
+            *slot = length(t[k], t[(k + 1) % 3]);
+        }
+    });
     if edges.is_empty() {
         return Vec::new();
     }

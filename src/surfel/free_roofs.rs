@@ -45,6 +45,7 @@ use rayon::prelude::*;
 
 use super::corners::Rings;
 use super::sets::Sets;
+use crate::io::parallel;
 use crate::io::triangulate::short_or_kept;
 
 /// Height between an edge's ends, in spacings, beyond which it drops: 0.75 m at the
@@ -273,21 +274,25 @@ type Edge = (u32, u32);
 /// an edge is a border edge when one triangle of the ring holds it.
 fn tin_edges(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<Edge>, Vec<Edge>) {
     let rings = Rings::of(vertex_count, triangles);
-    let chunks: Vec<Vec<(Edge, bool)>> = (0..vertex_count)
+    let chunks: Vec<(Vec<Edge>, Vec<Edge>)> = (0..vertex_count)
         .into_par_iter()
         .chunks(1 << 12)
         .map(|vertices| {
-            let (mut out, mut ends) = (Vec::new(), Vec::new());
+            let (mut all, mut border, mut ends) = (Vec::new(), Vec::new(), Vec::new());
             for v in vertices {
                 let greater = rings.neighbour_runs(triangles, v, |w| w as usize > v, &mut ends);
-                out.extend(greater.map(|run| ((v as u32, run[0]), run.len() == 1)));
+                for run in greater {
+                    all.push((v as u32, run[0]));
+                    if run.len() == 1 {
+                        border.push((v as u32, run[0]));
+                    }
+                }
             }
-            out
+            (all, border)
         })
         .collect();
-    let all = chunks.iter().flatten();
-    let border = all.clone().filter(|(_, b)| *b).map(|(e, _)| *e).collect();
-    (all.map(|(e, _)| *e).collect(), border)
+    let (all, border): (Vec<Vec<Edge>>, Vec<Vec<Edge>>) = chunks.into_iter().unzip();
+    (parallel::concat(&all), parallel::concat(&border))
 }
 
 /// The median horizontal length of `edges`; None where there are none.
@@ -295,7 +300,7 @@ fn median_length(positions: &[Vec3], edges: &[Edge]) -> Option<f32> {
     let length = |&(a, b): &Edge| {
         (positions[a as usize].truncate() - positions[b as usize].truncate()).length()
     };
-    let mut lengths: Vec<f32> = edges.iter().map(length).collect();
+    let mut lengths: Vec<f32> = edges.par_iter().map(length).collect();
     let mid = lengths.len() / 2;
     (!lengths.is_empty()).then(|| *lengths.select_nth_unstable_by(mid, f32::total_cmp).1)
 }

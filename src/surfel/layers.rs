@@ -171,6 +171,6 @@ pub fn tin_among(
 }
 
 /// `values` at `indices`.
-pub fn pick<T: Copy>(values: &[T], indices: &[u32]) -> Vec<T> {
-    indices.iter().map(|&i| values[i as usize]).collect()
+pub fn pick<T: Copy + Send + Sync>(values: &[T], indices: &[u32]) -> Vec<T> {
+    indices.par_iter().map(|&i| values[i as usize]).collect()
 }

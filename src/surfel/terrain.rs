@@ -183,16 +183,13 @@ fn in_canonical_order(triangles: &mut [[u32; 3]]) {
 
 /// The median horizontal length of `triangles`' edges; None when there are none.
 fn median_horizontal_edge(points: &[Vec3], triangles: &[[u32; 3]]) -> Option<f32> {
-    let mut edges: Vec<f32> = triangles
-        .par_iter()
-        .flat_map_iter(|t| {
-            (0..3).map(move |k| {
-                (points[t[k] as usize] - points[t[(k + 1) % 3] as usize])
-                    .truncate()
-                    .length()
-            })
-        })
-        .collect();
+    let mut edges = vec![0.0f32; 3 * triangles.len()];
+    (edges.par_chunks_mut(3).zip(triangles)).for_each(|(lengths, t)| {
+        for (k, slot) in lengths.iter_mut().enumerate() {
+            let (a, b) = (points[t[k] as usize], points[t[(k + 1) % 3] as usize]);
+            *slot = (a - b).truncate().length();
+        }
+    });
     let mid = edges.len().checked_sub(1)? / 2;
     Some(*edges.select_nth_unstable_by(mid, f32::total_cmp).1)
 }
