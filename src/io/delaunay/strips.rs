@@ -21,6 +21,7 @@ use rayon::prelude::*;
 
 use super::fill::{AtHull, fill};
 use super::{doubled_area, edge_key, same_area, xy};
+use crate::io::parallel;
 
 /// One strip's share: its kept triangles, the border they leave (each edge wound as
 /// the triangle beyond it winds it), and the samples of its triangles that were not
@@ -65,18 +66,15 @@ pub fn in_strips(positions: &[Vec3], strips: usize) -> Option<Vec<[u32; 3]>> {
     if !same_area(kept_area + filled_area, 2.0 * hull_area(positions, &loose)) {
         return None;
     }
-    let mut triangles = Vec::with_capacity(parts.iter().map(|p| p.kept.len()).sum::<usize>());
-    for part in parts {
-        triangles.extend(part.kept);
-    }
-    triangles.extend(filled);
-    Some(triangles)
+    let mut pieces: Vec<Vec<[u32; 3]>> = parts.into_iter().map(|p| p.kept).collect();
+    pieces.push(filled);
+    Some(parallel::concat(&pieces))
 }
 
 /// The x values that cut `positions` into `strips` of about equal counts, ascending,
 /// distinct, above the least x (no strip is empty).
 fn cuts(positions: &[Vec3], strips: usize) -> Vec<f32> {
-    let mut xs: Vec<f32> = positions.iter().map(|p| p.x).collect();
+    let mut xs: Vec<f32> = positions.par_iter().map(|p| p.x).collect();
     xs.par_sort_unstable_by(f32::total_cmp);
     let mut cuts: Vec<f32> = (1..strips)
         .map(|k| xs[k * xs.len() / strips])
