@@ -190,8 +190,9 @@ pub fn samples_no_surface(offsets: &[Vec3]) -> bool {
 }
 
 /// The least metric distance of the offsets (at least one; `lanes`, mapped by the
-/// ellipse's metric) within which, taken nearest first, they leave no angular gap wider than [`MAX_GAP`]; when even all of them do,
-/// their widest gap (its start, counter-clockwise, and width; radians in the metric).
+/// ellipse's metric) within which, taken nearest first, they leave no angular gap
+/// wider than [`MAX_GAP`]; when even all of them do, their widest gap (its start,
+/// counter-clockwise, and width; radians in the metric).
 ///
 /// Most points are surrounded by their few nearest (on the Lucy-size cloud by the 4th
 /// to 6th of 23), so the [`FIRST_RANKED`] nearest are selected and sorted first, and the
