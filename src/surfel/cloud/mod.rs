@@ -34,7 +34,7 @@ use rayon::prelude::*;
 
 use super::covering::{Covering, RadiusRule, covering};
 use super::pca::plane_normal;
-use super::shape::{Clip, Shape};
+use super::shape::{Clip, Shape, SplatShape};
 use super::{Surfel, SurfelStats};
 use super::{footprint, walls};
 pub use orientation::{NormalsTurned, Orientation};
@@ -63,14 +63,14 @@ fn median_of_positive(values: impl Iterator<Item = f32>) -> Option<f32> {
     Some(*kept.select_nth_unstable_by(mid, f32::total_cmp).1)
 }
 
-/// Normal, radius and ellipse from the neighbours of each point listed in `which`,
-/// searching among all `points` (unit-scaled by `scale` for the search), written into
-/// `surfels`. Non-zero `given` normals are kept, the estimated ones turned by
-/// `orientation` (on a quantised frame, smoothed first: `smoothed_disks`); a radius
-/// already set (from faces) is only grown. A boundary splat ends where its sampling does ([`boundary_clip`]), a
-/// terrain's edge sample where its wall stands ([`walls`]). Afterwards every listed
-/// surfel whose radius is still 0 gets [`fallback_radius`]. Returns a terrain's wall
-/// surfels (none for any other cloud).
+/// Normal, radius and ellipse from the neighbours of each point listed in `which`
+/// (distinct), searching among all `points` (unit-scaled by `scale` for the search),
+/// written into `surfels`. Non-zero `given` normals are kept, the estimated ones turned
+/// by `orientation` (on a quantised frame, smoothed first: `smoothed_disks`); a radius
+/// already set (from faces) is only grown. A boundary splat ends where its sampling
+/// does ([`boundary_clip`]), a terrain's edge sample where its wall stands
+/// ([`walls`]). Afterwards every listed surfel whose radius is still 0 gets
+/// [`fallback_radius`]. Returns a terrain's wall surfels (none for any other cloud).
 pub fn neighbour_disks(
     points: &[Vec3],
     scale: f32,
@@ -116,30 +116,40 @@ pub fn neighbour_disks(
         Vec::new()
     };
     drop(search);
-    let mut next_wall = walls.iter().peekable();
-    for (k, (&i, (normal, c))) in which.iter().zip(disks).enumerate() {
-        let wall = next_wall.next_if(|(j, _)| *j == k).map(|(_, w)| w);
-        let s = &mut surfels[i as usize];
-        let estimated = given_normal(i) == Vec3::ZERO;
-        s.normal = if estimated {
-            orientation.apply(s.position, normal)
-        } else {
-            normal
-        };
-        let radius = c.radius / scale;
-        if radius >= s.radius {
-            s.radius = radius;
-            let n = s.normal.as_dvec3();
-            let mut shape = Shape::ellipse(n, c.axis.as_dvec3(), c.ratio as f64);
-            let p = points[i as usize] * scale;
-            shape.clip = match wall {
-                Some(w) => w.clip_of(p, (&shape, n, c.radius)),
-                None => c.open.map(|d| boundary_clip(&shape, n, d)),
-            };
-            stats.clipped_boundaries += shape.clip.is_some() as u64;
-            s.shape = shape.pack();
+    // Worked out on every core a block at a time (a block's updates held, not all),
+    // then written.
+    let mut updates = Vec::with_capacity(UPDATE_BLOCK.min(which.len()));
+    for (b, (ids, block)) in which
+        .chunks(UPDATE_BLOCK)
+        .zip(disks.chunks(UPDATE_BLOCK))
+        .enumerate()
+    {
+        (ids.par_iter().zip(block).enumerate())
+            .map(|(j, (&i, disk))| {
+                let k = b * UPDATE_BLOCK + j;
+                let wall = walls
+                    .binary_search_by_key(&k, |(j, _)| *j)
+                    .ok()
+                    .map(|w| &walls[w].1);
+                let estimated = given_normal(i) == Vec3::ZERO;
+                let at = (points[i as usize] * scale, scale);
+                updated(
+                    &surfels[i as usize],
+                    disk,
+                    (at, wall),
+                    estimated.then_some(orientation),
+                )
+            })
+            .collect_into_vec(&mut updates);
+        for (&i, update) in ids.iter().zip(&updates) {
+            let s = &mut surfels[i as usize];
+            s.normal = update.normal;
+            if let Some((radius, shape, clipped)) = update.disk {
+                (s.radius, s.shape) = (radius, shape);
+                stats.clipped_boundaries += clipped as u64;
+            }
+            stats.capped_radii += update.capped as u64;
         }
-        stats.capped_radii += c.capped as u64;
     }
     let missing: Vec<u32> = which
         .iter()
@@ -160,6 +170,46 @@ pub fn neighbour_disks(
         .collect();
     stats.wall_splats += walls.len() as u64;
     walls
+}
+
+/// Listed points updated per parallel block of [`neighbour_disks`].
+const UPDATE_BLOCK: usize = 1 << 16;
+
+/// What a listed point's neighbourhood makes of its surfel: its normal, and where the
+/// covering is at least the radius it has, that radius, its packed shape and whether a
+/// clip ends it; whether the covering was capped.
+struct Update {
+    normal: Vec3,
+    disk: Option<(f32, SplatShape, bool)>,
+    capped: bool,
+}
+
+/// The update of surfel `s` from its estimated or given `normal` and covering `c`
+/// (unit-scaled, at unit-scaled position `p` in a model of `scale`): the normal turned
+/// by `orientation` where it was estimated; the shape clipped at its terrain `wall`, or
+/// where its sampling ends.
+fn updated(
+    s: &Surfel,
+    (normal, c): &(Vec3, Covering),
+    ((p, scale), wall): ((Vec3, f32), Option<&walls::Wall>),
+    orientation: Option<Orientation>,
+) -> Update {
+    let normal = orientation.map_or(*normal, |o| o.apply(s.position, *normal));
+    let radius = c.radius / scale;
+    let disk = (radius >= s.radius).then(|| {
+        let n = normal.as_dvec3();
+        let mut shape = Shape::ellipse(n, c.axis.as_dvec3(), c.ratio as f64);
+        shape.clip = match wall {
+            Some(w) => w.clip_of(p, (&shape, n, c.radius)),
+            None => c.open.map(|d| boundary_clip(&shape, n, d)),
+        };
+        (radius, shape.pack(), shape.clip.is_some())
+    });
+    Update {
+        normal,
+        disk,
+        capped: c.capped,
+    }
 }
 
 /// Each of the points `which`'s normal (given, or fitted to its neighbourhood and, on a
