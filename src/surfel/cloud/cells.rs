@@ -344,7 +344,7 @@ fn cell_edge(coords: &[[f32; 3]]) -> f64 {
     // An eighth taken by a hash of the index: a stride would follow a scan's or a
     // lattice's order (every 8th vertex of a generated surface is a sparser row).
     let picked = |i: usize| (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 61 == 0;
-    let sample: Vec<[f32; 3]> = (coords.iter().enumerate())
+    let sample: Vec<[f32; 3]> = (coords.par_iter().enumerate())
         .filter_map(|(i, c)| picked(i).then_some(*c))
         .collect();
     let others = (K - 1) / 8;

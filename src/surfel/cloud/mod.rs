@@ -50,11 +50,11 @@ pub const K: usize = 24;
 /// Radius for surfels without a measured one: the median of the measured radii, or
 /// 1/1024 of the model's extent (of one unit for a model without extent) when none was.
 pub fn fallback_radius(radii: &[f32], scale: f32) -> f32 {
-    median_of_positive(radii.iter().copied()).unwrap_or(1.0 / 1024.0 / scale)
+    median_of_positive(radii.par_iter().copied()).unwrap_or(1.0 / 1024.0 / scale)
 }
 
 /// The (upper) median of the positive, finite `values`; `None` when there are none.
-fn median_of_positive(values: impl Iterator<Item = f32>) -> Option<f32> {
+fn median_of_positive(values: impl ParallelIterator<Item = f32>) -> Option<f32> {
     let mut kept: Vec<f32> = values.filter(|v| *v > 0.0 && v.is_finite()).collect();
     if kept.is_empty() {
         return None;
@@ -308,18 +308,18 @@ pub const CLOUD_SPACINGS: f32 = 8.0;
 /// while their holes stayed under 0.4 %: neighbouring splats and pass 3's gap fill close
 /// what the shortened axes open.
 fn cap_to_spacing(disks: &mut [(Vec3, Covering)], spacings: f32) -> u64 {
-    let Some(spacing) = median_of_positive(disks.iter().map(|(_, c)| c.spacing)) else {
+    let Some(spacing) = median_of_positive(disks.par_iter().map(|(_, c)| c.spacing)) else {
         return 0;
     };
     let cap = spacings * spacing;
-    let mut shortened = 0;
-    for (_, c) in disks.iter_mut().filter(|(_, c)| c.radius > cap) {
-        let minor = c.ratio * c.radius;
-        c.ratio = (minor.min(cap) / cap).max(c.ratio);
-        c.radius = cap;
-        shortened += 1;
-    }
-    shortened
+    (disks.par_iter_mut())
+        .filter(|(_, c)| c.radius > cap)
+        .map(|(_, c)| {
+            let minor = c.ratio * c.radius;
+            c.ratio = (minor.min(cap) / cap).max(c.ratio);
+            c.radius = cap;
+        })
+        .count() as u64
 }
 
 /// Shrinks the `disks` of a sensor frame seen from `sensor` (unit-scaled) to its
