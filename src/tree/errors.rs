@@ -28,7 +28,6 @@
 
 use glam::{DVec2, DVec3, Vec3};
 
-use super::hierarchy::MAX_CHILDREN;
 use crate::surfel::pca::plane_normal;
 
 /// Tangent directions sampled for e_t: every 360°/16, which includes ±u, ±v and the
@@ -123,47 +122,32 @@ pub fn perpendicular_error(parent: &Disk, children: &[Splat]) -> f64 {
     (top - bottom).max(0.0)
 }
 
-/// A child's centre and axes in the parent's tangent basis (u, v): for t = u cos θ + v
-/// sin θ, (pᵢ − p)·t = a·(cos θ, sin θ), and its axes' dot products with t are
-/// x·(cos θ, sin θ) and y·(cos θ, sin θ); its radius.
-type Projected = (DVec2, DVec2, DVec2, f64);
-
 /// Tangential error e_t of `parent` over `children`.
+///
+/// Each child's reach along the sampled directions is taken in columns, one lane per
+/// direction: with a = (pᵢ − p), x = the major axis, y = the minor one scaled by the
+/// ratio, all in the parent's tangent basis (u, v), its reach along t = u cos θ + v sin θ
+/// is a·t + rᵢ |(x·t, y·t)|.
 pub fn tangential_error(parent: &Splat, children: &[Splat]) -> f64 {
     let (u, v) = (parent.axis, parent.disk.n.cross(parent.axis));
-    // The parent's support along t = u cos θ + v sin θ: r |(cos θ, ratio sin θ)|.
-    let (r, ratio) = (parent.disk.r, parent.ratio);
-    let parent = &parent.disk;
     let basis = |d: DVec3| DVec2::new(d.dot(u), d.dot(v));
-    let project = |c: &Splat| {
+    let mut reach = [f64::NEG_INFINITY; DIRECTIONS];
+    for c in children {
         let (major, minor) = c.axes();
-        (
-            basis(c.disk.p - parent.p),
-            basis(major),
-            basis(minor),
-            c.disk.r,
-        )
-    };
-    // The hierarchy gives 2–4 children: on the stack. Any other count: on the heap.
-    let mut small = [(DVec2::ZERO, DVec2::ZERO, DVec2::ZERO, 0.0); MAX_CHILDREN];
-    let large: Vec<_>;
-    let proj: &[Projected] = if children.len() <= MAX_CHILDREN {
-        for (slot, c) in small.iter_mut().zip(children) {
-            *slot = project(c);
+        let (a, x, y) = (basis(c.disk.p - parent.disk.p), basis(major), basis(minor));
+        for (t, reach) in reach.iter_mut().enumerate() {
+            let (cos, sin) = (DIRECTION_COS[t], DIRECTION_SIN[t]);
+            let (xt, yt) = (x.x * cos + x.y * sin, y.x * cos + y.y * sin);
+            let along = a.x * cos + a.y * sin + c.disk.r * (xt * xt + yt * yt).sqrt();
+            *reach = reach.max(along);
         }
-        &small[..children.len()]
-    } else {
-        large = children.iter().map(project).collect();
-        &large
-    };
+    }
+    // The parent's support along t: r |(cos θ, ratio sin θ)|.
+    let (r, ratio) = (parent.disk.r, parent.ratio);
     let mut worst = 0.0f64;
-    for &(cos, sin) in DIRECTION_TABLE.iter() {
-        let t = DVec2::new(cos, sin);
-        let mut reach = f64::NEG_INFINITY;
-        for &(a, x, y, r) in proj {
-            reach = reach.max(a.dot(t) + r * DVec2::new(x.dot(t), y.dot(t)).length());
-        }
-        worst = worst.max(r * DVec2::new(cos, ratio * sin).length() - reach);
+    for (t, reach) in reach.iter().enumerate() {
+        let (cos, sin) = (DIRECTION_COS[t], ratio * DIRECTION_SIN[t]);
+        worst = worst.max(r * (cos * cos + sin * sin).sqrt() - reach);
     }
     worst
 }
@@ -193,6 +177,23 @@ pub(super) const DIRECTION_TABLE: [(f64, f64); DIRECTIONS] = {
         (C1, -S1),
     ]
 };
+
+/// The table's cosines, in a column.
+pub(super) const DIRECTION_COS: [f64; DIRECTIONS] = direction_column(0);
+/// The table's sines, in a column.
+pub(super) const DIRECTION_SIN: [f64; DIRECTIONS] = direction_column(1);
+
+/// Column `which` (0: cos, 1: sin) of [`DIRECTION_TABLE`].
+const fn direction_column(which: usize) -> [f64; DIRECTIONS] {
+    let mut column = [0.0; DIRECTIONS];
+    let mut k = 0;
+    while k < DIRECTIONS {
+        let (cos, sin) = DIRECTION_TABLE[k];
+        column[k] = if which == 0 { cos } else { sin };
+        k += 1;
+    }
+    column
+}
 
 /// The node error before the max over children: √(e_p² + e_t²).
 pub fn node_error(parent: &Splat, children: &[Splat]) -> f64 {

@@ -30,7 +30,7 @@
 use arrayvec::ArrayVec;
 use glam::{DVec2, DVec3};
 
-use super::errors::{DIRECTION_TABLE, Disk};
+use super::errors::{DIRECTION_COS, DIRECTION_SIN, Disk};
 use super::hierarchy::MAX_CHILDREN;
 use crate::surfel::field;
 use crate::surfel::shape::{Fit, MIN_RATIO, Shape, rotate_gradient, tangent_frame};
@@ -38,6 +38,10 @@ use crate::surfel::shape::{Fit, MIN_RATIO, Shape, rotate_gradient, tangent_frame
 /// Rim points sampled per child, at the directions of the errors' table.
 pub const RIM_SAMPLES: usize = 16;
 const _: () = assert!(RIM_SAMPLES == super::errors::DIRECTIONS);
+
+/// 1 / cos(π / [`RIM_SAMPLES`]): how far each rim sample is pushed out from its child's
+/// centre so that the polygon of the samples holds the child's ellipse.
+const RIM_GROWTH: f64 = 1.019_591_158_208_318_4;
 
 /// Samples tilted further than 60° from the parent's normal count as 60°: beyond that
 /// a node straddles a crease, which no linear field follows (as `MAX_GRADIENT`).
@@ -98,39 +102,63 @@ impl Seen {
 
     /// The offset in the parent's frame of the child's point at plane coordinates
     /// (x, y), its ellipse `grow` times as large.
+    #[inline(always)]
     fn offset_at(&self, (x, y): (f64, f64), grow: f64) -> DVec2 {
         self.offset + self.along * grow * x + self.across * grow * y
     }
 
     /// Rim sample `k`'s plane coordinates in the child's ellipse.
+    #[inline(always)]
     fn rim_xy(&self, k: usize) -> (f64, f64) {
-        let (c, s) = DIRECTION_TABLE[k];
-        (c, s * self.ratio)
+        (DIRECTION_COS[k], DIRECTION_SIN[k] * self.ratio)
     }
 
     /// The sample at plane coordinates (x, y) as the fit takes it: its offset in the
     /// parent's frame, and the tangent of its tilt ([`tilt`]).
+    #[inline(always)]
     fn sample(&self, (x, y): (f64, f64)) -> (DVec2, DVec2) {
         let [a, b, c] = self.gradient;
         let (g1, g2) = (a * x + b * y, b * x + c * y);
         // A field that is not finite leaves the child's normal.
-        let (g1, g2) = if g1.is_finite() && g2.is_finite() {
-            (g1, g2)
-        } else {
-            (0.0, 0.0)
-        };
+        let finite = g1.is_finite() & g2.is_finite();
+        let (g1, g2) = (if finite { g1 } else { 0.0 }, if finite { g2 } else { 0.0 });
         let m = self.n + self.u * g1 + self.v * g2;
         (self.offset_at((x, y), 1.0), tilt(m))
+    }
+
+    /// Its rim samples as the fit takes them ([`Seen::sample`]), in columns: the
+    /// offsets' x and y, the tilts' x and y.
+    fn rim_samples(&self) -> [[f64; RIM_SAMPLES]; 4] {
+        let mut columns = [[0.0; RIM_SAMPLES]; 4];
+        for k in 0..RIM_SAMPLES {
+            let (d, t) = self.sample(self.rim_xy(k));
+            [columns[0][k], columns[1][k]] = d.to_array();
+            [columns[2][k], columns[3][k]] = t.to_array();
+        }
+        columns
+    }
+
+    /// The largest ρ² = (d·u)² + (d·v · stretch)² of its rim points d, its ellipse
+    /// `grow` times as large, offsets in the parent's frame.
+    fn farthest_rim(&self, (u, v): (DVec2, DVec2), stretch: f64, grow: f64) -> f64 {
+        let mut rho2 = [0.0f64; RIM_SAMPLES];
+        for (k, rho2) in rho2.iter_mut().enumerate() {
+            let d = self.offset_at(self.rim_xy(k), grow);
+            let (x, y) = (d.dot(u), d.dot(v) * stretch);
+            *rho2 = x * x + y * y;
+        }
+        rho2.into_iter().fold(0.0, f64::max)
     }
 }
 
 /// The tangent of a sample's tilt from the parent's normal, for its direction `m` (any
 /// length; x, y in the parent's frame, z along its normal): m_xy / m_z, its cosine
-/// m_z / |m| taken as at least [`MIN_COS_TILT`]. One division, and a root only where
-/// the cosine is clamped.
+/// m_z / |m| taken as at least [`MIN_COS_TILT`]. Branch-free, so that a child's rim
+/// samples run in vector lanes.
+#[inline(always)]
 fn tilt(m: DVec3) -> DVec2 {
     let (along, length2) = (m.z, m.length_squared());
-    let unclamped = along > 0.0 && along * along >= MIN_COS_TILT * MIN_COS_TILT * length2;
+    let unclamped = (along > 0.0) & (along * along >= MIN_COS_TILT * MIN_COS_TILT * length2);
     let denominator = if unclamped {
         along
     } else {
@@ -157,9 +185,9 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
         // tangential part over its normal part, tan of its tilt (not its sine).
         let (d, t) = s.sample((0.0, 0.0));
         fit.add(d, t);
+        let [dx, dy, tx, ty] = s.rim_samples();
         for k in 0..RIM_SAMPLES {
-            let (d, t) = s.sample(s.rim_xy(k));
-            fit.add(d, t);
+            fit.add(DVec2::new(dx[k], dy[k]), DVec2::new(tx[k], ty[k]));
         }
         seen.push(s);
     }
@@ -179,19 +207,14 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
     };
     // The ellipse's axes in the frame: each sample's offset along them.
     let (u, v) = (dir, dir.perp());
-    let grow = 1.0 / (std::f64::consts::PI / RIM_SAMPLES as f64).cos();
     // The largest ρ², then one root (√ is monotone and correctly rounded: the same
     // value as the largest root).
-    let (mut major2, stretch) = (0.0f64, ratio.recip());
-    for s in &seen {
-        for k in 0..RIM_SAMPLES {
-            let d = s.offset_at(s.rim_xy(k), grow);
-            let (x, y) = (d.dot(u), d.dot(v) * stretch);
-            major2 = major2.max(x * x + y * y);
-        }
-    }
+    let stretch = ratio.recip();
+    let major2 = (seen.iter())
+        .map(|s| s.farthest_rim((u, v), stretch, RIM_GROWTH))
+        .fold(0.0, f64::max);
     let mut major = major2.sqrt();
-    if !(major > 0.0 && major <= parent.r * grow) {
+    if !(major > 0.0 && major <= parent.r * RIM_GROWTH) {
         shape.ratio = 1.0;
         major = parent.r;
     }
@@ -258,6 +281,15 @@ mod tests {
             },
             color: DVec3::ZERO,
         }
+    }
+
+    #[test]
+    fn the_rim_growth_is_the_polygon_s() {
+        let want = 1.0 / (std::f64::consts::PI / RIM_SAMPLES as f64).cos();
+        assert!(
+            (RIM_GROWTH - want).abs() <= f64::EPSILON,
+            "{RIM_GROWTH} against {want}"
+        );
     }
 
     #[test]
