@@ -22,6 +22,9 @@ elif [ ! -d "$root/src" ]; then
   git clone --depth 1 https://github.com/potree/PotreeConverter "$root/src" >&2
 fi
 mkdir -p "$root/src/resources/page_template"
-cmake -S "$root/src" -B "$root/build" -DCMAKE_BUILD_TYPE=Release > "$root/cmake.log" 2>&1
+# The same instruction set as spt's own build (.cargo/config.toml): x86-64-v3 on x86-64.
+flags=""
+[ "$(uname -m)" = x86_64 ] && flags="-march=x86-64-v3"
+cmake -S "$root/src" -B "$root/build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS="$flags" > "$root/cmake.log" 2>&1
 cmake --build "$root/build" -j "${JOBS:-2}" > "$root/build.log" 2>&1 || { tail -30 "$root/build.log" >&2; exit 1; }
 echo "$root/build/PotreeConverter"
