@@ -130,6 +130,8 @@ impl Seen {
     /// offsets' x and y, the tilts' x and y.
     fn rim_samples(&self) -> [[f64; RIM_SAMPLES]; 4] {
         let mut columns = [[0.0; RIM_SAMPLES]; 4];
+        // k indexes the direction table and the four columns alike.
+        #[allow(clippy::needless_range_loop)]
         for k in 0..RIM_SAMPLES {
             let (d, t) = self.sample(self.rim_xy(k));
             [columns[0][k], columns[1][k]] = d.to_array();
