@@ -146,15 +146,15 @@ pub fn tangential_error(parent: &Splat, children: &[Splat]) -> f64 {
     let (r, ratio) = (parent.disk.r, parent.ratio);
     let mut worst = 0.0f64;
     for (t, reach) in reach.iter().enumerate() {
-        let (cos, sin) = (DIRECTION_COS[t], ratio * DIRECTION_SIN[t]);
-        worst = worst.max(r * (cos * cos + sin * sin).sqrt() - reach);
+        let (x, y) = (DIRECTION_COS[t], ratio * DIRECTION_SIN[t]);
+        worst = worst.max(r * (x * x + y * y).sqrt() - reach);
     }
     worst
 }
 
 /// (cos θ, sin θ) of the sampled directions θ = k · 360° / [`DIRECTIONS`], exact at the
 /// axes and diagonals.
-pub(super) const DIRECTION_TABLE: [(f64, f64); DIRECTIONS] = {
+const DIRECTION_TABLE: [(f64, f64); DIRECTIONS] = {
     const H: f64 = std::f64::consts::FRAC_1_SQRT_2;
     const C1: f64 = 0.923_879_532_511_286_7; // cos 22.5°
     const S1: f64 = 0.382_683_432_365_089_8; // sin 22.5°
