@@ -76,15 +76,15 @@ impl Search {
     ) -> Vec<T> {
         let mut out: Vec<T> = Vec::with_capacity(queries.len());
         out.par_extend((0..queries.len()).into_par_iter().map(|_| T::default()));
+        if self.is_empty() {
+            return out;
+        }
         // One block per job: split adaptively, one of two threads ran its last share
         // alone for 0.5 s on the Lucy-size cloud while the other one waited.
         let block = query_block(queries.len());
         (out.par_chunks_mut(block).zip(queries.par_chunks(block)))
             .with_max_len(1)
             .for_each(|(slots, block)| {
-                if self.is_empty() {
-                    return;
-                }
                 let positions: Vec<Vec3> = block.iter().map(position).collect();
                 let found = self.cells.nearest(&self.coords, self.k, &positions);
                 for ((slot, q), found) in slots.iter_mut().zip(block).zip(found) {
@@ -100,8 +100,9 @@ impl Search {
 /// scan's or a generator's order lie near each other, so a block's queries fall in few
 /// cells, and the larger the block, the fewer cells it splits with its neighbours. A
 /// block is at most [`MAX_QUERY_BLOCK`], and small enough that each thread gets 32
-/// (down to [`MIN_QUERY_BLOCK`]). On the Lucy-size cloud, on 2 cores, the surfels took 13.9–14.9 s in blocks
-/// of 2,048, 13.4–13.7 s of 8,192 and 13.2–13.3 s of 32,768 (2026-11-29, alternated).
+/// (down to [`MIN_QUERY_BLOCK`]). On the Lucy-size cloud, on 2 cores, the surfels took
+/// 13.9–14.9 s in blocks of 2,048, 13.4–13.7 s of 8,192 and 13.2–13.3 s of 32,768
+/// (2026-11-29, alternated).
 fn query_block(count: usize) -> usize {
     (count / (32 * rayon::current_num_threads())).clamp(MIN_QUERY_BLOCK, MAX_QUERY_BLOCK)
 }
