@@ -141,11 +141,11 @@ impl Seen {
     }
 
     /// The largest ρ² = (d·u)² + (d·v · stretch)² of its rim points d, its ellipse
-    /// `grow` times as large, offsets in the parent's frame.
-    fn farthest_rim(&self, (u, v): (DVec2, DVec2), stretch: f64, grow: f64) -> f64 {
+    /// [`RIM_GROWTH`] times as large, offsets in the parent's frame.
+    fn farthest_rim(&self, (u, v): (DVec2, DVec2), stretch: f64) -> f64 {
         let mut rho2 = [0.0f64; RIM_SAMPLES];
         for (k, rho2) in rho2.iter_mut().enumerate() {
-            let d = self.offset_at(self.rim_xy(k), grow);
+            let d = self.offset_at(self.rim_xy(k), RIM_GROWTH);
             let (x, y) = (d.dot(u), d.dot(v) * stretch);
             *rho2 = x * x + y * y;
         }
@@ -213,7 +213,7 @@ pub fn parent_shape(parent: &Disk, children: &[Child]) -> (Shape, f64) {
     // value as the largest root).
     let stretch = ratio.recip();
     let major2 = (seen.iter())
-        .map(|s| s.farthest_rim((u, v), stretch, RIM_GROWTH))
+        .map(|s| s.farthest_rim((u, v), stretch))
         .fold(0.0, f64::max);
     let mut major = major2.sqrt();
     if !(major > 0.0 && major <= parent.r * RIM_GROWTH) {
