@@ -226,7 +226,8 @@ fn add_lattice(
         tx[k] = linear(k, &|t| t.x, &tangential) / length;
         ty[k] = linear(k, &|t| t.y, &tangential) / length;
         let covered = x[k] * x[k] + y[k] * y[k] * inv_ratio2 < 1.0;
-        kept[k] = covered && !(length2 <= 0.0);
+        // Only where the normals cancel (length 0) is a covered point left out.
+        kept[k] = covered && (length2 > 0.0 || length2.is_nan());
     }
     for k in 0..LANES {
         let row = terms(DVec2::new(x[k], y[k]), DVec2::new(tx[k], ty[k]), area);
