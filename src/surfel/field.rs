@@ -190,8 +190,7 @@ fn add_lattice(
     corners: [(DVec3, DVec3); 3],
 ) {
     let [(a, na), (b, nb), (c, nc)] = corners;
-    let area = 0.5 * (b - a).cross(c - a).length();
-    let plane = [a, b, c].map(|p| DVec2::new((p - at).dot(u), (p - at).dot(v)) / r);
+    let (area, plane) = projected((at, r, (u, v)), [a, b, c]);
     // Tangential normal components are linear in the barycentric coordinates; the
     // interpolated normal's length is √(λᵀ Gram λ).
     let tangential = [na, nb, nc].map(|n| DVec2::new(n.dot(u), n.dot(v)));
@@ -225,15 +224,16 @@ fn add_lattice(
         let length = length2.sqrt();
         tx[k] = linear(k, &|t| t.x, &tangential) / length;
         ty[k] = linear(k, &|t| t.y, &tangential) / length;
-        let covered = x[k] * x[k] + y[k] * y[k] * inv_ratio2 < 1.0;
+        let covered = inside(DVec2::new(x[k], y[k]), inv_ratio2);
         // Only where the normals cancel (length 0) is a covered point left out.
         kept[k] = covered && (length2 > 0.0 || length2.is_nan());
     }
-    for k in 0..LANES {
-        let row = terms(DVec2::new(x[k], y[k]), DVec2::new(tx[k], ty[k]), area);
-        if kept[k] {
-            fit.add_terms(&row);
-        }
+    for k in (0..LANES).filter(|&k| kept[k]) {
+        fit.add_terms(&terms(
+            DVec2::new(x[k], y[k]),
+            DVec2::new(tx[k], ty[k]),
+            area,
+        ));
     }
 }
 
@@ -263,15 +263,30 @@ fn covered_lattice(
     (at, r, shape, v): (DVec3, f64, &Shape, DVec3),
     corners: [DVec3; 3],
 ) -> impl Iterator<Item = ([f64; 3], DVec2, f64)> + use<> {
-    let [a, b, c] = corners;
-    let area = 0.5 * (b - a).cross(c - a).length();
-    let u = shape.axis;
-    let plane = corners.map(|p| DVec2::new((p - at).dot(u), (p - at).dot(v)) / r);
+    let (area, plane) = projected((at, r, (shape.axis, v)), corners);
     let inv_ratio2 = 1.0 / (shape.ratio * shape.ratio);
     LATTICE.into_iter().filter_map(move |l| {
         let xy = l[0] * plane[0] + l[1] * plane[1] + l[2] * plane[2];
-        (xy.x * xy.x + xy.y * xy.y * inv_ratio2 < 1.0).then_some((l, xy, area))
+        inside(xy, inv_ratio2).then_some((l, xy, area))
     })
+}
+
+/// The triangle `corners` as the splat at `at` (major radius `r`, axes `u`, `v`) sees
+/// it: its area, and its corners' plane coordinates in major radii.
+fn projected(
+    (at, r, (u, v)): (DVec3, f64, (DVec3, DVec3)),
+    corners: [DVec3; 3],
+) -> (f64, [DVec2; 3]) {
+    let [a, b, c] = corners;
+    let area = 0.5 * (b - a).cross(c - a).length();
+    let plane = corners.map(|p| DVec2::new((p - at).dot(u), (p - at).dot(v)) / r);
+    (area, plane)
+}
+
+/// Whether the plane coordinates `xy` (in major radii) lie inside the ellipse of
+/// minor over major 1/√`inv_ratio2`: x² + y² · inv_ratio2 < 1.
+fn inside(xy: DVec2, inv_ratio2: f64) -> bool {
+    xy.x * xy.x + xy.y * xy.y * inv_ratio2 < 1.0
 }
 
 /// An 8-bit RGBA colour's RGB as the fields see colours: 0–1.
