@@ -165,8 +165,10 @@ fn draw_pixel(s: SplatVarying, node: u32, pixel: vec2<i32>) {
     }
     switch RASTER_PASS {
         case RASTER_VISIBILITY: {
+            // Only a nearer depth than the pixel holds (held ≥ 0): a farther one's
+            // atomicMax would change nothing, and saves its trip to memory.
             let depth = visibility_depth(at);
-            if depth > 0.0 {
+            if depth > bitcast<f32>(held) {
                 atomicMax(&visible[p], bitcast<u32>(depth));
             }
         }
