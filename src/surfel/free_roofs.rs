@@ -39,6 +39,7 @@
 //! autzen_trim 262, at the trees.
 
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 use glam::{DMat3, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
@@ -109,7 +110,7 @@ pub fn free_standing(positions: &[Vec3], delaunay: &[[u32; 3]]) -> Vec<Standing>
         })
         .partition(|&(hi, lo)| positions[hi as usize].z - positions[lo as usize].z > fall);
     drop(edges);
-    let (top, firsts) = tops_joined(positions, &level);
+    let (top, firsts) = tops_joined(positions, (&level, delaunay));
     drop(level);
     let top = |k: u32| top[k as usize] as usize;
     let mut tops = held_tops(positions, (&top, &firsts), PLANAR_SPACINGS * spacing);
@@ -148,33 +149,44 @@ pub fn free_standing(positions: &[Vec3], delaunay: &[[u32; 3]]) -> Vec<Standing>
 
 /// Each sample's top (numbered in the order of their least samples) and each top's
 /// least sample: the sets that the `level` edges join, with the samples that share an
-/// x–y (which the TIN leaves but one of) joined.
-fn tops_joined(positions: &[Vec3], level: &[Edge]) -> (Vec<u32>, Vec<u32>) {
-    let mut sets = Sets::new(positions.len());
-    (level.iter()).for_each(|&(a, b)| sets.join(a as usize, b as usize));
-    let mut order: Vec<u32> = (0..positions.len() as u32).collect();
-    let xy = |k: &u32| {
-        let p = positions[*k as usize];
-        (p.x.to_bits(), p.y.to_bits())
+/// x–y joined. Of those `delaunay` holds at most one, so each such group has a sample
+/// that no triangle holds: every sample is looked up among those alone (in a 20 M
+/// sample city tile, sorting all samples by x–y took 0.9 s of the 1.6 s here).
+fn tops_joined(
+    positions: &[Vec3],
+    (level, delaunay): (&[Edge], &[[u32; 3]]),
+) -> (Vec<u32>, Vec<u32>) {
+    let sets = Sets::new(positions.len());
+    (level.par_iter()).for_each(|&(a, b)| sets.join(a as usize, b as usize));
+    let xy = |k: u32| {
+        let p = positions[k as usize];
+        ((p.x.to_bits() as u64) << 32) | p.y.to_bits() as u64
     };
-    order.par_sort_unstable_by_key(xy);
-    for pair in order.windows(2).filter(|p| xy(&p[0]) == xy(&p[1])) {
-        sets.join(pair[0] as usize, pair[1] as usize);
-    }
-    drop(order);
-    // A set's least sample is its root, met first.
-    let (mut number, mut firsts) = (vec![u32::MAX; positions.len()], Vec::new());
-    let top = (0..positions.len())
-        .map(|k| {
-            let root = sets.root(k);
-            if number[root] == u32::MAX {
-                number[root] = firsts.len() as u32;
-                firsts.push(root as u32);
-            }
-            number[root]
-        })
+    let held: Vec<AtomicBool> = (0..positions.len())
+        .into_par_iter()
+        .map(|_| AtomicBool::new(false))
         .collect();
-    (top, firsts)
+    // Triangle by triangle: rayon's `flatten` would drive each 3-array as a parallel
+    // iterator of its own (1.3 s on the 20 M tile, against 0.04 s).
+    let hold = |&v: &u32| held[v as usize].store(true, Relaxed);
+    (delaunay.par_iter()).for_each(|t| t.iter().for_each(hold));
+    let mut unheld: Vec<(u64, u32)> = (0..positions.len() as u32)
+        .into_par_iter()
+        .filter(|&k| !held[k as usize].load(Relaxed))
+        .map(|k| (xy(k), k))
+        .collect();
+    drop(held);
+    unheld.par_sort_unstable();
+    if !unheld.is_empty() {
+        (0..positions.len() as u32).into_par_iter().for_each(|k| {
+            let key = xy(k);
+            let first = unheld.partition_point(|u| u.0 < key);
+            if let Some(&(_, twin)) = unheld.get(first).filter(|u| u.0 == key) {
+                sets.join(k as usize, twin as usize);
+            }
+        });
+    }
+    sets.numbered()
 }
 
 /// The tops (each sample's `top` and each top's first sample), their samples held and
@@ -324,7 +336,7 @@ fn walled_tops(positions: &[Vec3], standing: &[(usize, usize)], spacing: f32) ->
     for k in 0..standing.len() {
         cells.entry(cell(k)).or_default().push(k);
     }
-    let mut runs = Sets::new(standing.len());
+    let runs = Sets::new(standing.len());
     for k in 0..standing.len() {
         let (top, i, j) = cell(k);
         let around = (-1..=1).flat_map(|di| (-1..=1).map(move |dj| (top, i + di, j + dj)));

@@ -110,7 +110,9 @@ impl FirstTin {
         for (n, k) in kept.enumerate() {
             renumber[k] = n as u32;
         }
-        (rest.par_iter_mut().flatten()).for_each(|v| *v = renumber[*v as usize]);
+        // Triangle by triangle: rayon's `flatten` would drive each 3-array as a
+        // parallel iterator of its own, at many times the cost.
+        (rest.par_iter_mut()).for_each(|t| t.iter_mut().for_each(|v| *v = renumber[*v as usize]));
         rest
     }
 }

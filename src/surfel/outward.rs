@@ -173,7 +173,7 @@ const LOOSE: u32 = u32::MAX;
 /// order of their least vertex), [`LOOSE`] for a vertex of no triangle; and the count
 /// of pieces.
 fn pieces(vertices: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, usize) {
-    let mut sets = Sets::new(vertices);
+    let sets = Sets::new(vertices);
     let mut reached = vec![false; vertices];
     for t in triangles {
         sets.join(t[0] as usize, t[1] as usize);

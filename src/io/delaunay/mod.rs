@@ -88,13 +88,16 @@ fn held_by_least_twins(points: &[Vec3], triangles: &mut [[u32; 3]]) {
         return;
     }
     unheld.par_sort_unstable();
-    triangles.par_iter_mut().flatten().for_each(|v| {
+    let least_twin = |v: &mut u32| {
         let at = xy_key(points[*v as usize]);
         let first = unheld.partition_point(|u| u.0 < at);
         if let Some(&(key, twin)) = unheld.get(first) {
             *v = (*v).min(if key == at { twin } else { *v });
         }
-    });
+    };
+    // Triangle by triangle: rayon's `flatten` would drive each 3-array as a parallel
+    // iterator of its own, at many times the cost.
+    (triangles.par_iter_mut()).for_each(|t| t.iter_mut().for_each(least_twin));
 }
 
 /// A sample's x–y as one key, equal for equal coordinates (adding +0 makes −0 +0).
