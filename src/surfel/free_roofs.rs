@@ -150,8 +150,8 @@ pub fn free_standing(positions: &[Vec3], delaunay: &[[u32; 3]]) -> Vec<Standing>
 /// Each sample's top (numbered in the order of their least samples) and each top's
 /// least sample: the sets that the `level` edges join, with the samples that share an
 /// x–y joined. Of those `delaunay` holds at most one, so each such group has a sample
-/// that no triangle holds: every sample is looked up among those alone (in a 20 M
-/// sample city tile, sorting all samples by x–y took 0.9 s of the 1.6 s here).
+/// that no triangle holds: every sample is looked up among those alone (on a city
+/// slice of 20 M samples, sorting all of them by x–y took 0.9 s of the 1.6 s here).
 fn tops_joined(
     positions: &[Vec3],
     (level, delaunay): (&[Edge], &[[u32; 3]]),
@@ -167,7 +167,7 @@ fn tops_joined(
         .map(|_| AtomicBool::new(false))
         .collect();
     // Triangle by triangle: rayon's `flatten` would drive each 3-array as a parallel
-    // iterator of its own (1.3 s on the 20 M tile, against 0.04 s).
+    // iterator of its own (1.3 s on a 20 M-sample city slice, against 0.04 s).
     let hold = |&v: &u32| held[v as usize].store(true, Relaxed);
     (delaunay.par_iter()).for_each(|t| t.iter().for_each(hold));
     let mut unheld: Vec<(u64, u32)> = (0..positions.len() as u32)

@@ -82,22 +82,20 @@ impl Sets {
                     .count() as u32
             })
             .collect();
-        let starts = counts.iter().scan(0, |sum, &c| {
-            let start = *sum;
-            *sum += c;
-            Some(start)
+        let mut starts = Vec::with_capacity(counts.len());
+        counts.into_iter().fold(0, |sum, count| {
+            starts.push(sum);
+            sum + count
         });
         let mut before = vec![0u32; names.len()];
-        (before
-            .par_chunks_mut(PIECE)
-            .zip(starts.collect::<Vec<u32>>())
-            .enumerate())
-        .for_each(|(p, (piece, mut count))| {
-            for (j, slot) in piece.iter_mut().enumerate() {
-                *slot = count;
-                count += is_root(p * PIECE + j) as u32;
-            }
-        });
+        (before.par_chunks_mut(PIECE).zip(starts).enumerate()).for_each(
+            |(p, (piece, mut count))| {
+                for (j, slot) in piece.iter_mut().enumerate() {
+                    *slot = count;
+                    count += is_root(p * PIECE + j) as u32;
+                }
+            },
+        );
         names
             .par_iter_mut()
             .for_each(|name| *name = before[*name as usize]);
