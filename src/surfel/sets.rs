@@ -19,7 +19,7 @@ pub struct Sets {
     parent: Vec<AtomicU32>,
 }
 
-/// Members per piece of [`Sets::numbered`]'s count of roots.
+/// Members per piece of [`Sets::numbered`]'s running count of roots.
 const PIECE: usize = 1 << 14;
 
 impl Sets {
@@ -73,29 +73,16 @@ impl Sets {
         let is_root = |k: usize| names[k] as usize == k;
         // A root's name is itself: the roots kept are the least members.
         let firsts = parallel::filtered(&names, is_root);
-        // Each member's count of roots before it, piece by piece.
-        let counts: Vec<u32> = (0..names.len().div_ceil(PIECE))
-            .into_par_iter()
-            .map(|p| {
-                (p * PIECE..names.len().min((p + 1) * PIECE))
-                    .filter(|&k| is_root(k))
-                    .count() as u32
-            })
-            .collect();
-        let mut starts = Vec::with_capacity(counts.len());
-        counts.into_iter().fold(0, |sum, count| {
-            starts.push(sum);
-            sum + count
-        });
+        // Each member's count of roots before it, piece by piece: a piece starts
+        // from the roots (sorted) below its first member.
         let mut before = vec![0u32; names.len()];
-        (before.par_chunks_mut(PIECE).zip(starts).enumerate()).for_each(
-            |(p, (piece, mut count))| {
-                for (j, slot) in piece.iter_mut().enumerate() {
-                    *slot = count;
-                    count += is_root(p * PIECE + j) as u32;
-                }
-            },
-        );
+        (before.par_chunks_mut(PIECE).enumerate()).for_each(|(p, piece)| {
+            let mut count = firsts.partition_point(|&f| (f as usize) < p * PIECE) as u32;
+            for (j, slot) in piece.iter_mut().enumerate() {
+                *slot = count;
+                count += is_root(p * PIECE + j) as u32;
+            }
+        });
         names
             .par_iter_mut()
             .for_each(|name| *name = before[*name as usize]);

@@ -10,12 +10,14 @@
 mod fill;
 mod removal;
 mod strips;
+mod twins;
 
 use delaunator::Point;
 use glam::Vec3;
 use rayon::prelude::*;
 
 pub use removal::without;
+pub use twins::Unheld;
 
 /// Samples per strip of [`delaunay_xy`]: sets of fewer than two strips' samples are
 /// triangulated whole. A fixed count (not one per core) keeps the triangulation, ties
@@ -76,27 +78,16 @@ fn xy(p: &Vec3) -> Point {
 /// Makes each corner of `triangles` the least of the samples that share its x–y
 /// (delaunator holds one of them, which one depending on the order it met them).
 fn held_by_least_twins(points: &[Vec3], triangles: &mut [[u32; 3]]) {
-    let mut held = vec![false; points.len()];
-    for &v in triangles.iter().flatten() {
-        held[v as usize] = true;
-    }
-    let mut unheld: Vec<(u64, u32)> = (0..points.len() as u32)
-        .filter(|&v| !held[v as usize])
-        .map(|v| (xy_key(points[v as usize]), v))
-        .collect();
+    let unheld = Unheld::of(points, triangles, xy_key);
     if unheld.is_empty() {
         return;
     }
-    unheld.par_sort_unstable();
     let least_twin = |v: &mut u32| {
-        let at = xy_key(points[*v as usize]);
-        let first = unheld.partition_point(|u| u.0 < at);
-        if let Some(&(key, twin)) = unheld.get(first) {
-            *v = (*v).min(if key == at { twin } else { *v });
+        if let Some(twin) = unheld.twin(xy_key(points[*v as usize])) {
+            *v = (*v).min(twin);
         }
     };
-    // Triangle by triangle: rayon's `flatten` would drive each 3-array as a parallel
-    // iterator of its own, at many times the cost.
+    // Triangle by triangle, as `Unheld::of` walks them.
     (triangles.par_iter_mut()).for_each(|t| t.iter_mut().for_each(least_twin));
 }
 
