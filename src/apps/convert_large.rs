@@ -11,6 +11,7 @@ use crate::apps::progress::Stage;
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::{count, walls};
 use crate::io::formats::ModelStream;
+use crate::io::heap;
 use crate::tree::out_of_core::{BYTES_PER_JOB_POINT, Built, Options, Progress, build_file};
 
 /// Bytes per point the in-memory build takes at its peak on a cloud (measured: 14 M
@@ -106,8 +107,13 @@ pub fn options(output: &Path, memory: u64) -> Options {
     options
 }
 
+/// Freed memory is kept for the next job up to this share of the budget, in quarters
+/// ([`heap::keep_freed_memory`]): the jobs are planned to peak at half of it.
+const KEEP_FREED_QUARTERS: u64 = 3;
+
 pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
     let start = Instant::now();
+    heap::keep_freed_memory(memory / 4 * KEEP_FREED_QUARTERS);
     let options = options(output, memory);
     let bars = Bars::default();
     let built = build_file(input, output, &options, &bars)?;

@@ -11,6 +11,7 @@ pub mod delaunay;
 pub mod format;
 pub mod formats;
 pub(crate) mod geometry;
+pub mod heap;
 pub mod las;
 pub mod model;
 pub mod parallel;

@@ -46,6 +46,7 @@ pub(crate) mod spill;
 
 use std::path::Path;
 
+use crate::io::heap;
 use crate::tree::TreeMeta;
 use join::Joined;
 use manifest::Manifest;
@@ -144,11 +145,13 @@ pub fn build_file(
     }
 }
 
-/// Runs every job of `manifest` (in `dir`), [`LANES`] at a time ([`in_lanes`]).
+/// Runs every job of `manifest` (in `dir`), [`LANES`] at a time ([`in_lanes`]), the
+/// memory each frees given back as [`heap::give_back_freed_memory`] decides.
 fn run_jobs(dir: &Path, manifest: &Manifest, progress: &dyn Progress) -> anyhow::Result<()> {
     let all: Vec<usize> = (0..manifest.jobs.len()).collect();
     in_lanes(&all, &|j| {
         run_job::run(dir, manifest, j)?;
+        heap::give_back_freed_memory();
         progress.advance(manifest.jobs[j].points);
         Ok(())
     })
