@@ -11,9 +11,9 @@
 //!
 //! Measured on a 20 M-point slice of the generated city (`gen_cloud --points 20000000
 //! --size 1265`) built out of core at `--memory 2048` (16 jobs, 2 cores, 2026-11-30):
-//! 3.7 M minor faults and 12–13 s of system time by default, 0.26 M and 5.3 s kept;
-//! the whole convert 43–52 s by default, 41–42 s kept (alternated, the same file);
-//! peak 0.77–0.80 GiB by default, 1.0–1.1 GiB kept.
+//! 3.4–3.7 M minor faults and 12.1–12.6 s of system time by default, 0.22–0.28 M and
+//! 4.5–4.7 s kept; the whole convert 46.7–48.5 s by default, 41.0–41.3 s kept
+//! (alternated, the same file); peak 0.76–0.78 GiB by default, 0.86–1.08 GiB kept.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 

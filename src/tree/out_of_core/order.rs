@@ -108,8 +108,8 @@ mod tests {
         // Octave of 2 first; then octave of 1, by level (1 before 3); then 0.5.
         assert_eq!(placed, [(0, 0, 3), (1, 0, 13), (1, 4, 17), (0, 10, 23)]);
         // Each found from every finger: the chunk it held, another, one past the end.
-        for finger in 0..3 {
-            let at = |k: usize, local: u64| layout.position(k, local, &mut finger.clone());
+        for start in 0..3 {
+            let at = |k: usize, local: u64| layout.position(k, local, &mut { start });
             assert_eq!(at(0, 12), 25);
             assert_eq!(at(0, 9), 12);
             assert_eq!(at(1, 5), 18);
