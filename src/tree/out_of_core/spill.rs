@@ -9,6 +9,7 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+use arrayvec::ArrayVec;
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, IVec3};
 
@@ -307,10 +308,14 @@ pub struct JobFiles<'a> {
 }
 
 /// The jobs other than `job` whose cells lie within [`HALO`] of `p`'s cell faces.
+/// Called for every point of the spill, so nothing here allocates: three small
+/// vectors a point had made the 200 M-point city tile's spill take 32.7–33.8 s, against
+/// 19.5 s so (2 cores, 2026-11-30, alternated).
 fn halo_jobs(table: &[u32], (cell, frac): (IVec3, DVec3), job: u32, out: &mut Vec<u32>) {
     out.clear();
     let steps = |k: usize| {
-        let mut s = vec![0];
+        let mut s = ArrayVec::<i32, 3>::new();
+        s.push(0);
         if frac[k] < HALO && cell[k] > 0 {
             s.push(-1);
         }
@@ -458,4 +463,46 @@ pub fn read_records<T: Pod>(path: &Path) -> anyhow::Result<Vec<T>> {
     let mut records = vec![T::zeroed(); bytes / size];
     std::io::Read::read_exact(&mut file, bytemuck::cast_slice_mut(&mut records))?;
     Ok(records)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A table giving each cell a job of its own: its index.
+    fn cell_per_job() -> Vec<u32> {
+        (0..(GRID * GRID * GRID) as u32).collect()
+    }
+
+    #[test]
+    fn a_point_takes_the_jobs_across_the_faces_it_lies_near() {
+        let table = cell_per_job();
+        let cell = IVec3::new(5, 6, 7);
+        let job = table[Grid::index(cell)];
+        let jobs_near = |frac: DVec3| {
+            let mut out = Vec::new();
+            halo_jobs(&table, (cell, frac), job, &mut out);
+            out.sort_unstable();
+            out
+        };
+        assert!(
+            jobs_near(DVec3::splat(0.5)).is_empty(),
+            "the middle of its cell"
+        );
+        let low_x = table[Grid::index(cell - IVec3::X)];
+        assert_eq!(jobs_near(DVec3::new(0.1, 0.5, 0.5)), [low_x]);
+        // Near a corner: the 7 cells that share it.
+        let near_corner = jobs_near(DVec3::new(0.9, 0.1, 0.9));
+        let mut corner: Vec<u32> = (0..8)
+            .map(|k| IVec3::new(k & 1, -((k >> 1) & 1), (k >> 2) & 1))
+            .filter(|&d| d != IVec3::ZERO)
+            .map(|d| table[Grid::index(cell + d)])
+            .collect();
+        corner.sort_unstable();
+        assert_eq!(near_corner, corner);
+        // At the grid's edge there is no cell beyond.
+        let mut out = Vec::new();
+        halo_jobs(&table, (IVec3::ZERO, DVec3::splat(0.1)), 0, &mut out);
+        assert!(out.is_empty(), "{out:?}");
+    }
 }
