@@ -11,6 +11,7 @@ use clap::Subcommand;
 use crate::apps::convert_large::{Bars, options, summary};
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::count;
+use crate::tree::out_of_core::checksums::Check;
 use crate::tree::out_of_core::in_lanes;
 use crate::tree::out_of_core::join::{Joined, join};
 use crate::tree::out_of_core::manifest::Manifest;
@@ -104,7 +105,7 @@ fn run_build(dir: &Path, jobs: &[usize]) -> anyhow::Result<()> {
     let named = if jobs.is_empty() { &all[..] } else { jobs };
     in_lanes(named, &|j| {
         let start = Instant::now();
-        let (how, record) = match run_job(dir, &m, j)? {
+        let (how, record) = match run_job(dir, &m, j, Check::Checksums)? {
             Ran::Built(r) => ("built", r),
             Ran::Kept(r) => ("kept (already built)", r),
         };
@@ -125,7 +126,7 @@ fn run_build(dir: &Path, jobs: &[usize]) -> anyhow::Result<()> {
 
 fn run_join(dir: &Path, output: &Path, clean: bool) -> anyhow::Result<()> {
     let start = Instant::now();
-    match join(dir, output)? {
+    match join(dir, output, Check::Checksums)? {
         Joined::Rebuild(reason) => Err(RebuildNeeded(reason).into()),
         Joined::Written(built) => {
             summary(&built, output, start);

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use crate::common;
 
+use spt::tree::out_of_core::checksums::Check;
 use spt::tree::out_of_core::join::{Joined, join};
 use spt::tree::out_of_core::manifest::Manifest;
 use spt::tree::out_of_core::plan::{Planned, plan};
@@ -43,7 +44,7 @@ fn planned(dir: &Path) -> (PathBuf, PathBuf, Manifest) {
 }
 
 fn joined(jobs: &Path, output: &Path) -> Vec<u8> {
-    match join(jobs, output).unwrap() {
+    match join(jobs, output, Check::Checksums).unwrap() {
         Joined::Written(_) => std::fs::read(output).unwrap(),
         Joined::Rebuild(why) => panic!("asked for the parts again: {why}"),
     }
@@ -56,19 +57,28 @@ fn steps_run_apart_in_any_order_give_the_file_of_one_process() {
     let one_process = dir.path().join("one.spt");
     build_file(&input, &one_process, &options(dir.path()), &Quiet).unwrap();
     for j in (0..m.jobs.len()).rev() {
-        assert!(matches!(run(&jobs, &m, j).unwrap(), Ran::Built(_)));
+        assert!(matches!(
+            run(&jobs, &m, j, Check::Checksums).unwrap(),
+            Ran::Built(_)
+        ));
     }
     let apart = joined(&jobs, &dir.path().join("apart.spt"));
     assert_eq!(apart, std::fs::read(&one_process).unwrap());
     // Planned again: the plan is kept, and so is every part.
     let again = plan(&input, &jobs, &options(dir.path()), &Quiet).unwrap();
     assert!(matches!(again, Planned::Kept(_)));
-    assert!(matches!(run(&jobs, &m, 0).unwrap(), Ran::Kept(_)));
+    assert!(matches!(
+        run(&jobs, &m, 0, Check::Checksums).unwrap(),
+        Ran::Kept(_)
+    ));
     // A job run again from scratch writes the same bytes.
     let part = jobs.join("job3.part");
     let first = std::fs::read(&part).unwrap();
     std::fs::remove_file(jobs.join("job3.part.json")).unwrap();
-    assert!(matches!(run(&jobs, &m, 3).unwrap(), Ran::Built(_)));
+    assert!(matches!(
+        run(&jobs, &m, 3, Check::Checksums).unwrap(),
+        Ran::Built(_)
+    ));
     assert_eq!(std::fs::read(&part).unwrap(), first);
 }
 
@@ -77,14 +87,16 @@ fn a_truncated_part_is_refused_by_the_join_and_built_again() {
     let dir = common::temp_dir();
     let (_, jobs, m) = planned(dir.path());
     for j in 0..m.jobs.len() {
-        run(&jobs, &m, j).unwrap();
+        run(&jobs, &m, j, Check::Checksums).unwrap();
     }
     let output = dir.path().join("out.spt");
     let whole = joined(&jobs, &output);
     let part = jobs.join("job2.part");
     let bytes = std::fs::read(&part).unwrap();
     std::fs::write(&part, &bytes[..bytes.len() / 2]).unwrap();
-    let refused = join(&jobs, &output).unwrap_err().to_string();
+    let refused = join(&jobs, &output, Check::Checksums)
+        .unwrap_err()
+        .to_string();
     assert!(
         refused.contains("job2.part") && refused.contains("truncated"),
         "{refused}"
@@ -92,7 +104,7 @@ fn a_truncated_part_is_refused_by_the_join_and_built_again() {
     // The file already there is untouched.
     assert_eq!(std::fs::read(&output).unwrap(), whole);
     let ran: Vec<bool> = (0..m.jobs.len())
-        .map(|j| matches!(run(&jobs, &m, j).unwrap(), Ran::Built(_)))
+        .map(|j| matches!(run(&jobs, &m, j, Check::Checksums).unwrap(), Ran::Built(_)))
         .collect();
     assert_eq!(ran.iter().filter(|&&b| b).count(), 1, "{ran:?}");
     assert!(ran[2]);
@@ -107,7 +119,7 @@ fn a_damaged_job_input_is_refused_by_its_checksum() {
     let mut bytes = std::fs::read(&own).unwrap();
     bytes[100] ^= 0x10;
     std::fs::write(&own, &bytes).unwrap();
-    let refused = format!("{:#}", run(&jobs, &m, 1).unwrap_err());
+    let refused = format!("{:#}", run(&jobs, &m, 1, Check::Checksums).unwrap_err());
     assert!(
         refused.contains(&*own.to_string_lossy()) && refused.contains("damaged"),
         "{refused}"

@@ -10,14 +10,11 @@
 //! the file, and each part's root record replaced by the linked one. The sections are streamed from the part files, hashed as they are written; the
 //! header, known before, gets the checksum last.
 
-use std::fs::File;
-use std::io::{Read, Seek, SeekFrom};
-use std::path::Path;
-
 use glam::Vec3;
 
 use super::job::{Model, Part};
-use super::order::{Layout, Piece};
+use super::order::Layout;
+use super::read_ahead::{PartFile, Span, stream};
 use super::spill::Split;
 use crate::io::PointAttributes;
 use crate::surfel::NormalsTurned;
@@ -97,58 +94,6 @@ fn top_tree(split: &Split, parts: &[Part], model: &Model, oriented: bool) -> Top
         parents: order.iter().map(|&id| parent_at(id)).collect(),
         roots: (0..j).map(|k| (set.records[k], parent_at(k))).collect(),
     }
-}
-
-/// Nodes per slab streamed from a part file.
-const SLAB: usize = 1 << 20;
-
-/// An open part file and its path, which its read errors name.
-struct PartFile<'a> {
-    file: File,
-    path: &'a Path,
-}
-
-impl<'a> PartFile<'a> {
-    fn open(part: &'a Part) -> std::io::Result<PartFile<'a>> {
-        let path = part.path.as_path();
-        let file = File::open(path).map_err(|e| cannot_read(path, e))?;
-        Ok(PartFile { file, path })
-    }
-
-    /// Fills `into` from byte `at` on, or from where the last read ended when `at` is
-    /// `None`.
-    fn read_at(&mut self, at: Option<u64>, into: &mut [u8]) -> std::io::Result<()> {
-        if let Some(at) = at {
-            (self.file.seek(SeekFrom::Start(at))).map_err(|e| cannot_read(self.path, e))?;
-        }
-        (self.file.read_exact(into)).map_err(|e| cannot_read(self.path, e))
-    }
-}
-
-/// `e` of reading `path`, naming it.
-fn cannot_read(path: &Path, e: std::io::Error) -> std::io::Error {
-    std::io::Error::new(e.kind(), format!("cannot read {}: {e}", path.display()))
-}
-
-/// Streams `count` records of `T` from `file` at `at`, each slab changed by `fix`
-/// (given the index of its first record) before it is written.
-fn stream<T: bytemuck::Pod>(
-    file: &mut PartFile,
-    (at, count): (u64, usize),
-    out: &mut Hashed,
-    mut fix: impl FnMut(usize, &mut [T]),
-) -> std::io::Result<()> {
-    let mut slab = vec![T::zeroed(); SLAB.min(count)];
-    let mut done = 0;
-    while done < count {
-        let n = SLAB.min(count - done);
-        let from = (done == 0).then_some(at);
-        file.read_at(from, bytemuck::cast_slice_mut(&mut slab[..n]))?;
-        fix(done, &mut slab[..n]);
-        out.put(bytemuck::cast_slice(&slab[..n]))?;
-        done += n;
-    }
-    Ok(())
 }
 
 /// The meta of the whole tree.
@@ -287,7 +232,8 @@ fn chunk_table(layout: &Layout, top: &Top) -> Vec<Chunk> {
     chunks
 }
 
-/// The six sections, each from the top tree then every piece of the layout.
+/// The six sections, each from the top tree then every piece of the layout, the pieces
+/// read ahead ([`read_ahead::stream`]).
 fn write_sections(
     out: &mut Hashed,
     (parts, layout): (&[Part], &Layout),
@@ -299,53 +245,56 @@ fn write_sections(
         .iter()
         .map(|p| part_offsets(p.nodes, has_attributes))
         .collect();
-    let range = |p: &Piece, section: u64, size: usize| {
-        (
-            section + p.chunk.start * size as u64,
-            p.chunk.count as usize,
-        )
+    // Each piece's values in the section that starts at `section(part)`.
+    let spans = |section: &dyn Fn(usize) -> u64, size: usize| -> Vec<Span> {
+        (layout.pieces.iter())
+            .map(|p| Span {
+                part: p.part,
+                at: section(p.part) + p.chunk.start * size as u64,
+                count: p.chunk.count as usize,
+            })
+            .collect()
     };
+    let piece = |k: usize| &layout.pieces[k];
     let mut blocks = BlockIndexBuilder::new(chunks);
     out.put(bytemuck::cast_slice(&top.records))?;
     blocks.feed(&top.records);
-    for p in &layout.pieces {
-        let (root, _) = top.roots[p.part];
-        let size = std::mem::size_of::<NodeRecord>();
-        stream::<NodeRecord>(&mut files[p.part], range(p, 0, size), out, |first, slab| {
-            for r in slab.iter_mut() {
-                r.level += root.level;
-            }
-            if p.chunk.start == 0 && first == 0 {
-                slab[0] = root;
-            }
-            blocks.feed(slab);
-        })?;
-    }
+    let records = spans(&|_| 0, std::mem::size_of::<NodeRecord>());
+    stream::<NodeRecord>(&mut files, &records, out, |k, first, slab| {
+        let (root, _) = top.roots[piece(k).part];
+        for r in slab.iter_mut() {
+            r.level += root.level;
+        }
+        if piece(k).chunk.start == 0 && first == 0 {
+            slab[0] = root;
+        }
+        blocks.feed(slab);
+    })?;
     out.put(bytemuck::cast_slice(&top.parents))?;
-    for p in &layout.pieces {
+    let parents = spans(&|part| offsets[part].0, 4);
+    // Each piece's lookups start from its first chunk.
+    let mut finger = 0;
+    stream::<u32>(&mut files, &parents, out, |k, first, slab| {
+        let p = piece(k);
         let up = top.roots[p.part].1;
-        let at = range(p, offsets[p.part].0, 4);
-        let mut finger = 0;
-        stream::<u32>(&mut files[p.part], at, out, |_, slab| {
-            for q in slab.iter_mut() {
-                *q = match *q {
-                    u32::MAX => up,
-                    local => layout.position(p.part, local as u64, &mut finger) as u32,
-                };
-            }
-        })?;
-    }
+        if first == 0 {
+            finger = 0;
+        }
+        for q in slab.iter_mut() {
+            *q = match *q {
+                u32::MAX => up,
+                local => layout.position(p.part, local as u64, &mut finger) as u32,
+            };
+        }
+    })?;
     out.put(bytemuck::cast_slice(&top.shapes))?;
-    for p in &layout.pieces {
-        let at = range(p, offsets[p.part].1, std::mem::size_of::<SplatShape>());
-        stream::<SplatShape>(&mut files[p.part], at, out, |_, _| {})?;
-    }
+    let shapes = spans(&|part| offsets[part].1, std::mem::size_of::<SplatShape>());
+    stream::<SplatShape>(&mut files, &shapes, out, |_, _, _| {})?;
     if has_attributes {
         out.put(bytemuck::cast_slice(&top.attributes))?;
-        for p in &layout.pieces {
-            let at = range(p, offsets[p.part].2, std::mem::size_of::<PointAttributes>());
-            stream::<PointAttributes>(&mut files[p.part], at, out, |_, _| {})?;
-        }
+        let size = std::mem::size_of::<PointAttributes>();
+        let attributes = spans(&|part| offsets[part].2, size);
+        stream::<PointAttributes>(&mut files, &attributes, out, |_, _, _| {})?;
     }
     out.put(bytemuck::cast_slice(chunks))?;
     let (suffix, heads) = blocks.finish();

@@ -8,6 +8,7 @@
 
 use std::path::Path;
 
+use super::checksums::Check;
 use super::job::{Model, Part};
 use super::manifest::Manifest;
 use super::record::{PartRecord, part_name};
@@ -22,9 +23,9 @@ pub enum Joined {
     Rebuild(String),
 }
 
-/// Each job's record, checked against the plan and its part file: an error names the
-/// first job that is missing, stale or damaged, and says how to mend it.
-fn records(dir: &Path, m: &Manifest) -> anyhow::Result<Vec<PartRecord>> {
+/// Each job's record, checked against the plan and its part file (by `check`): an error
+/// names the first job that is missing, stale or damaged, and says how to mend it.
+fn records(dir: &Path, m: &Manifest, check: Check) -> anyhow::Result<Vec<PartRecord>> {
     use rayon::prelude::*;
     let id = m.id();
     let again = |j: usize| format!("build it again: `spt jobs build {} {j}`", dir.display());
@@ -44,7 +45,7 @@ fn records(dir: &Path, m: &Manifest) -> anyhow::Result<Vec<PartRecord>> {
                 again(j)
             );
             anyhow::ensure!(
-                r.part_intact()?,
+                r.part_intact(check)?,
                 "{}: damaged or truncated: it does not hold the {} bytes of checksum {} that \
                  job {j} wrote; {}",
                 dir.join(part_name(j)).display(),
@@ -57,10 +58,11 @@ fn records(dir: &Path, m: &Manifest) -> anyhow::Result<Vec<PartRecord>> {
         .collect()
 }
 
-/// Joins the parts of the plan in `dir` into the `.spt` file `output`.
-pub fn join(dir: &Path, output: &Path) -> anyhow::Result<Joined> {
+/// Joins the parts of the plan in `dir`, checked by `check`, into the `.spt` file
+/// `output`.
+pub fn join(dir: &Path, output: &Path, check: Check) -> anyhow::Result<Joined> {
     let mut m = Manifest::read(dir)?;
-    let records = records(dir, &m)?;
+    let records = records(dir, &m, check)?;
     let vote = (records.iter())
         .filter_map(|r| r.vote)
         .fold(Vote::default(), Vote::plus);

@@ -26,8 +26,10 @@
 //! (scan, count, split, spill, and a [`manifest::Manifest`] naming every job's input
 //! files with their checksums), [`run_job::run`] per job (its part file and record), and
 //! [`join::join`] (every part checked, the file written). `spt convert` runs them in one
-//! process; `spt jobs plan|build|join` runs each alone, so that an engine such as Dask
-//! can run the jobs on many machines (docs/cluster.md).
+//! process, where each step checks only the sizes of the files the steps before it
+//! wrote ([`checksums::Check::Sizes`]); `spt jobs plan|build|join` runs each alone, so
+//! that an engine such as Dask can run the jobs on many machines (docs/cluster.md), and
+//! each step checks their checksums too.
 //!
 //! Normals that the file gives are kept, for a cloud's points as for a mesh's vertices.
 
@@ -40,6 +42,7 @@ pub(crate) mod mesh_job;
 pub(crate) mod mesh_spill;
 pub(crate) mod order;
 pub mod plan;
+mod read_ahead;
 pub mod record;
 pub mod run_job;
 pub(crate) mod spill;
@@ -48,6 +51,7 @@ use std::path::Path;
 
 use crate::io::heap;
 use crate::tree::TreeMeta;
+use checksums::Check;
 use join::Joined;
 use manifest::Manifest;
 
@@ -139,7 +143,7 @@ pub fn build_file(
         progress.stage("build", manifest.input.points);
         run_jobs(dir.path(), &manifest, progress)?;
         progress.stage("write", 0);
-        if let Joined::Written(built) = join::join(dir.path(), output)? {
+        if let Joined::Written(built) = join::join(dir.path(), output, Check::Sizes)? {
             return Ok(built);
         }
     }
@@ -150,7 +154,7 @@ pub fn build_file(
 fn run_jobs(dir: &Path, manifest: &Manifest, progress: &dyn Progress) -> anyhow::Result<()> {
     let all: Vec<usize> = (0..manifest.jobs.len()).collect();
     in_lanes(&all, &|j| {
-        run_job::run(dir, manifest, j)?;
+        run_job::run(dir, manifest, j, Check::Sizes)?;
         heap::give_back_freed_memory();
         progress.advance(manifest.jobs[j].points);
         Ok(())

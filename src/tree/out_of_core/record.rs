@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::checksums::{FileEntry, checksum};
+use super::checksums::{Check, FileEntry, holds};
 use super::job::Part;
 use super::manifest::BuildParams;
 use crate::io::PointAttributes;
@@ -70,14 +70,9 @@ impl PartRecord {
         Ok(Some(r))
     }
 
-    /// Whether its part file holds the bytes it says.
-    pub fn part_intact(&self) -> std::io::Result<bool> {
-        let (bytes, xxh3) = match checksum(&self.part.path) {
-            Ok(c) => c,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(false),
-            Err(e) => return Err(e),
-        };
-        Ok(bytes == self.file.bytes && xxh3 == self.file.xxh3)
+    /// Whether its part file holds the bytes it says, by `check`.
+    pub fn part_intact(&self, check: Check) -> std::io::Result<bool> {
+        holds(&self.part.path, &self.file, check)
     }
 
     /// Its part with the intensity sample read from the part file's end.

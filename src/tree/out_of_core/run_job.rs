@@ -8,7 +8,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::checksums;
+use super::checksums::{self, Check};
 use super::job::{self, Model};
 use super::manifest::Manifest;
 use super::mesh_job;
@@ -23,17 +23,24 @@ pub enum Ran {
     Kept(PartRecord),
 }
 
-/// The record of job `j` in `dir` when its part is whole and built for `manifest`.
-pub fn done(dir: &Path, manifest: &Manifest, j: usize) -> anyhow::Result<Option<PartRecord>> {
+/// The record of job `j` in `dir` when its part is whole (by `check`) and built for
+/// `manifest`.
+pub fn done(
+    dir: &Path,
+    manifest: &Manifest,
+    j: usize,
+    check: Check,
+) -> anyhow::Result<Option<PartRecord>> {
     let Some(record) = PartRecord::read(dir, j).unwrap_or(None) else {
         return Ok(None);
     };
     let current = record.plan == manifest.id() && record.built_with == manifest.build;
-    Ok((current && record.part_intact()?).then_some(record))
+    Ok((current && record.part_intact(check)?).then_some(record))
 }
 
-/// Runs job `j` of the plan in `dir` (its manifest `manifest`).
-pub fn run(dir: &Path, manifest: &Manifest, j: usize) -> anyhow::Result<Ran> {
+/// Runs job `j` of the plan in `dir` (its manifest `manifest`), its input files and a
+/// part already there checked by `check`.
+pub fn run(dir: &Path, manifest: &Manifest, j: usize, check: Check) -> anyhow::Result<Ran> {
     let jobs = manifest.jobs.len();
     let Some(entry) = manifest.jobs.get(j) else {
         anyhow::bail!(
@@ -42,11 +49,11 @@ pub fn run(dir: &Path, manifest: &Manifest, j: usize) -> anyhow::Result<Ran> {
             jobs - 1
         );
     };
-    if let Some(record) = done(dir, manifest, j)? {
+    if let Some(record) = done(dir, manifest, j, check)? {
         return Ok(Ran::Kept(record));
     }
     for f in &entry.files {
-        checksums::verify(dir, f).map_err(|e| {
+        checksums::verify(dir, f, check).map_err(|e| {
             e.context(format!(
                 "job {j}: an input file differs from the plan; plan again (`spt jobs plan`)"
             ))

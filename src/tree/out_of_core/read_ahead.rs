@@ -1,0 +1,243 @@
+//! The join's reads of the part files, ahead of its writes. A reader thread fills slabs
+//! with the next pieces' values while the joining thread fixes, hashes and writes the
+//! slab before: both wait on the device (the 200 M-point tile's 19 GB of parts are read
+//! once and written once), and one thread doing each in turn waited on each in turn.
+//! The bytes written and their order are the same either way.
+
+use std::fs::File;
+use std::io::{Read, Seek, SeekFrom};
+use std::path::Path;
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+
+use bytemuck::Pod;
+
+use super::job::Part;
+use crate::tree::spt_write::Hashed;
+
+/// Bytes per slab.
+const SLAB_BYTES: usize = 8 << 20;
+/// Slabs in flight: the one being written, and the ones read ahead of it.
+const SLABS: usize = 3;
+
+/// An open part file and its path, which its read errors name.
+pub struct PartFile<'a> {
+    file: File,
+    path: &'a Path,
+}
+
+impl<'a> PartFile<'a> {
+    pub fn open(part: &'a Part) -> std::io::Result<PartFile<'a>> {
+        PartFile::at(&part.path)
+    }
+
+    fn at(path: &'a Path) -> std::io::Result<PartFile<'a>> {
+        let file = File::open(path).map_err(|e| cannot_read(path, e))?;
+        Ok(PartFile { file, path })
+    }
+
+    /// Fills `into` from byte `at` on, or from where the last read ended when `at` is
+    /// `None`.
+    pub fn read_at(&mut self, at: Option<u64>, into: &mut [u8]) -> std::io::Result<()> {
+        if let Some(at) = at {
+            (self.file.seek(SeekFrom::Start(at))).map_err(|e| cannot_read(self.path, e))?;
+        }
+        (self.file.read_exact(into)).map_err(|e| cannot_read(self.path, e))
+    }
+}
+
+/// `e` of reading `path`, naming it.
+fn cannot_read(path: &Path, e: std::io::Error) -> std::io::Error {
+    std::io::Error::new(e.kind(), format!("cannot read {}: {e}", path.display()))
+}
+
+/// `count` values of a part file's section, from byte `at` of part `part`.
+#[derive(Debug, Clone, Copy)]
+pub struct Span {
+    pub part: usize,
+    pub at: u64,
+    pub count: usize,
+}
+
+/// Values read ahead: the first `used` of `values`, runs of consecutive spans, each as
+/// (span index, index in the span of its first value, length).
+struct Slab<T> {
+    values: Vec<T>,
+    used: usize,
+    runs: Vec<(usize, usize, usize)>,
+}
+
+/// Writes the values of `spans` (of `files`), in order, to `out`: each run of a span
+/// is first changed by `fix`, given the span's index, the index in the span of the
+/// run's first value, and the run. The reads run on a thread of their own,
+/// [`SLABS`] − 1 slabs ahead.
+pub fn stream<T: Pod + Send>(
+    files: &mut [PartFile],
+    spans: &[Span],
+    out: &mut Hashed,
+    fix: impl FnMut(usize, usize, &mut [T]),
+) -> std::io::Result<()> {
+    let per_slab = (SLAB_BYTES / size_of::<T>()).max(1);
+    stream_slabs(files, spans, per_slab, (fix, |bytes| out.put(bytes)))
+}
+
+/// [`stream`] in slabs of `per_slab` values, each written by `put`.
+fn stream_slabs<T: Pod + Send>(
+    files: &mut [PartFile],
+    spans: &[Span],
+    per_slab: usize,
+    (mut fix, mut put): (
+        impl FnMut(usize, usize, &mut [T]),
+        impl FnMut(&[u8]) -> std::io::Result<()>,
+    ),
+) -> std::io::Result<()> {
+    let (full_tx, full_rx) = sync_channel(SLABS);
+    let (free_tx, free_rx) = sync_channel(SLABS);
+    for _ in 0..SLABS {
+        let slab = Slab {
+            values: Vec::new(),
+            used: 0,
+            runs: Vec::new(),
+        };
+        free_tx.send(slab).expect("the channel holds every slab");
+    }
+    std::thread::scope(move |scope| {
+        scope.spawn(move || read_slabs(files, spans, per_slab, (free_rx, full_tx)));
+        // Returning early drops both channels' other ends, which stops the reader.
+        for slab in full_rx {
+            let mut slab: Slab<T> = slab?;
+            let mut first = 0;
+            for &(span, start, len) in &slab.runs {
+                fix(span, start, &mut slab.values[first..first + len]);
+                first += len;
+            }
+            put(bytemuck::cast_slice(&slab.values[..slab.used]))?;
+            // A reader that has read every span takes no more slabs; those it sent
+            // are still to be written.
+            let _ = free_tx.send(slab);
+        }
+        Ok(())
+    })
+}
+
+/// The reader of [`stream`]: fills each free slab with up to `per_slab` values of the
+/// spans in order and sends it on, or the first read error.
+fn read_slabs<T: Pod>(
+    files: &mut [PartFile],
+    spans: &[Span],
+    per_slab: usize,
+    (free, full): (Receiver<Slab<T>>, SyncSender<std::io::Result<Slab<T>>>),
+) {
+    let take = || {
+        let mut slab = free.recv().ok()?;
+        slab.values.resize(per_slab, T::zeroed());
+        slab.used = 0;
+        slab.runs.clear();
+        Some(slab)
+    };
+    let Some(mut slab) = take() else {
+        return;
+    };
+    for (k, span) in spans.iter().enumerate() {
+        let mut done = 0;
+        while done < span.count {
+            if slab.used == per_slab {
+                let sent = full.send(Ok(slab));
+                let Some(next) = sent.ok().and_then(|()| take()) else {
+                    return;
+                };
+                slab = next;
+            }
+            let n = (per_slab - slab.used).min(span.count - done);
+            let into = &mut slab.values[slab.used..slab.used + n];
+            let from = (done == 0).then_some(span.at);
+            if let Err(e) = files[span.part].read_at(from, bytemuck::cast_slice_mut(into)) {
+                let _ = full.send(Err(e));
+                return;
+            }
+            slab.runs.push((k, done, n));
+            slab.used += n;
+            done += n;
+        }
+    }
+    if slab.used > 0 {
+        let _ = full.send(Ok(slab));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spans_come_out_in_order_fixed_run_by_run_through_small_slabs() {
+        // Three part files of u32 values 1000 f + i; spans across them, some empty,
+        // some longer than a slab, some reading on where the last one of their file
+        // ended.
+        let dir = tempfile::tempdir().unwrap();
+        let paths: Vec<_> = (0..3u32)
+            .map(|f| {
+                let path = dir.path().join(format!("part{f}"));
+                let values: Vec<u32> = (0..40).map(|i| 1000 * f + i).collect();
+                std::fs::write(&path, bytemuck::cast_slice(&values)).unwrap();
+                path
+            })
+            .collect();
+        let span = |part: usize, first: u64, count: usize| Span {
+            part,
+            at: 4 * first,
+            count,
+        };
+        let spans = [
+            span(1, 3, 7),
+            span(0, 0, 0),
+            span(2, 10, 13),
+            span(0, 5, 2),
+            span(1, 10, 30),
+            span(2, 0, 1),
+        ];
+        for per_slab in [1, 4, 5, 64] {
+            let mut files: Vec<PartFile> = paths.iter().map(|p| PartFile::at(p).unwrap()).collect();
+            let mut written: Vec<u8> = Vec::new();
+            // Each value gets its span's index and its index in the span added.
+            let fix = |k: usize, first: usize, run: &mut [u32]| {
+                for (i, v) in run.iter_mut().enumerate() {
+                    *v += 100_000 * k as u32 + 10_000 * (first + i) as u32;
+                }
+            };
+            let put = |bytes: &[u8]| {
+                written.extend_from_slice(bytes);
+                Ok(())
+            };
+            stream_slabs(&mut files, &spans, per_slab, (fix, put)).unwrap();
+            let expected: Vec<u32> = (spans.iter().enumerate())
+                .flat_map(|(k, s)| {
+                    let start = (s.at / 4) as u32;
+                    (0..s.count as u32).map(move |i| {
+                        1000 * s.part as u32 + start + i + 100_000 * k as u32 + 10_000 * i
+                    })
+                })
+                .collect();
+            assert_eq!(
+                bytemuck::cast_slice::<u8, u32>(&written),
+                expected,
+                "{per_slab}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_span_past_its_file_s_end_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("job7.part");
+        std::fs::write(&path, [0u8; 40]).unwrap();
+        let mut files = vec![PartFile::at(&path).unwrap()];
+        let spans = [Span {
+            part: 0,
+            at: 8,
+            count: 9,
+        }];
+        let put = |_: &[u8]| Ok(());
+        let failed = stream_slabs::<u32>(&mut files, &spans, 4, (|_, _, _| {}, put)).unwrap_err();
+        assert!(failed.to_string().contains("job7.part"), "{failed}");
+    }
+}
