@@ -14,7 +14,7 @@ use bytemuck::Pod;
 use super::job::Part;
 use crate::tree::spt_write::Hashed;
 
-/// Bytes per slab.
+/// Bytes per slab, at most.
 const SLAB_BYTES: usize = 8 << 20;
 /// Slabs in flight: the one being written, and the ones read ahead of it.
 const SLABS: usize = 3;
@@ -76,7 +76,9 @@ pub fn stream<T: Pod + Send>(
     out: &mut Hashed,
     fix: impl FnMut(usize, usize, &mut [T]),
 ) -> std::io::Result<()> {
-    let per_slab = (SLAB_BYTES / size_of::<T>()).max(1);
+    // No larger than the spans: a slab is allocated whole.
+    let total = spans.iter().map(|s| s.count).sum::<usize>();
+    let per_slab = (SLAB_BYTES / size_of::<T>()).min(total).max(1);
     stream_slabs(files, spans, per_slab, (fix, |bytes| out.put(bytes)))
 }
 
