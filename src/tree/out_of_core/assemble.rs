@@ -7,8 +7,9 @@
 //! chunk, sorted by parent error, the root first), then the jobs' chunks interleaved
 //! coarse first ([`super::order`]), each as its part file holds it, with its nodes'
 //! levels shifted by its root's, its parent indices and start moved to their places in
-//! the file, and each part's root record replaced by the linked one. The sections are streamed from the part files, hashed as they are written; the
-//! header, known before, gets the checksum last.
+//! the file, and each part's root record replaced by the linked one. The sections are
+//! streamed from the part files, read ahead of the writes ([`super::read_ahead`]), and
+//! hashed as they are written; the header, known before, gets the checksum last.
 
 use glam::Vec3;
 
