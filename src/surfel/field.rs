@@ -35,6 +35,7 @@
 //! the 3D distance, which no tilt of the plane lengthens). The mesh pass keeps the
 //! vertex normals (`LeafSurfels::vertex_normals`) and colours.
 
+use arrayvec::ArrayVec;
 use glam::{DVec2, DVec3};
 
 use super::shape::{Fit, Shape};
@@ -128,20 +129,27 @@ impl FieldFit {
 }
 
 /// Fits the shading field of the splat at `at` (normal `normal`, major radius `r`,
-/// shape `shape`) over `triangles`, each as its three (position, normal) with the
-/// splat's vertex first; returns the new normal and shape, or None where the fit is
-/// undetermined (the one-ring fit stays). Positions and `r` in one unit.
+/// shape `shape`) over the fan of triangles around one vertex (`centre`: its position
+/// and normal; a mesh vertex's splat is at its vertex): `corners` lists each triangle
+/// by its two other vertices (next, previous), whose (position, normal) `vertex` gives.
+/// Returns the new normal and shape, or None where the fit is undetermined (the
+/// one-ring fit stays). Positions and `r` in one unit.
+///
+/// Each triangle's [`LATTICE`] points weigh its area. Neighbouring triangles share
+/// lattice points: the vertex itself, and the three on each edge from it (at its
+/// thirds and its far end). A shared point has one position and one interpolated
+/// normal, so it is evaluated once, weighing the area of every triangle that holds it:
+/// 1 + 3 per neighbour + 3 per triangle, 37 points for a ring of six instead of 60.
+/// A fan of one triangle (a long triangle's splat) takes its 10 points.
 pub fn fit_field(
     (at, normal): (DVec3, DVec3),
     (r, shape): (f64, &Shape),
-    triangles: impl Iterator<Item = [(DVec3, DVec3); 3]>,
+    (centre, vertex): ((DVec3, DVec3), impl Fn(u32) -> (DVec3, DVec3)),
+    corners: impl Iterator<Item = (u32, u32)>,
 ) -> Option<(DVec3, Shape)> {
     let (u, v) = (shape.axis, shape.minor_axis(normal));
-    let mut fit = FieldFit::default();
-    let splat = (at, r, shape.ratio, (u, v));
-    for corners in triangles {
-        add_lattice(&mut fit, splat, corners);
-    }
+    let splat = Splat::new((at, r, (u, v), shape.ratio), centre);
+    let fit = splat.fan_sums(vertex, corners);
     let (gradient, offset) = fit.solve()?;
     let tilted = (normal + u * offset.x + v * offset.y).normalize_or(normal);
     let axis = (u - tilted * u.dot(tilted)).normalize_or(u);
@@ -155,85 +163,176 @@ pub fn fit_field(
     ))
 }
 
-/// Lanes of a triangle's lattice in columns ([`LATTICE_COLUMNS`]): its 10 points and
-/// two of (0, 0, 0), three 4-wide vectors. In columns, a generated city tile of 20 M
-/// samples (`gen_cloud --points 20000000 --size 1265`) took 32.0–32.4 s in the
-/// surfels stage against 34.8–35.1 s a point at a time (2 cores, 2026-11-29,
-/// alternated; the same sums in the same order, the same file).
-const LANES: usize = 12;
+/// Ring neighbours whose edge points [`fit_field`] shares between triangles; a larger
+/// ring's further neighbours are evaluated once per triangle (the same sums).
+const MAX_SPOKES: usize = 24;
 
-/// [`LATTICE`] by barycentric coordinate, padded to [`LANES`] with (0, 0, 0): the
-/// interpolated normal there has length 0, so that such a point never counts.
-const LATTICE_COLUMNS: [[f64; LANES]; 3] = {
-    let mut columns = [[0.0; LANES]; 3];
-    let mut k = 0;
-    while k < LATTICE.len() {
-        let mut c = 0;
-        while c < 3 {
-            columns[c][k] = LATTICE[k][c];
-            c += 1;
+/// The lattice's barycentric steps.
+const THIRD: f64 = 1.0 / 3.0;
+const TWO_THIRDS: f64 = 2.0 * THIRD;
+
+/// The splat whose field [`fit_field`] fits, as its lattice points see it.
+struct Splat {
+    at: DVec3,
+    r: f64,
+    /// Its major and minor axes u, v.
+    axes: (DVec3, DVec3),
+    /// 1 / ratio²: the point at plane coordinates (x, y) is covered when x² + y² / ratio² < 1.
+    inv_ratio2: f64,
+    /// The fan's centre vertex.
+    centre: Spoke,
+}
+
+/// A vertex w of the fan as the splat sees it: its position, plane coordinates in major radii,
+/// its normal's tangential components, (n_w·n_w, n_c·n_w) with n_c the centre's normal
+/// (an interpolated normal's squared length is λᵀ Gram λ), its normal, and the area
+/// of the fan's triangles that hold the edge from the centre to it.
+#[derive(Clone, Copy, Default)]
+struct Spoke {
+    id: u32,
+    position: DVec3,
+    plane: DVec2,
+    tangential: DVec2,
+    gram: (f64, f64),
+    normal: DVec3,
+    weight: f64,
+}
+
+impl Splat {
+    /// The splat at `at` of major radius `r`, axes `u`, `v` and minor over major
+    /// `ratio`, about the fan's centre vertex (position, normal).
+    fn new(
+        (at, r, (u, v), ratio): (DVec3, f64, (DVec3, DVec3), f64),
+        centre: (DVec3, DVec3),
+    ) -> Splat {
+        let mut splat = Splat {
+            at,
+            r,
+            axes: (u, v),
+            inv_ratio2: 1.0 / (ratio * ratio),
+            centre: Spoke::default(),
+        };
+        splat.centre = splat.seen(u32::MAX, centre, 0.0);
+        splat
+    }
+
+    /// The [`FieldFit`] sums of the lattice points of the fan `corners` (see
+    /// [`fit_field`]).
+    fn fan_sums(
+        &self,
+        vertex: impl Fn(u32) -> (DVec3, DVec3),
+        corners: impl Iterator<Item = (u32, u32)>,
+    ) -> FieldFit {
+        let mut fit = FieldFit::default();
+        let mut spokes: ArrayVec<Spoke, MAX_SPOKES> = ArrayVec::new();
+        let mut total = 0.0;
+        let centre = self.centre.position;
+        for (next, previous) in corners {
+            let (b, c) = (vertex(next), vertex(previous));
+            let area = 0.5 * (b.0 - centre).cross(c.0 - centre).length();
+            total += area;
+            let b = self.spoke_of(&mut spokes, &mut fit, (next, b), area);
+            let c = self.spoke_of(&mut spokes, &mut fit, (previous, c), area);
+            self.add_inner(&mut fit, (&b, &c), area);
         }
-        k += 1;
+        let c = &self.centre;
+        self.add_point(&mut fit, (c.plane, c.tangential, c.gram.0), total);
+        for spoke in &spokes {
+            self.add_spoke(&mut fit, spoke, spoke.weight);
+        }
+        fit
     }
-    columns
-};
 
-/// Adds to `fit` the points of [`LATTICE`] in the triangle `corners` (position, vertex
-/// normal) that the splat at `at` covers (major radius `r`, minor over major `ratio`,
-/// axes `u`, `v`: ρ² = x² + y²/ratio² < 1 in major radii), each weighing the
-/// triangle's area, with the tangential components of the interpolated normal there;
-/// a point where the corners' normals cancel is left out. Worked out for all
-/// [`LANES`] in columns, then added in the lattice's order.
-fn add_lattice(
-    fit: &mut FieldFit,
-    (at, r, ratio, (u, v)): (DVec3, f64, f64, (DVec3, DVec3)),
-    corners: [(DVec3, DVec3); 3],
-) {
-    let [(a, na), (b, nb), (c, nc)] = corners;
-    let (area, plane) = projected((at, r, (u, v)), [a, b, c]);
-    // Tangential normal components are linear in the barycentric coordinates; the
-    // interpolated normal's length is √(λᵀ Gram λ).
-    let tangential = [na, nb, nc].map(|n| DVec2::new(n.dot(u), n.dot(v)));
-    let gram = [
-        na.dot(na),
-        nb.dot(nb),
-        nc.dot(nc),
-        na.dot(nb),
-        na.dot(nc),
-        nb.dot(nc),
-    ];
-    let inv_ratio2 = 1.0 / (ratio * ratio);
-    let [l0, l1, l2] = &LATTICE_COLUMNS;
-    let linear = |k: usize, f: &dyn Fn(DVec2) -> f64, at: &[DVec2; 3]| {
-        l0[k] * f(at[0]) + l1[k] * f(at[1]) + l2[k] * f(at[2])
-    };
-    let (mut x, mut y, mut tx, mut ty, mut kept) = (
-        [0.0; LANES],
-        [0.0; LANES],
-        [0.0; LANES],
-        [0.0; LANES],
-        [false; LANES],
-    );
-    for k in 0..LANES {
-        x[k] = linear(k, &|p| p.x, &plane);
-        y[k] = linear(k, &|p| p.y, &plane);
-        let length2 = l0[k] * l0[k] * gram[0]
-            + l1[k] * l1[k] * gram[1]
-            + l2[k] * l2[k] * gram[2]
-            + 2.0 * (l0[k] * l1[k] * gram[3] + l0[k] * l2[k] * gram[4] + l1[k] * l2[k] * gram[5]);
-        let length = length2.sqrt();
-        tx[k] = linear(k, &|t| t.x, &tangential) / length;
-        ty[k] = linear(k, &|t| t.y, &tangential) / length;
-        let covered = inside(DVec2::new(x[k], y[k]), inv_ratio2);
-        // Only where the normals cancel (length 0) is a covered point left out.
-        kept[k] = covered && (length2 > 0.0 || length2.is_nan());
+    /// Neighbour `id` at (position, normal), found among `spokes` and its weight grown
+    /// by `area`, or added to them; where they are full, its edge's points go into
+    /// `fit` at once, weighing `area`.
+    fn spoke_of(
+        &self,
+        spokes: &mut ArrayVec<Spoke, MAX_SPOKES>,
+        fit: &mut FieldFit,
+        (id, (p, n)): (u32, (DVec3, DVec3)),
+        area: f64,
+    ) -> Spoke {
+        if let Some(known) = spokes.iter_mut().find(|s| s.id == id) {
+            known.weight += area;
+            return *known;
+        }
+        let spoke = self.seen(id, (p, n), area);
+        if spokes.try_push(spoke).is_err() {
+            self.add_spoke(fit, &spoke, area);
+        }
+        spoke
     }
-    for k in (0..LANES).filter(|&k| kept[k]) {
-        fit.add_terms(&terms(
-            DVec2::new(x[k], y[k]),
-            DVec2::new(tx[k], ty[k]),
-            area,
-        ));
+
+    /// Vertex `id` at (position `p`, normal `n`) as the splat sees it, weighing `area`.
+    fn seen(&self, id: u32, (p, n): (DVec3, DVec3), area: f64) -> Spoke {
+        let (u, v) = self.axes;
+        let d = p - self.at;
+        let to_centre = if id == u32::MAX {
+            n
+        } else {
+            self.centre.normal
+        };
+        Spoke {
+            id,
+            position: p,
+            plane: DVec2::new(d.dot(u), d.dot(v)) / self.r,
+            tangential: DVec2::new(n.dot(u), n.dot(v)),
+            gram: (n.dot(n), to_centre.dot(n)),
+            normal: n,
+            weight: area,
+        }
+    }
+
+    /// The points of the edge from the fan's centre to `spoke` (at its thirds and its
+    /// far end), weighing `w`.
+    fn add_spoke(&self, fit: &mut FieldFit, spoke: &Spoke, w: f64) {
+        let c = &self.centre;
+        let (g_ww, g_cw) = spoke.gram;
+        for (lc, lw) in [(TWO_THIRDS, THIRD), (THIRD, TWO_THIRDS), (0.0, 1.0)] {
+            let plane = c.plane * lc + spoke.plane * lw;
+            let tangential = c.tangential * lc + spoke.tangential * lw;
+            let length2 = lc * lc * c.gram.0 + lw * lw * g_ww + 2.0 * lc * lw * g_cw;
+            self.add_point(fit, (plane, tangential, length2), w);
+        }
+    }
+
+    /// The points of triangle (centre, `b`, `c`) that no other triangle of the fan
+    /// holds: its centroid and the two on its far edge, weighing its `area`.
+    fn add_inner(&self, fit: &mut FieldFit, (b, c): (&Spoke, &Spoke), area: f64) {
+        let a = &self.centre;
+        let g_bc = b.normal.dot(c.normal);
+        let ((g_bb, g_ab), (g_cc, g_ac)) = (b.gram, c.gram);
+        let centre = (
+            (a.plane + b.plane + c.plane) * THIRD,
+            (a.tangential + b.tangential + c.tangential) * THIRD,
+            (a.gram.0 + g_bb + g_cc + 2.0 * (g_ab + g_ac + g_bc)) * (THIRD * THIRD),
+        );
+        self.add_point(fit, centre, area);
+        for (lb, lc) in [(TWO_THIRDS, THIRD), (THIRD, TWO_THIRDS)] {
+            let plane = b.plane * lb + c.plane * lc;
+            let tangential = b.tangential * lb + c.tangential * lc;
+            let length2 = lb * lb * g_bb + lc * lc * g_cc + 2.0 * lb * lc * g_bc;
+            self.add_point(fit, (plane, tangential, length2), area);
+        }
+    }
+
+    /// Adds the lattice point at plane coordinates `plane` whose interpolated normal
+    /// has tangential components `tangential` and squared length `length2`, weighing
+    /// `w`, where the splat covers it; a point where the corners' normals cancel
+    /// (length 0) is left out.
+    fn add_point(
+        &self,
+        fit: &mut FieldFit,
+        (plane, tangential, length2): (DVec2, DVec2, f64),
+        w: f64,
+    ) {
+        if !inside(plane, self.inv_ratio2) || length2 <= 0.0 {
+            return;
+        }
+        let length = length2.sqrt();
+        let t = DVec2::new(tangential.x / length, tangential.y / length);
+        fit.add_terms(&terms(plane, t, w));
     }
 }
 
@@ -343,26 +442,94 @@ mod tests {
         assert!(FieldFit::default().solve().is_none());
     }
 
+    /// A vertex's position and normal.
+    type Vertex = (DVec3, DVec3);
+
     /// A flat hexagonal one-ring of unit edges in the plane z = 0 around the origin, its
-    /// vertex normals tilted by `tilt` (x, y ↦ tangential components).
-    fn ring(tilt: impl Fn(DVec2) -> DVec2) -> Vec<[(DVec3, DVec3); 3]> {
+    /// vertex normals tilted by `tilt` (x, y ↦ tangential components): its vertices
+    /// (position, normal), the centre first, and its triangles' (next, previous).
+    fn ring(tilt: impl Fn(DVec2) -> DVec2) -> (Vec<Vertex>, Vec<(u32, u32)>) {
         let at = |p: DVec2| {
             let t = tilt(p);
             (p.extend(0.0), DVec3::new(t.x, t.y, 1.0).normalize())
         };
         let corner = |k: usize| DVec2::from_angle(k as f64 * std::f64::consts::FRAC_PI_3);
-        (0..6)
-            .map(|k| [at(DVec2::ZERO), at(corner(k)), at(corner(k + 1))])
-            .collect()
+        let vertices = std::iter::once(at(DVec2::ZERO))
+            .chain((0..6).map(|k| at(corner(k))))
+            .collect();
+        let corners = (0..6).map(|k| (1 + k, 1 + (k + 1) % 6)).collect();
+        (vertices, corners)
+    }
+
+    #[test]
+    fn the_fan_s_shared_points_give_each_triangle_s_lattice_sums() {
+        // Rings of 3 to 40 neighbours (more than the shared spokes hold), closed or
+        // open, on a bumpy surface with scattered normals and ellipses that cover part
+        // of them (proptest's seeded generator): the sums equal those of the ten
+        // lattice points of every triangle, each weighing its area.
+        use proptest::prelude::Rng;
+        let mut rng = proptest::test_runner::TestRng::deterministic_rng(
+            proptest::test_runner::RngAlgorithm::ChaCha,
+        );
+        let mut jitter = |scale: f64| (rng.random::<f64>() - 0.5) * scale;
+        for count in 3..=40 {
+            let closed = count % 3 != 0;
+            let mut vertices: Vec<Vertex> = vec![(
+                DVec3::new(jitter(0.1), jitter(0.1), jitter(0.1)),
+                DVec3::new(jitter(0.4), jitter(0.4), 1.0).normalize(),
+            )];
+            for k in 0..count {
+                let t = k as f64 * std::f64::consts::TAU / count as f64 + jitter(0.2);
+                let p = DVec3::new(t.cos(), t.sin(), jitter(0.3)) * (1.0 + jitter(1.0));
+                let n = DVec3::new(jitter(0.6), jitter(0.6), 1.0).normalize();
+                vertices.push((p, n));
+            }
+            let triangles = if closed { count } else { count - 1 };
+            let corners: Vec<(u32, u32)> = (0..triangles)
+                .map(|k| (1 + k as u32, 1 + ((k + 1) % count) as u32))
+                .collect();
+            let shape = Shape::ellipse(
+                DVec3::Z,
+                DVec3::new(1.0, jitter(1.0), 0.0).normalize(),
+                0.4 + jitter(0.4),
+            );
+            let (u, v) = (shape.axis, shape.minor_axis(DVec3::Z));
+            let (at, r) = (DVec3::new(jitter(0.2), jitter(0.2), 0.0), 0.8 + jitter(0.6));
+            let splat = Splat::new((at, r, (u, v), shape.ratio), vertices[0]);
+            let at_vertex = |w: u32| vertices[w as usize];
+            let shared = splat.fan_sums(at_vertex, corners.iter().copied());
+            let mut each = FieldFit::default();
+            let inv_ratio2 = 1.0 / (shape.ratio * shape.ratio);
+            for &(b, c) in &corners {
+                let fan = [vertices[0], at_vertex(b), at_vertex(c)];
+                let (area, plane) = projected((at, r, (u, v)), fan.map(|q| q.0));
+                for l in LATTICE {
+                    let xy = l[0] * plane[0] + l[1] * plane[1] + l[2] * plane[2];
+                    let n = l[0] * fan[0].1 + l[1] * fan[1].1 + l[2] * fan[2].1;
+                    if inside(xy, inv_ratio2) {
+                        let t = DVec2::new(n.dot(u), n.dot(v)) / n.length();
+                        each.add_terms(&terms(xy, t, area));
+                    }
+                }
+            }
+            for (k, (a, b)) in shared.sums.iter().zip(&each.sums).enumerate() {
+                let scale = each.sums[0].abs().max(1e-300);
+                assert!(
+                    (a - b).abs() <= 1e-12 * scale.max(b.abs()),
+                    "{count} neighbours, sum {k}: {a} against {b}"
+                );
+            }
+            assert!(each.sums[0] > 0.0, "some points are covered");
+        }
     }
 
     #[test]
     fn a_field_the_triangles_interpolate_is_kept_and_a_peak_is_lowered() {
         let shape = Shape::circle(DVec3::Z);
         let fitted = |tilt: &dyn Fn(DVec2) -> DVec2| {
-            let triangles = ring(tilt);
-            let centre = triangles[0][0];
-            fit_field(centre, (1.0, &shape), triangles.into_iter()).unwrap()
+            let (vertices, corners) = ring(tilt);
+            let at = |w: u32| vertices[w as usize];
+            fit_field(at(0), (1.0, &shape), (at(0), at), corners.into_iter()).unwrap()
         };
         // Normals of a sphere of radius 50 seen near its pole: the fit keeps the
         // centre's normal and finds the shape operator 1/50 (per radius of 1).

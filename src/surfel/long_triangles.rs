@@ -195,12 +195,9 @@ fn triangle_splat(corners: [Corner; 3], colored: bool, reach: Reach) -> Option<S
     let r = r * if wall { reach.wall_scale } else { reach.scale };
     let shape = Shape::ellipse(face, major, ratio.max(reach.min_ratio));
     let at = |k: &Corner| (k.position, k.normal);
-    let (normal, mut shape) = fit_field(
-        (g, face),
-        (r, &shape),
-        std::iter::once(corners.map(|k| at(&k))),
-    )
-    .unwrap_or((face, shape));
+    let fan = (at(&corners[0]), |k: u32| at(&corners[k as usize]));
+    let (normal, mut shape) =
+        fit_field((g, face), (r, &shape), fan, std::iter::once((1, 2))).unwrap_or((face, shape));
     let mut color = corners.iter().map(|k| k.color).sum::<DVec3>() / 3.0;
     if reach.wall_colour_from_above && wall {
         color = colour_from_above(&corners);

@@ -235,10 +235,10 @@ pub fn ring_shapes(
             |(v, surfel)| match vertex_shape(&p, &n, v as u32, || ring(v)) {
                 Some((r, shape)) => {
                     let at = |w: u32| (p(w), n(w));
-                    let triangles =
-                        ring(v).map(|(_, next, previous)| [at(v as u32), at(next), at(previous)]);
-                    let (normal, shape) = fit_field(at(v as u32), (r, &shape), triangles)
-                        .unwrap_or((n(v as u32), shape));
+                    let corners = ring(v).map(|(_, next, previous)| (next, previous));
+                    let (normal, shape) =
+                        fit_field(at(v as u32), (r, &shape), (at(v as u32), at), corners)
+                            .unwrap_or((n(v as u32), shape));
                     let mut shape = shape;
                     if colored {
                         let at = |w: u32| (p(w), colors[w as usize]);
