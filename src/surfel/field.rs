@@ -212,7 +212,7 @@ impl Splat {
             inv_ratio2: 1.0 / (ratio * ratio),
             centre: Spoke::default(),
         };
-        splat.centre = splat.seen(u32::MAX, centre, 0.0);
+        splat.centre = splat.seen((u32::MAX, centre), centre.1, 0.0);
         splat
     }
 
@@ -257,28 +257,24 @@ impl Splat {
             known.weight += area;
             return *known;
         }
-        let spoke = self.seen(id, (p, n), area);
+        let spoke = self.seen((id, (p, n)), self.centre.normal, area);
         if spokes.try_push(spoke).is_err() {
             self.add_spoke(fit, &spoke, area);
         }
         spoke
     }
 
-    /// Vertex `id` at (position `p`, normal `n`) as the splat sees it, weighing `area`.
-    fn seen(&self, id: u32, (p, n): (DVec3, DVec3), area: f64) -> Spoke {
+    /// Vertex `id` at (position `p`, normal `n`) as the splat sees it, weighing `area`;
+    /// `centre_normal` is the fan's centre's (its own, for the centre).
+    fn seen(&self, (id, (p, n)): (u32, (DVec3, DVec3)), centre_normal: DVec3, area: f64) -> Spoke {
         let (u, v) = self.axes;
         let d = p - self.at;
-        let to_centre = if id == u32::MAX {
-            n
-        } else {
-            self.centre.normal
-        };
         Spoke {
             id,
             position: p,
             plane: DVec2::new(d.dot(u), d.dot(v)) / self.r,
             tangential: DVec2::new(n.dot(u), n.dot(v)),
-            gram: (n.dot(n), to_centre.dot(n)),
+            gram: (n.dot(n), centre_normal.dot(n)),
             normal: n,
             weight: area,
         }
