@@ -76,9 +76,11 @@ pub fn stream<T: Pod + Send>(
     out: &mut Hashed,
     fix: impl FnMut(usize, usize, &mut [T]),
 ) -> std::io::Result<()> {
-    // No larger than the spans: a slab is allocated whole.
+    // A slab is allocated whole: a small section's slabs together hold it about once.
     let total = spans.iter().map(|s| s.count).sum::<usize>();
-    let per_slab = (SLAB_BYTES / size_of::<T>()).min(total).max(1);
+    let per_slab = (SLAB_BYTES / size_of::<T>())
+        .min(total.div_ceil(SLABS))
+        .max(1);
     stream_slabs(files, spans, per_slab, (fix, |bytes| out.put(bytes)))
 }
 
