@@ -46,8 +46,32 @@ pub trait PointStream: Send + Sync {
     fn up(&self) -> Option<UpAxis>;
     /// Calls `f` on every batch of points, in file order.
     fn points(&self, f: &mut dyn FnMut(&PointBatch)) -> Result<(), ModelError>;
+    /// Calls `f` on the positions of rows 0, `stride`, 2 `stride`, … in file order. By
+    /// default from a pass over every point; a format whose records lie at known
+    /// offsets reads only those.
+    fn strided_positions(
+        &self,
+        stride: u64,
+        f: &mut dyn FnMut([f64; 3]),
+    ) -> Result<(), ModelError> {
+        self.points(&mut every_stride_th(stride, f))
+    }
     /// Calls `f` on the triangles, a batch at a time, in file order (none for a cloud).
     fn triangles(&self, f: &mut dyn FnMut(&[[u32; 3]])) -> Result<(), ModelError>;
+}
+
+/// What a pass hands each batch to so that `f` gets the positions of rows 0, `stride`,
+/// 2 `stride`, … of the whole pass.
+pub fn every_stride_th(stride: u64, f: &mut dyn FnMut([f64; 3])) -> impl FnMut(&PointBatch) + '_ {
+    let mut row = 0u64;
+    move |b| {
+        for p in &b.xyz {
+            if row.is_multiple_of(stride) {
+                f(*p);
+            }
+            row += 1;
+        }
+    }
 }
 
 /// One batch of points, in file order.

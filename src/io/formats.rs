@@ -74,6 +74,16 @@ impl ModelStream {
         self.0.points(&mut f)
     }
 
+    /// Calls `f` on the positions of rows 0, `stride` (at least 1), 2 `stride`, … in
+    /// file order, reading only those where the format allows.
+    pub fn strided_positions(
+        &self,
+        stride: u64,
+        mut f: impl FnMut([f64; 3]),
+    ) -> Result<(), ModelError> {
+        self.0.strided_positions(stride.max(1), &mut f)
+    }
+
     /// Calls `f` on the triangles, a batch at a time, in file order (none for a cloud).
     pub fn triangles(&self, mut f: impl FnMut(&[[u32; 3]])) -> Result<(), ModelError> {
         self.0.triangles(&mut f)

@@ -334,3 +334,27 @@ fn an_open_mesh_built_in_jobs_keeps_its_winding_and_is_drawn_two_sided() {
         assert!(up > 0.0, "a normal turned down: {up}");
     }
 }
+
+#[test]
+fn the_scan_s_strided_sample_is_every_stride_th_point() {
+    // A LAS file's sampled rows are read each where its record lies, a LAZ file's in
+    // its pass: both must be the rows a pass over every point strides to.
+    use spt::io::formats::ModelStream;
+    let dir = common::temp_dir();
+    for compressed in [false, true] {
+        let input = dir.path().join(if compressed { "s.laz" } else { "s.las" });
+        std::fs::write(&input, common::las_files::sample(5000, compressed)).unwrap();
+        let stream = ModelStream::open(&input).unwrap();
+        let mut all = Vec::new();
+        stream.points(|b| all.extend_from_slice(&b.xyz)).unwrap();
+        assert_eq!(all.len(), 5000);
+        for stride in [1, 7, 1000, 4999, 5000, 9000] {
+            let mut sampled = Vec::new();
+            stream
+                .strided_positions(stride, |p| sampled.push(p))
+                .unwrap();
+            let every: Vec<[f64; 3]> = all.iter().copied().step_by(stride as usize).collect();
+            assert_eq!(sampled, every, "stride {stride}, compressed {compressed}");
+        }
+    }
+}

@@ -45,6 +45,29 @@ impl LasBatches {
         self.expected
     }
 
+    /// Whether the file is LAZ, whose seeks decode from a chunk's start.
+    pub fn compressed(&self) -> bool {
+        self.reader.header().point_format().is_compressed
+    }
+
+    /// Calls `f` on the positions of rows 0, `stride` (at least 1), 2 `stride`, … below
+    /// the header's count, each row read alone where its record lies: for a LAS file
+    /// (a LAZ file's are read faster in a pass).
+    pub fn strided(&mut self, stride: u64, f: &mut dyn FnMut([f64; 3])) -> Result<(), LasError> {
+        for row in (0..self.expected).step_by(stride.max(1) as usize) {
+            let failed = |e: String| damaged(&self.path, self.expected, row, e);
+            self.reader.seek(row).map_err(|e| failed(e.to_string()))?;
+            if fill_contained(&mut self.reader, 1, &mut self.data).map_err(failed)? == 0 {
+                return Err(failed("no record".into()));
+            }
+            let d = &self.data;
+            if let (Some(x), Some(y), Some(z)) = (d.x().next(), d.y().next(), d.z().next()) {
+                f([x, y, z]);
+            }
+        }
+        Ok(())
+    }
+
     /// Reads the next batch into `out` (cleared first); false once every point is read.
     pub fn next_batch(&mut self, out: &mut PointBatch) -> Result<bool, LasError> {
         out.clear();
@@ -52,14 +75,8 @@ impl LasBatches {
             return Ok(false);
         }
         let want = self.per_batch.min(self.expected - self.read);
-        let n = fill_contained(&mut self.reader, want, &mut self.data).map_err(|e| LasError {
-            path: self.path.clone(),
-            message: format!(
-                "the header announces {} points; decoding failed after {} ({e}): the file is \
-                 damaged or truncated",
-                self.expected, self.read
-            ),
-        })?;
+        let n = fill_contained(&mut self.reader, want, &mut self.data)
+            .map_err(|e| damaged(&self.path, self.expected, self.read, e))?;
         if n == 0 {
             return Ok(false);
         }
@@ -77,5 +94,17 @@ impl LasBatches {
                 .map(|((i, c), (r, n))| PointAttributes::new(i, c, r, n)),
         );
         Ok(true)
+    }
+}
+
+/// The error of the file at `path`, whose header announces `expected` points, when
+/// decoding failed at `row` (`e`).
+fn damaged(path: &Path, expected: u64, row: u64, e: String) -> LasError {
+    LasError {
+        path: path.to_owned(),
+        message: format!(
+            "the header announces {expected} points; decoding failed after {row} ({e}): the \
+             file is damaged or truncated"
+        ),
     }
 }

@@ -4,8 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use super::{LasBatches, read_las};
-use crate::io::format::PointBatch;
 use crate::io::format::{Format, PointStream};
+use crate::io::format::{PointBatch, every_stride_th};
 use crate::io::model::{Model, ModelError, Summary};
 use crate::io::up::UpAxis;
 
@@ -81,6 +81,18 @@ impl PointStream for LasStream {
             f(&batch);
         }
         Ok(())
+    }
+
+    fn strided_positions(
+        &self,
+        stride: u64,
+        f: &mut dyn FnMut([f64; 3]),
+    ) -> Result<(), ModelError> {
+        let mut reader = LasBatches::open(&self.path)?;
+        if reader.compressed() {
+            return self.points(&mut every_stride_th(stride, f));
+        }
+        Ok(reader.strided(stride, f)?)
     }
 
     fn triangles(&self, _: &mut dyn FnMut(&[[u32; 3]])) -> Result<(), ModelError> {
