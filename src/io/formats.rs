@@ -35,6 +35,9 @@ pub fn read_model(path: &Path) -> Result<Model, ModelError> {
     format_of(path)?.read(path)
 }
 
+/// Batches a [`ModelStream::points_ahead`] pass decodes ahead of its consumer.
+pub const BATCHES_AHEAD: usize = 2;
+
 /// A model file open for reading a batch at a time, whatever its format.
 pub struct ModelStream(Box<dyn PointStream>);
 
@@ -72,6 +75,32 @@ impl ModelStream {
     /// Calls `f` on every batch of points, in file order.
     pub fn points(&self, mut f: impl FnMut(&PointBatch)) -> Result<(), ModelError> {
         self.0.points(&mut f)
+    }
+
+    /// As [`ModelStream::points`], with the file decoded on another thread up to
+    /// [`BATCHES_AHEAD`] batches ahead of `f`: for a pass whose own work per point
+    /// weighs as much as the decoding.
+    pub fn points_ahead(&self, mut f: impl FnMut(&PointBatch)) -> Result<(), ModelError> {
+        use std::sync::mpsc::{channel, sync_channel};
+        let (full, decoded) = sync_channel::<PointBatch>(BATCHES_AHEAD);
+        let (used, recycled) = channel::<PointBatch>();
+        std::thread::scope(|scope| {
+            let decoder = scope.spawn(move || {
+                self.0.points(&mut |b| {
+                    let mut copy = recycled.try_recv().unwrap_or_default();
+                    copy.clone_from(b);
+                    // Refused only once `f` has panicked: the pass then runs out unread.
+                    let _ = full.send(copy);
+                })
+            });
+            for batch in decoded {
+                f(&batch);
+                let _ = used.send(batch);
+            }
+            decoder
+                .join()
+                .unwrap_or_else(|p| std::panic::resume_unwind(p))
+        })
     }
 
     /// Calls `f` on the positions of rows 0, `stride` (at least 1), 2 `stride`, … in

@@ -358,3 +358,26 @@ fn the_scan_s_strided_sample_is_every_stride_th_point() {
         }
     }
 }
+
+#[test]
+fn a_pass_decoded_ahead_hands_the_same_batches_in_order() {
+    // Four batches of a LAS file: the decoding thread recycles the batches its
+    // consumer is done with, and none may come out of order or changed.
+    use spt::io::formats::ModelStream;
+    let dir = common::temp_dir();
+    let input = dir.path().join("s.las");
+    std::fs::write(&input, common::las_files::sample(4 * 65536 + 7, false)).unwrap();
+    let stream = ModelStream::open(&input).unwrap();
+    let (mut plain, mut ahead) = (Vec::new(), Vec::new());
+    stream.points(|b| plain.push(b.clone())).unwrap();
+    stream.points_ahead(|b| ahead.push(b.clone())).unwrap();
+    assert_eq!(plain.len(), 5);
+    let same = plain.iter().zip(&ahead).all(|(a, b)| {
+        (&a.xyz, &a.rgb, &a.normals, &a.attributes) == (&b.xyz, &b.rgb, &b.normals, &b.attributes)
+    });
+    assert!(same && plain.len() == ahead.len());
+    // A consumer that panics stops the pass: the panic comes through, nothing hangs.
+    let stream = std::panic::AssertUnwindSafe(&stream);
+    let stopped = std::panic::catch_unwind(|| stream.points_ahead(|_| panic!("stop")));
+    assert!(stopped.is_err());
+}

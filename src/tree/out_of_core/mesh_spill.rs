@@ -199,7 +199,7 @@ fn spill_vertices(
     let mut failed = None;
     let mut index = 0u32;
     let mut pairs = halo.keys.iter().peekable();
-    input.points(|b| {
+    input.points_ahead(|b| {
         for (i, p) in b.xyz.iter().enumerate() {
             let v = index;
             index += 1;
