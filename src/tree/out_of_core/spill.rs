@@ -83,7 +83,7 @@ impl Scan {
         let (mut bounds, mut core) = (Bounds::empty(), Bounds::empty());
         let (mut has_color, mut eight_bit) = (false, true);
         let mut rows = 0u64;
-        input.points_ahead(|b| {
+        input.points(|b| {
             rows += b.xyz.len() as u64;
             for p in self.kept(b) {
                 sum += p;
@@ -211,7 +211,7 @@ pub enum Split {
 /// Pass 3: kept points per cell.
 pub fn count_cells(input: &ModelStream, scan: &Scan, grid: &Grid) -> anyhow::Result<Vec<u64>> {
     let mut counts = vec![0u64; (GRID * GRID * GRID) as usize];
-    input.points_ahead(|b| {
+    input.points(|b| {
         for p in scan.kept(b) {
             counts[Grid::index(grid.locate(p).0)] += 1;
         }
