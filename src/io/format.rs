@@ -96,6 +96,20 @@ impl PointBatch {
         self.attributes.clear();
     }
 
+    /// Makes this batch rows `rows` of `from`.
+    pub fn copy_rows(&mut self, from: &PointBatch, rows: std::ops::Range<usize>) {
+        fn copy<T: Clone>(to: &mut Vec<T>, from: &[T], rows: std::ops::Range<usize>) {
+            to.clear();
+            if !from.is_empty() {
+                to.extend_from_slice(&from[rows]);
+            }
+        }
+        copy(&mut self.xyz, &from.xyz, rows.clone());
+        copy(&mut self.rgb, &from.rgb, rows.clone());
+        copy(&mut self.normals, &from.normals, rows.clone());
+        copy(&mut self.attributes, &from.attributes, rows);
+    }
+
     /// Point `i`'s colour as RGBA8, converted as the whole-file reader converts it
     /// ([`crate::io::geometry`]'s channels: 8-bit values as they are, 16-bit ones
     /// over 257); `None` when the file has no colours.

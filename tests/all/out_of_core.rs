@@ -360,23 +360,37 @@ fn the_scan_s_strided_sample_is_every_stride_th_point() {
 }
 
 #[test]
-fn a_pass_decoded_ahead_hands_the_same_batches_in_order() {
-    // Four batches of a LAS file: the decoding thread recycles the batches its
-    // consumer is done with, and none may come out of order or changed.
-    use spt::io::formats::ModelStream;
+fn a_pass_decoded_ahead_hands_the_same_rows_in_order() {
+    // A LAS file's batches of 65,536 points and a LAZ file's one batch, cut for the
+    // hand-over: the decoding thread recycles the batches its consumer is done with,
+    // and no row may come out of order or changed.
+    use spt::io::format::PointBatch;
+    use spt::io::formats::{ModelStream, POINTS_AHEAD_BATCH};
     let dir = common::temp_dir();
-    let input = dir.path().join("s.las");
-    std::fs::write(&input, common::las_files::sample(4 * 65536 + 7, false)).unwrap();
-    let stream = ModelStream::open(&input).unwrap();
-    let (mut plain, mut ahead) = (Vec::new(), Vec::new());
-    stream.points(|b| plain.push(b.clone())).unwrap();
-    stream.points_ahead(|b| ahead.push(b.clone())).unwrap();
-    assert_eq!(plain.len(), 5);
-    let same = plain.iter().zip(&ahead).all(|(a, b)| {
-        (&a.xyz, &a.rgb, &a.normals, &a.attributes) == (&b.xyz, &b.rgb, &b.normals, &b.attributes)
-    });
-    assert!(same && plain.len() == ahead.len());
+    let rows = |batches: &[PointBatch]| {
+        let mut all = PointBatch::default();
+        for b in batches {
+            all.xyz.extend_from_slice(&b.xyz);
+            all.rgb.extend_from_slice(&b.rgb);
+            all.normals.extend_from_slice(&b.normals);
+            all.attributes.extend_from_slice(&b.attributes);
+        }
+        (all.xyz, all.rgb, all.normals, all.attributes)
+    };
+    for compressed in [false, true] {
+        let input = dir.path().join(if compressed { "s.laz" } else { "s.las" });
+        std::fs::write(&input, common::las_files::sample(4 * 65536 + 7, compressed)).unwrap();
+        let stream = ModelStream::open(&input).unwrap();
+        let (mut plain, mut ahead) = (Vec::new(), Vec::new());
+        stream.points(|b| plain.push(b.clone())).unwrap();
+        stream.points_ahead(|b| ahead.push(b.clone())).unwrap();
+        assert_eq!(ahead.len(), 5, "compressed {compressed}");
+        assert!(ahead.iter().all(|b| b.xyz.len() <= POINTS_AHEAD_BATCH));
+        assert!(rows(&plain) == rows(&ahead), "compressed {compressed}");
+        assert_eq!(rows(&plain).0.len(), 4 * 65536 + 7);
+    }
     // A consumer that panics stops the pass: the panic comes through, nothing hangs.
+    let stream = ModelStream::open(&dir.path().join("s.las")).unwrap();
     let stream = std::panic::AssertUnwindSafe(&stream);
     let stopped = std::panic::catch_unwind(|| stream.points_ahead(|_| panic!("stop")));
     assert!(stopped.is_err());

@@ -115,8 +115,9 @@ impl Scan {
 /// The first passes, with [`crate::io::rebase`]'s rule (the whole-file readers'): an
 /// evenly strided sample of the finite points gives the outlier window (a LAS file's
 /// sampled records are read alone, not in a pass: on the 200 M-point tile the scan
-/// took 5.7–7.5 s instead of 11.2–14.8 s); a pass measures the finite points. When some lies beyond `MAX_OFFSET / 2` of the core's
-/// centre, only those within it of the sample's median are kept, measured again.
+/// took 5.7–7.5 s instead of 11.2–14.8 s); a pass measures the finite points. When
+/// some lies beyond `MAX_OFFSET / 2` of the core's centre, only those within it of the
+/// sample's median are kept, measured again.
 pub fn scan(input: &ModelStream, path: &Path) -> anyhow::Result<Scan> {
     let stride = input.point_count().div_ceil(SAMPLE as u64);
     let mut sample = Vec::new();
