@@ -341,7 +341,7 @@ fn halo_jobs(table: &[u32], (cell, frac): (IVec3, DVec3), job: u32, out: &mut Ve
     }
 }
 
-/// Pass 4: every kept point to its job's file and to the halo files of the jobs
+/// The last pass: every kept point to its job's file and to the halo files of the jobs
 /// around it, relative to `origin`, colours as 8-bit RGBA.
 pub fn spill(
     input: &ModelStream,
