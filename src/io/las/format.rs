@@ -39,10 +39,11 @@ impl Format for LasFormat {
     }
 
     fn stream(&self, path: &Path) -> Result<Box<dyn PointStream>, ModelError> {
-        let points = LasBatches::open(path)?.point_count();
+        let reader = LasBatches::open(path)?;
         Ok(Box::new(LasStream {
             path: path.to_owned(),
-            points,
+            points: reader.point_count(),
+            compressed: reader.compressed(),
         }))
     }
 }
@@ -51,6 +52,8 @@ impl Format for LasFormat {
 struct LasStream {
     path: PathBuf,
     points: u64,
+    /// LAZ: a seek decodes from its chunk's start, so a strided sample takes a pass.
+    compressed: bool,
 }
 
 impl PointStream for LasStream {
@@ -88,11 +91,10 @@ impl PointStream for LasStream {
         stride: u64,
         f: &mut dyn FnMut([f64; 3]),
     ) -> Result<(), ModelError> {
-        let mut reader = LasBatches::open(&self.path)?;
-        if reader.compressed() {
+        if self.compressed {
             return self.points(&mut every_stride_th(stride, f));
         }
-        Ok(reader.strided(stride, f)?)
+        Ok(LasBatches::open(&self.path)?.strided(stride, f)?)
     }
 
     fn triangles(&self, _: &mut dyn FnMut(&[[u32; 3]])) -> Result<(), ModelError> {

@@ -119,6 +119,12 @@ impl Scan {
 /// some lies beyond `MAX_OFFSET / 2` of the core's centre, only those within it of the
 /// sample's median are kept, measured again.
 pub fn scan(input: &ModelStream, path: &Path) -> anyhow::Result<Scan> {
+    if input.point_count() == 0 {
+        return Err(ModelError::Empty {
+            path: path.to_owned(),
+        }
+        .into());
+    }
     let stride = input.point_count().div_ceil(SAMPLE as u64);
     let mut sample = Vec::new();
     input.strided_positions(stride, |p| {
@@ -126,12 +132,6 @@ pub fn scan(input: &ModelStream, path: &Path) -> anyhow::Result<Scan> {
             sample.push(p);
         }
     })?;
-    if input.point_count() == 0 {
-        return Err(ModelError::Empty {
-            path: path.to_owned(),
-        }
-        .into());
-    }
     let none = || anyhow::anyhow!("{}: the file holds no finite point", path.display());
     let (median, window) = sample_window(&sample).ok_or_else(none)?;
     let mut scan = Scan {
