@@ -12,7 +12,7 @@
 //!   water, the hull's slivers). A terrain's splats shade with the same triangles'
 //!   normals (`surfel::cloud::tin`).
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
 use super::Geometry;
@@ -129,39 +129,83 @@ pub fn drop_long(
 }
 
 /// Whether [`drop_long`] keeps each of `triangles`.
+///
+/// Edges are compared by their squared x–y lengths: the median length is the root of
+/// the median square (√ is monotone and correctly rounded), and an edge is within the
+/// bound exactly when its square is at most [`largest_square_within`] the bound.
 pub fn short_or_kept(
     positions: &[Vec3],
     triangles: &[[u32; 3]],
     keep_long: impl Fn(Vec3, f64) -> bool + Sync,
 ) -> Vec<bool> {
-    let length = |a: u32, b: u32| {
-        let (p, q) = (&positions[a as usize], &positions[b as usize]);
-        DVec3::new((p.x - q.x) as f64, (p.y - q.y) as f64, 0.0).length()
+    let squares = |t: &[u32; 3]| {
+        let [a, b, c] = t.map(|v| positions[v as usize]);
+        [(a, b), (b, c), (c, a)].map(|(p, q)| {
+            let (dx, dy) = ((p.x - q.x) as f64, (p.y - q.y) as f64);
+            dx * dx + dy * dy
+        })
     };
-    let mut edges = vec![0.0; 3 * triangles.len()];
-    (edges.par_chunks_mut(3).zip(triangles)).for_each(|(lengths, t)| {
-        for (k, slot) in lengths.iter_mut().enumerate() {
-            *slot = length(t[k], t[(k + 1) % 3]);
-        }
-    });
-    if edges.is_empty() {
+    let mut edges = vec![[0.0; 3]; triangles.len()];
+    (edges.par_iter_mut().zip(triangles)).for_each(|(lengths, t)| *lengths = squares(t));
+    let flat = edges.as_flattened_mut();
+    if flat.is_empty() {
         return Vec::new();
     }
-    let mid = edges.len() / 2;
-    let median = *edges.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let mid = flat.len() / 2;
+    let median = flat.select_nth_unstable_by(mid, f64::total_cmp).1.sqrt();
     drop(edges);
+    let within = largest_square_within(TERRAIN_MAX_EDGE * median);
     (triangles.par_iter())
         .map(|t| {
-            let short = (0..3).all(|k| length(t[k], t[(k + 1) % 3]) <= TERRAIN_MAX_EDGE * median);
+            let short = squares(t).iter().all(|&s| s <= within);
             let centroid = || t.iter().map(|&v| positions[v as usize]).sum::<Vec3>() / 3.0;
             short || keep_long(centroid(), median)
         })
         .collect()
 }
 
+/// The largest s ≥ 0 whose root is at most `bound`: for every s ≥ 0, √s ≤ `bound`
+/// exactly when s ≤ this (√ is monotone). Infinite for an infinite bound, and NaN
+/// where every root exceeds the bound (a negative or NaN one).
+fn largest_square_within(bound: f64) -> f64 {
+    if bound.is_nan() || bound < 0.0 {
+        return f64::NAN;
+    }
+    let mut s = bound * bound;
+    while s > 0.0 && s.sqrt() > bound {
+        s = s.next_down();
+    }
+    while s.next_up().sqrt() <= bound && s.is_finite() {
+        s = s.next_up();
+    }
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_square_is_within_the_bound_exactly_when_its_root_is() {
+        // Bounds over every magnitude, subnormal to huge, and their neighbours: the
+        // largest square's root is within, the next square's is not.
+        let mut bounds = vec![0.0, f64::MIN_POSITIVE, 5e-324, 1.0, 4.0, f64::MAX];
+        for e in -300..300 {
+            for m in [1.0, 1.1, 1.5, std::f64::consts::SQRT_2, 1.999_999] {
+                let b = m * 10f64.powi(e);
+                bounds.extend([b, b.next_up(), b.next_down()]);
+            }
+        }
+        for bound in bounds {
+            let s = largest_square_within(bound);
+            assert!(s >= 0.0 && s.sqrt() <= bound, "{bound}: {s}");
+            let next = s.next_up();
+            assert!(next.sqrt() > bound || next.is_infinite(), "{bound}: {s}");
+        }
+        assert_eq!(largest_square_within(f64::INFINITY), f64::INFINITY);
+        assert!(largest_square_within(f64::NAN).is_nan());
+        assert!(largest_square_within(-1.0).is_nan());
+    }
 
     fn grid_points(width: usize, height: usize, hole: Option<usize>) -> Geometry {
         let mut points = Vec::new();
