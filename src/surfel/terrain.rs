@@ -181,17 +181,18 @@ fn in_canonical_order(triangles: &mut [[u32; 3]]) {
     triangles.par_sort_unstable();
 }
 
-/// The median horizontal length of `triangles`' edges; None when there are none.
+/// The median horizontal length of `triangles`' edges; None when there are none. It is
+/// the root of the median squared length (√ is monotone and correctly rounded), so
+/// each edge's square is all that is selected.
 fn median_horizontal_edge(points: &[Vec3], triangles: &[[u32; 3]]) -> Option<f32> {
-    let mut edges = vec![0.0f32; 3 * triangles.len()];
-    (edges.par_chunks_mut(3).zip(triangles)).for_each(|(lengths, t)| {
-        for (k, slot) in lengths.iter_mut().enumerate() {
-            let (a, b) = (points[t[k] as usize], points[t[(k + 1) % 3] as usize]);
-            *slot = (a - b).truncate().length();
-        }
+    let mut squares = vec![[0.0f32; 3]; triangles.len()];
+    (squares.par_iter_mut().zip(triangles)).for_each(|(edges, t)| {
+        let [a, b, c] = t.map(|v| points[v as usize].truncate());
+        *edges = [a - b, b - c, c - a].map(|d| d.length_squared());
     });
-    let mid = edges.len().checked_sub(1)? / 2;
-    Some(*edges.select_nth_unstable_by(mid, f32::total_cmp).1)
+    let squares = squares.as_flattened_mut();
+    let mid = squares.len().checked_sub(1)? / 2;
+    Some(squares.select_nth_unstable_by(mid, f32::total_cmp).1.sqrt())
 }
 
 /// The corner of triangle `t` least in (x, y, z) order: the same in every piece that
