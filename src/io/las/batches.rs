@@ -59,8 +59,9 @@ impl LasBatches {
     /// the header's count, each row read alone where its record lies: for a LAS file
     /// (a LAZ file's are read faster in a pass).
     pub fn strided(&mut self, stride: u64, f: &mut dyn FnMut([f64; 3])) -> Result<(), LasError> {
-        let rows = (0..self.expected).step_by(stride.max(1) as usize);
-        self.ask_ahead(rows.clone());
+        let stride = stride.max(1);
+        let rows = (0..self.expected).step_by(stride as usize);
+        self.ask_ahead(rows.clone(), stride);
         for row in rows {
             let failed = |e: String| damaged(&self.path, self.expected, row, e);
             self.reader.seek(row).map_err(|e| failed(e.to_string()))?;
@@ -75,33 +76,37 @@ impl LasBatches {
         Ok(())
     }
 
-    /// Asks the kernel to read the records of `rows` into the page cache, all at once,
-    /// so that reading them one by one finds them there. From a cold cache each read
-    /// otherwise waits out its own trip to the disk: the 200 M-point tile's 16,384
-    /// sampled records took 1.3–1.4 s so, 0.5 s asked ahead (warm: 0.07–0.14 s, 0.11–0.16
-    /// s; 2026-11-30). Only a hint, where the system takes one (Linux): nothing is
-    /// read here, and a record it misses is read as before.
-    fn ask_ahead(&self, rows: impl Iterator<Item = u64>) {
+    /// Asks the kernel to read the records of `rows`, `stride` apart, into the page
+    /// cache, all at once, so that reading them one by one finds them there. From a
+    /// cold cache each read otherwise waits out its own trip to the disk: the 200
+    /// M-point tile's 16,384 sampled records took 1.3–1.4 s so, 0.5 s asked ahead
+    /// (warm: 0.07–0.14 s, 0.11–0.16 s; 2026-11-30). Rows closer than a buffer's read
+    /// are read nearly in sequence, which the kernel reads ahead of by itself: not
+    /// asked. Only a hint, where the system takes one (Linux): nothing is read here,
+    /// and a record it misses is read as before.
+    fn ask_ahead(&self, rows: impl Iterator<Item = u64>, stride: u64) {
         #[cfg(target_os = "linux")]
         {
             use std::os::fd::AsRawFd;
-            let header = self.reader.header();
-            let Ok(raw) = header.clone().into_raw() else {
-                return;
-            };
-            let Ok(file) = std::fs::File::open(&self.path) else {
+            let Ok(raw) = self.reader.header().clone().into_raw() else {
                 return;
             };
             let (data, record) = (
                 u64::from(raw.offset_to_point_data),
                 u64::from(raw.point_data_record_length),
             );
+            let len = BUFFERED_READ.max(i64::from(raw.point_data_record_length));
+            if stride.saturating_mul(record) < len as u64 {
+                return;
+            }
+            let Ok(file) = std::fs::File::open(&self.path) else {
+                return;
+            };
             for row in rows {
                 let at = row.saturating_mul(record).saturating_add(data);
                 let Ok(at) = i64::try_from(at) else {
                     return;
                 };
-                let len = BUFFERED_READ.max(record as i64);
                 // SAFETY: a hint on an open descriptor; it reads no memory of ours.
                 unsafe {
                     libc::posix_fadvise(file.as_raw_fd(), at, len, libc::POSIX_FADV_WILLNEED)
@@ -109,7 +114,7 @@ impl LasBatches {
             }
         }
         #[cfg(not(target_os = "linux"))]
-        let _ = rows;
+        let _ = (rows, stride);
     }
 
     /// Reads the next batch into `out` (cleared first); false once every point is read.
