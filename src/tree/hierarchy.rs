@@ -130,14 +130,7 @@ fn split(s: &mut [Key]) -> usize {
         2
     };
     let mid = 0.5 * (lo[axis] + hi[axis]);
-    // In-place partition: centres below the midpoint first.
-    let mut left = 0;
-    for i in 0..n {
-        if s[i].position[axis] < mid {
-            s.swap(i, left);
-            left += 1;
-        }
-    }
+    let left = partition_below(s, axis, mid);
     if left.min(n - left) * UNBALANCED >= n {
         return left;
     }
@@ -145,6 +138,23 @@ fn split(s: &mut [Key]) -> usize {
     let half = n / 2;
     s.select_nth_unstable_by(half, |a, b| a.position[axis].total_cmp(&b.position[axis]));
     half
+}
+
+/// Moves the keys whose centre lies below `mid` along `axis` to the front, in place,
+/// and returns how many there are: Lomuto's partition, each key in turn swapped with
+/// the first key not below when it lies below. The swap is done or not by selects
+/// rather than a branch, which a random half of the keys would mispredict; the keys
+/// end where the branching loop puts them.
+fn partition_below(s: &mut [Key], axis: usize, mid: f32) -> usize {
+    let mut left = 0;
+    for i in 0..s.len() {
+        let (here, first) = (s[i], s[left]);
+        let below = here.position[axis] < mid;
+        s[i] = if below { first } else { here };
+        s[left] = if below { here } else { first };
+        left += below as usize;
+    }
+    left
 }
 
 /// Splits a range into its up to four child ranges (two binary levels).
@@ -275,5 +285,54 @@ pub fn build(surfels: &[Surfel], report: &dyn Report) -> Hierarchy {
         leaf_count,
         internal,
         leaf_order: keys.par_iter().map(|k| k.index).collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_branch_free_partition_puts_each_key_where_the_branching_one_does() {
+        // Lomuto's partition with a branch, as the reference.
+        fn branching(s: &mut [Key], axis: usize, mid: f32) -> usize {
+            let mut left = 0;
+            for i in 0..s.len() {
+                if s[i].position[axis] < mid {
+                    s.swap(i, left);
+                    left += 1;
+                }
+            }
+            left
+        }
+        // Keys on a scrambled lattice with repeated coordinates, split on each axis at
+        // a coordinate some keys hold, between two, below all and above all.
+        let keys: Vec<Key> = (0..1000u32)
+            .map(|i| {
+                let h = i.wrapping_mul(2_654_435_761);
+                let c = |shift: u32| ((h >> shift) % 17) as f32 - 8.0;
+                Key {
+                    position: Vec3::new(c(3), c(11), c(19)),
+                    index: i,
+                }
+            })
+            .collect();
+        let order = |s: &[Key]| s.iter().map(|k| k.index).collect::<Vec<_>>();
+        for axis in 0..3 {
+            for mid in [0.0, 0.5, -9.0, 9.0, f32::NAN] {
+                let (mut a, mut b) = (keys.clone(), keys.clone());
+                let (left_a, left_b) = (
+                    partition_below(&mut a, axis, mid),
+                    branching(&mut b, axis, mid),
+                );
+                assert_eq!(
+                    (left_a, order(&a)),
+                    (left_b, order(&b)),
+                    "axis {axis}, mid {mid}"
+                );
+                assert!(a[..left_a].iter().all(|k| k.position[axis] < mid));
+                assert!(!a[left_a..].iter().any(|k| k.position[axis] < mid));
+            }
+        }
     }
 }
