@@ -54,12 +54,28 @@ pub fn scatter_matrix(points: impl Iterator<Item = Vec3> + Clone) -> Option<DMat
         return None;
     }
     let mean = sum / n as f64;
-    let mut cov = DMat3::ZERO;
+    // The six distinct sums, each added point by point as the full matrix's entry
+    // would be (products commute exactly): xx, xy, xz, yy, yz, zz.
+    let mut s = [0.0; 6];
     for p in points {
         let d = p.as_dvec3() - mean;
-        cov += DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+        let products = [
+            d.x * d.x,
+            d.x * d.y,
+            d.x * d.z,
+            d.y * d.y,
+            d.y * d.z,
+            d.z * d.z,
+        ];
+        for (sum, product) in s.iter_mut().zip(products) {
+            *sum += product;
+        }
     }
-    Some(cov)
+    Some(DMat3::from_cols(
+        DVec3::new(s[0], s[1], s[2]),
+        DVec3::new(s[1], s[3], s[4]),
+        DVec3::new(s[2], s[4], s[5]),
+    ))
 }
 
 /// Unit normal of the best-fit plane of `points`: the eigenvector of the smallest

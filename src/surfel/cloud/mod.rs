@@ -32,7 +32,7 @@ use arrayvec::ArrayVec;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::covering::{Covering, RadiusRule, covering};
+use super::covering::{Covering, MAX_NEIGHBOURS, RadiusRule, covering};
 use super::pca::plane_normal;
 use super::shape::{Clip, Shape, SplatShape};
 use super::{Surfel, SurfelStats};
@@ -46,6 +46,7 @@ use smoothed::{Steps, smoothed_disks};
 /// the sensor and whose ellipse leaves streaks of holes between the steps; 24 see the
 /// next step (the frame's holes 0.93 % → 0.10 %, docs/point-clouds.md).
 pub const K: usize = 24;
+const _: () = assert!(K <= MAX_NEIGHBOURS, "the covering takes every neighbour");
 
 /// Radius for surfels without a measured one: the median of the measured radii, or
 /// 1/1024 of the model's extent (of one unit for a model without extent) when none was.

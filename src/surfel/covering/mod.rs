@@ -52,8 +52,10 @@ use glam::{Vec2, Vec3};
 
 use axes::{Columns, Mapped, Metric, axes};
 
-/// Most neighbours a covering looks at (more are ignored).
-pub const MAX_NEIGHBOURS: usize = 64;
+/// Most neighbours a covering looks at (more are ignored): a cloud's neighbourhood
+/// ([`crate::surfel::cloud::K`]) fits. The axes' columns and the rankings are held in
+/// fixed arrays of this size, set up for every point.
+pub const MAX_NEIGHBOURS: usize = 32;
 /// Widest angular gap (radians) that the surrounding neighbours may leave: 120°.
 pub const MAX_GAP: f32 = 2.0 * std::f32::consts::FRAC_PI_3;
 /// Major semi-axis over the surrounding distance.
@@ -194,39 +196,27 @@ pub fn samples_no_surface(offsets: &[Vec3]) -> bool {
 /// wider than [`MAX_GAP`]; when even all of them do, their widest gap (its start,
 /// counter-clockwise, and width; radians in the metric).
 ///
-/// Most points are surrounded by their few nearest (on the Lucy-size cloud by the 4th
-/// to 6th of 23), so the [`FIRST_RANKED`] nearest are selected and sorted first, and the
-/// rest only when those do not surround the point. Neither result depends on how equal
-/// distances are ordered: the ring closes at the same distance whichever of them comes
-/// first, and the widest gap is that of the same angles.
+/// Each offset is ranked by one integer, its squared distance's bits (which order as
+/// the distances do, all being ≥ 0) above its index, and all are sorted at once: the
+/// standard library sorts up to 32 integers by a sorting network and merges, with few
+/// branches to mispredict. Neither result depends on how equal distances are ordered:
+/// the ring closes at the same distance whichever of them comes first, and the widest
+/// gap is that of the same angles.
 fn surrounding_distance(lanes: &Mapped) -> Result<f32, (f32, f32)> {
-    let mut mapped: ArrayVec<(f32, Vec2), MAX_NEIGHBOURS> =
-        (0..lanes.len).map(|k| lanes.get(k)).collect();
-    let nearer = |a: &(f32, Vec2), b: &(f32, Vec2)| a.0.total_cmp(&b.0);
-    let first = FIRST_RANKED.min(mapped.len());
-    if first < mapped.len() {
-        mapped.select_nth_unstable_by(first - 1, nearer);
-    }
+    let mut ranked: ArrayVec<u64, MAX_NEIGHBOURS> = (0..lanes.len)
+        .map(|k| (u64::from(lanes.get(k).0.to_bits()) << 32) | k as u64)
+        .collect();
+    ranked.sort_unstable();
     let mut gaps = Gaps::default();
-    mapped[..first].sort_unstable_by(nearer);
-    if let Some(r) = mapped[..first]
-        .iter()
-        .find_map(|&(d2, xy)| gaps.add(d2, xy))
-    {
-        return Ok(r);
-    }
-    mapped[first..].sort_unstable_by(nearer);
-    if let Some(r) = mapped[first..]
-        .iter()
-        .find_map(|&(d2, xy)| gaps.add(d2, xy))
-    {
+    let closing = ranked.iter().find_map(|r| {
+        let (d2, xy) = lanes.get(*r as u32 as usize);
+        gaps.add(d2, xy)
+    });
+    if let Some(r) = closing {
         return Ok(r);
     }
     Err(gaps.widest())
 }
-
-/// Neighbours ranked before the others in [`surrounding_distance`].
-const FIRST_RANKED: usize = 8;
 
 /// The sorted angles of the neighbours taken so far, and their widest gap (its start,
 /// counter-clockwise, and width) once three are in: an angle outside it leaves it
@@ -334,12 +324,15 @@ fn median_spacing(points: &[Vec3]) -> f32 {
     // The second least counts a tie with the least: twin returns give their distance.
     let nearest = (least.iter().zip(&second).take(points.len()))
         .map(|(&l, &s)| if s.is_finite() { s } else { l });
-    let mut nearest: ArrayVec<f32, SPACING_MEMBERS> = nearest.filter(|d| d.is_finite()).collect();
+    let mut nearest: ArrayVec<u32, SPACING_MEMBERS> = (nearest.filter(|d| d.is_finite()))
+        .map(f32::to_bits)
+        .collect();
     if nearest.is_empty() {
         return 0.0;
     }
-    let mid = nearest.len() / 2;
-    nearest.select_nth_unstable_by(mid, f32::total_cmp).1.sqrt()
+    // Positive finite distances order as their bits do.
+    nearest.sort_unstable();
+    f32::from_bits(nearest[nearest.len() / 2]).sqrt()
 }
 
 #[cfg(test)]
