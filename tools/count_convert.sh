@@ -6,17 +6,20 @@
 #   tools/count_convert.sh SPT...       (one or more spt binaries, counted in turn)
 # Prints, per binary, its instructions, branches, mispredicted branches
 # and the md5 of the file it wrote (the same file for changes that keep the bytes).
-# Needs valgrind (apt-get install -y valgrind); about 20 s per binary.
+# Needs valgrind (apt-get install -y valgrind); about a minute per binary.
 set -euo pipefail
-cd "$(dirname "$0")/.."
 [ $# -ge 1 ] || { echo "usage: tools/count_convert.sh SPT..." >&2; exit 2; }
+# The binaries as given from the caller's directory.
+spts=()
+for spt in "$@"; do spts+=("$(realpath "$spt")"); done
+cd "$(dirname "$0")/.."
 command -v valgrind > /dev/null || { echo "count_convert.sh: valgrind is not installed" >&2; exit 1; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cargo build --release --quiet --example gen_model
 ./target/release/examples/gen_model --segments 700 --sides 300 --no-faces \
   -o "$work/cloud.ply" > /dev/null
-for spt in "$@"; do
+for spt in "${spts[@]}"; do
   RAYON_NUM_THREADS=1 valgrind --tool=cachegrind --cache-sim=no --branch-sim=yes \
     --cachegrind-out-file="$work/cg.out" "$spt" convert "$work/cloud.ply" "$work/cloud.spt" \
     > /dev/null 2> "$work/log"

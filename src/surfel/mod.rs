@@ -41,6 +41,19 @@ use crate::io::{Geometry, PointAttributes};
 use layers::Layer;
 use shape::SplatShape;
 
+/// One integer that orders (squared distance, index) pairs, for the neighbour searches'
+/// selections and sorts: the distance's bits above the index (below 2³²). The bits of
+/// floats from +0 to +∞ order as the floats do, so ranks sort by distance, equal
+/// distances by index, and no two are equal.
+pub(crate) fn distance_rank(squared: f32, index: usize) -> u64 {
+    (u64::from(squared.to_bits()) << 32) | index as u64
+}
+
+/// The squared distance and the index that [`distance_rank`] packed.
+pub(crate) fn rank_parts(rank: u64) -> (f32, usize) {
+    (f32::from_bits((rank >> 32) as u32), rank as u32 as usize)
+}
+
 /// A splat: centre, unit normal, radius (the major semi-axis), colour, its ellipse and
 /// normal field ([`shape`]), and its LiDAR attributes (zero for other models). 52 bytes.
 #[repr(C)]

@@ -24,6 +24,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use super::K;
+use crate::surfel::{distance_rank, rank_parts};
 
 /// Cells per axis: a cell index takes 21 bits, a key three of them.
 const CELLS_PER_AXIS: i64 = 1 << 21;
@@ -303,7 +304,7 @@ impl Candidates {
             .map(|((x, y), z)| (x - p.x).powi(2) + (y - p.y).powi(2) + (z - p.z).powi(2));
         self.squared.clear();
         self.squared.extend(squared);
-        let rank = |(i, d): (usize, &f32)| (u64::from(d.to_bits()) << 32) | i as u64;
+        let rank = |(i, d): (usize, &f32)| distance_rank(*d, i);
         let bound = within * within;
         self.ranked.resize(self.squared.len(), 0);
         // Branch-free compaction: every rank is written, the next one overwrites it
@@ -327,10 +328,8 @@ impl Candidates {
         let nearest = &mut self.ranked[..k];
         nearest.sort_unstable();
         let unpacked = |r: &u64| {
-            (
-                f32::from_bits((r >> 32) as u32),
-                self.id[*r as u32 as usize],
-            )
+            let (d, i) = rank_parts(*r);
+            (d, self.id[i])
         };
         nearest.iter().map(unpacked).collect()
     }

@@ -50,6 +50,7 @@ mod axes;
 use arrayvec::ArrayVec;
 use glam::{Vec2, Vec3};
 
+use super::{distance_rank, rank_parts};
 use axes::{Columns, Mapped, Metric, axes};
 
 /// Most neighbours a covering looks at (more are ignored): a cloud's neighbourhood
@@ -196,20 +197,19 @@ pub fn samples_no_surface(offsets: &[Vec3]) -> bool {
 /// wider than [`MAX_GAP`]; when even all of them do, their widest gap (its start,
 /// counter-clockwise, and width; radians in the metric).
 ///
-/// Each offset is ranked by one integer, its squared distance's bits (which order as
-/// the distances do, all being ≥ 0) above its index, and all are sorted at once: the
-/// standard library sorts up to 32 integers by a sorting network and merges, with few
-/// branches to mispredict. Neither result depends on how equal distances are ordered:
-/// the ring closes at the same distance whichever of them comes first, and the widest
-/// gap is that of the same angles.
+/// Each offset is ranked by one integer ([`distance_rank`]) and all are sorted at
+/// once: the standard library sorts up to 32 integers by a sorting network and merges,
+/// with few branches to mispredict. Neither result depends on how equal distances are
+/// ordered: the ring closes at the same distance whichever of them comes first, and
+/// the widest gap is that of the same angles.
 fn surrounding_distance(lanes: &Mapped) -> Result<f32, (f32, f32)> {
     let mut ranked: ArrayVec<u64, MAX_NEIGHBOURS> = (0..lanes.len)
-        .map(|k| (u64::from(lanes.get(k).0.to_bits()) << 32) | k as u64)
+        .map(|k| distance_rank(lanes.get(k).0, k))
         .collect();
     ranked.sort_unstable();
     let mut gaps = Gaps::default();
     let closing = ranked.iter().find_map(|r| {
-        let (d2, xy) = lanes.get(*r as u32 as usize);
+        let (d2, xy) = lanes.get(rank_parts(*r).1);
         gaps.add(d2, xy)
     });
     if let Some(r) = closing {
