@@ -240,10 +240,11 @@ const FARTHEST_REACH: i64 = 3;
 const FARTHEST_COLUMNS: usize = (2 * FARTHEST_REACH as usize + 1).pow(2);
 
 /// The reach within which a query's k nearest are first sought, in the last query's
-/// k-th distance; a query with fewer than k candidates within it ranks them all. On
-/// the Lucy-size cloud 38 of a block's 136 candidates lie within it on average, and
-/// 0.5 % of the queries rank them all. The cloud_surfels bench took 318 ms at 1.25,
-/// 327 ms at 1.1 and 348 ms at 1.5.
+/// k-th distance; a query with fewer than k candidates within it selects from them
+/// all. On the Lucy-size cloud 38 of a block's 136 candidates lie within it on
+/// average, and 0.5 % of the queries select from them all. Before the second bound
+/// ([`narrower`]), the cloud_surfels bench took 318 ms at 1.25, 327 ms at 1.1 and
+/// 348 ms at 1.5.
 const NEXT_REACH: f32 = 1.25;
 
 /// The first index of the ascending `keys` whose key is at least `key`, galloping
