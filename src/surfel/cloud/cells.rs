@@ -306,7 +306,7 @@ impl Candidates {
     /// times the last query's k-th distance); from the m candidates within it, the
     /// second ([`narrower`]) expects a little more than k, few enough to be sorted
     /// whole. When a bound holds fewer than k, the last one that held k is kept, and
-    /// when none does, all candidates are ranked.
+    /// when none does, all candidates are selected from.
     fn nearest(&mut self, p: Vec3, k: usize, within: f32) -> ArrayVec<(f32, u32), K> {
         let squared = (self.x.iter().zip(&self.y).zip(&self.z))
             .map(|((x, y), z)| (x - p.x).powi(2) + (y - p.y).powi(2) + (z - p.z).powi(2));
