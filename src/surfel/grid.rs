@@ -114,12 +114,13 @@ pub fn frame_disks(
     let points = &g.positions;
     let is_long = is_long_in(points, sensor, mesh.pitch);
     let lone_radius = |p: Vec3| PIXEL_HALF_DIAGONAL * mesh.pitch * (p - sensor).length();
+    let all = surfels.len();
     let split = long_triangles::disks(
         (points, scale),
         &mesh.triangles,
         (is_long, lone_radius),
         given,
-        surfels,
+        (surfels, all),
         stats,
     );
     let redundant = isolated::redundant(points, scale, &split.isolated, surfels);

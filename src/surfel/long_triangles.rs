@@ -41,7 +41,8 @@ pub const LONG_PITCHES: f32 = 3.0;
 /// drawn by splats of their own: each vertex's normal from all its triangles, its
 /// ellipse and shading field from its short ones, clipped at their border, and no
 /// colour field; a vertex on long triangles only is a circle of `lone_radius(position)`.
-/// Fills `surfels` (one per point; `given` normals kept) and returns the isolated
+/// Fills `surfels` (one per point; `given` normals kept; only the first `kept` get
+/// ellipses and clips, [`ring_shapes`]) and returns the isolated
 /// vertices (ascending), the long triangles and the vertex normals that
 /// [`splats`] interpolates over them.
 pub fn disks(
@@ -49,7 +50,7 @@ pub fn disks(
     triangles: &[[u32; 3]],
     (is_long, lone_radius): (impl Fn(&[u32; 3]) -> bool + Sync, impl Fn(Vec3) -> f32),
     given: Option<&[Vec3]>,
-    surfels: &mut [Surfel],
+    (surfels, kept): (&mut [Surfel], usize),
     stats: &mut SurfelStats,
 ) -> Split {
     let isolated = face_disks(points, scale, triangles, given, surfels, stats);
@@ -63,13 +64,13 @@ pub fn disks(
     // The vertices keep their own colours, without fields: fitted over a ring cut at a
     // step's edge, a field ran on across the step in saturated specks.
     let rings = Rings::of(points.len(), &short);
-    let normals = ring_shapes(points, scale, (&short, &rings), surfels, false);
+    let normals = ring_shapes(points, scale, (&short, &rings), (surfels, kept), false);
     for (v, s) in surfels.iter_mut().enumerate() {
         if !in_short[v] && s.radius > 0.0 {
             s.radius = s.radius.min(lone_radius(s.position));
         }
     }
-    stats.clipped_boundaries += clip_at_border(points, (&short, &rings), surfels);
+    stats.clipped_boundaries += clip_at_border(points, (&short, &rings), (surfels, kept));
     Split {
         isolated,
         long,

@@ -152,7 +152,9 @@ pub fn vertex_disks(
         }
     };
     let rings = super::corners::Rings::of(points.len(), triangles);
-    let normals = super::ring::ring_shapes(points, scale, (triangles, &rings), surfels, colored);
+    let all = surfels.len();
+    let normals =
+        super::ring::ring_shapes(points, scale, (triangles, &rings), (surfels, all), colored);
     let redundant = super::isolated::redundant(points, scale, &isolated, surfels);
     stats.redundant_vertices = redundant.len() as u64;
     MeshDisks {

@@ -206,7 +206,9 @@ fn covering_radius(frame: &RingFrame, (shape, minor): (&Shape, DVec3), corners: 
 /// its shading field ([`fit_field`]); other vertices get a circle. With `colored` (a
 /// model with colours), also its colour field ([`fit_color_field`]).
 /// `points` are the model's positions, `scale` its unit scale; the vertex normals are
-/// read from `surfels`, and returned. Each vertex gathers over its own corners
+/// read from `surfels`, and returned. Only the first `kept` surfels are shaped: the
+/// rest (an out-of-core job's halo, dropped after its surfels are made) lend their
+/// positions and normals to their neighbours' rings. Each vertex gathers over its own corners
 /// (`rings`, of `triangles`), in parallel, and everything it needs is its own: one pass,
 /// with no per-vertex temporaries (on the Lucy-size model they were 1.7 GB of fresh
 /// pages to fault in).
@@ -214,7 +216,7 @@ pub fn ring_shapes(
     points: &[Vec3],
     scale: f32,
     (triangles, rings): (&[[u32; 3]], &Rings),
-    surfels: &mut [Surfel],
+    (surfels, kept): (&mut [Surfel], usize),
     colored: bool,
 ) -> Vec<Vec3> {
     let s = scale as f64;
@@ -227,7 +229,7 @@ pub fn ring_shapes(
         Vec::new()
     };
     let ring = |v: usize| rings.ring(triangles, v);
-    surfels
+    surfels[..kept]
         .par_iter_mut()
         .enumerate()
         .with_min_len(1 << 12)
@@ -326,10 +328,11 @@ where
 /// parallel, first to tell whether it is on the border (a neighbour that one triangle
 /// of the ring holds), then, inside it, to find the border edges opposite it: an edge
 /// (a, b) whose ends are both on the border and that one triangle of a's ring holds.
+/// Only the first `kept` splats are clipped (as [`ring_shapes`] shapes them).
 pub fn clip_at_border(
     points: &[Vec3],
     (triangles, rings): (&[[u32; 3]], &Rings),
-    surfels: &mut [Surfel],
+    (surfels, kept): (&mut [Surfel], usize),
 ) -> u64 {
     let on_border: Vec<bool> = (0..surfels.len())
         .into_par_iter()
@@ -346,7 +349,7 @@ pub fn clip_at_border(
     };
     let border_edge =
         |a: u32, b: u32| on_border[a as usize] && on_border[b as usize] && shared(a, b) == 1;
-    surfels
+    surfels[..kept]
         .par_iter_mut()
         .enumerate()
         .with_min_len(1 << 12)
@@ -412,6 +415,37 @@ mod tests {
         (points, triangles)
     }
 
+    #[test]
+    fn only_the_kept_splats_are_shaped_and_clipped_and_as_over_all() {
+        // The grid's first 10 vertices kept (a job's own), the other 6 its halo: the kept
+        // ones get the shapes and clips of a pass over all, the halo's stay as given.
+        let (points, triangles) = grid();
+        let rings = Rings::of(points.len(), &triangles);
+        let given: Vec<Surfel> = (points.iter())
+            .map(|&p| Surfel {
+                radius: 1.0,
+                normal: Vec3::Z,
+                ..Surfel::unsized_at(p)
+            })
+            .collect();
+        let shaped = |kept: usize| {
+            let mut surfels = given.clone();
+            ring_shapes(
+                &points,
+                1.0,
+                (&triangles, &rings),
+                (&mut surfels, kept),
+                false,
+            );
+            clip_at_border(&points, (&triangles, &rings), (&mut surfels, kept));
+            surfels
+        };
+        let (all, some) = (shaped(16), shaped(10));
+        assert_eq!(all[..10], some[..10]);
+        assert_eq!(some[10..], given[10..]);
+        assert_ne!(all[10..], given[10..]);
+    }
+
     /// With the grid's winding, and with it reversed under the same +z normals (the
     /// triangles wound clockwise seen from the normal, as after `orient_outward`
     /// turned an inward-wound mesh's normals).
@@ -434,7 +468,8 @@ mod tests {
             })
             .collect();
         let rings = Rings::of(points.len(), triangles);
-        ring_shapes(points, 1.0, (triangles, &rings), &mut surfels, false);
+        let all = surfels.len();
+        ring_shapes(points, 1.0, (triangles, &rings), (&mut surfels, all), false);
         for (i, s) in surfels.iter().enumerate() {
             let (x, y) = ((i % 4) as f64, (i / 4) as f64);
             let border = x == 0.0 || x == 3.0 || y == 0.0 || y == 3.0;
@@ -504,7 +539,7 @@ mod tests {
         assert!(surfels[4].covers(Vec3::new(1.25, 0.0, 0.0)));
         let rings = Rings::of(points.len(), &triangles);
         assert_eq!(
-            clip_at_border(&points, (&triangles, &rings), &mut surfels),
+            clip_at_border(&points, (&triangles, &rings), (&mut surfels, 5)),
             1
         );
         let kept = |x: f32, y: f32| surfels[4].covers(Vec3::new(x, y, 0.0));

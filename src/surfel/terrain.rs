@@ -102,7 +102,7 @@ pub fn terrain_disks(
         &triangles,
         (is_long, lone_radius),
         given,
-        surfels,
+        (surfels, own),
         stats,
     );
     drop(triangles);
