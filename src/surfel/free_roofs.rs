@@ -14,7 +14,8 @@
 //! - an edge **drops** where its ends lie more than [`DROP_SPACINGS`] apart in height;
 //! - a **top** is a set of samples that edges which do not drop join, with no drop from
 //!   it up to a higher sample, at least one down, and none of its samples on the TIN's
-//!   border (a plateau at a tile's edge, or a piece's, may rise beyond it);
+//!   border (a plateau at a tile's edge, or a piece's, may rise beyond it), nor in an
+//!   out-of-core piece's own samples and its halo both (see below);
 //! - a top is a **slab** where [`ON_PLANE_SHARE`] of its samples lie within
 //!   [`PLANAR_SPACINGS`] of the plane that fits them: a deck, a flat roof; not a
 //!   pitched roof, a crown, a roof with structures on it;
@@ -29,6 +30,13 @@
 //! no run) and, without classes, the bridge deck (99.2 %); its six buildings are
 //! walled or pitched. On terrain_utm (s = 2.4 m) it finds four flat roofs of 23–63
 //! samples that no pulse saw a wall of; autzen_trim's roofs are all walled or rough.
+//!
+//! An out-of-core piece sees a top that crosses its border only as far as its halo
+//! reaches, and the piece across the border sees the rest of it that way. Were each to
+//! judge its part, one could hold a roof free while the other joins it to the ground,
+//! and neither would draw the TIN's triangles between them: a hole in the ground at
+//! the roof's foot. So a top with both own and halo samples is held bordered, in
+//! both pieces alike: the TIN joins it, as it joins a roof at the tile's edge.
 //!
 //! A top that stands and holds no triangle of the TIN of its own is **lone**, where no
 //! drop from it lands on a sample standing over a further drop (a wall's samples stand
@@ -87,9 +95,10 @@ pub enum Standing {
 }
 
 /// What each of `positions` (the samples that one TIN holds: neither vegetation nor
-/// deck) stands on (the module doc), from `delaunay`, their Delaunay triangulation in
-/// x–y ([`delaunay_xy`](crate::io::delaunay::delaunay_xy), long triangles kept).
-pub fn free_standing(positions: &[Vec3], delaunay: &[[u32; 3]]) -> Vec<Standing> {
+/// deck; the first `own` the piece's own, the rest its halo) stands on (the module
+/// doc), from `delaunay`, their Delaunay triangulation in x–y
+/// ([`delaunay_xy`](crate::io::delaunay::delaunay_xy), long triangles kept).
+pub fn free_standing(positions: &[Vec3], delaunay: &[[u32; 3]], own: usize) -> Vec<Standing> {
     let kept = short_or_kept(positions, delaunay, |_, _| false);
     let triangles: Vec<[u32; 3]> = (delaunay.iter().zip(&kept))
         .filter_map(|(t, &k)| k.then_some(*t))
@@ -126,6 +135,13 @@ pub fn free_standing(positions: &[Vec3], delaunay: &[[u32; 3]]) -> Vec<Standing>
     for &(a, b) in &border {
         tops[top(a)].bordered = true;
         tops[top(b)].bordered = true;
+    }
+    let mut sides = vec![[false; 2]; tops.len()];
+    for k in 0..positions.len() {
+        sides[top(k as u32)][(k >= own) as usize] = true;
+    }
+    for (top, sides) in tops.iter_mut().zip(sides) {
+        top.bordered |= sides == [true, true];
     }
     for t in &triangles {
         let [a, b, c] = t.map(top);
@@ -369,7 +385,7 @@ mod tests {
     }
 
     fn standings(points: &[Vec3]) -> Vec<Standing> {
-        free_standing(points, &delaunay_xy(points))
+        free_standing(points, &delaunay_xy(points), points.len())
     }
 
     fn free_of(points: &[Vec3]) -> Vec<bool> {
@@ -438,5 +454,23 @@ mod tests {
         let (mut points, _) = scene(2.6, false);
         points.retain(|p| p.y >= 6.0);
         assert!(free_of(&points).iter().all(|&f| !f));
+    }
+
+    #[test]
+    fn a_roof_across_a_piece_s_border_does_not_stand_free() {
+        // The free roof, its samples north of y = 6 m a piece's halo (listed last): it
+        // is joined, as the ground is.
+        let (points, roof) = scene(2.6, false);
+        let (own, halo): (Vec<Vec3>, Vec<Vec3>) = points.iter().partition(|p| p.y < 6.0);
+        let split = [&own[..], &halo[..]].concat();
+        let standing = free_standing(&split, &delaunay_xy(&split), own.len());
+        assert!(standing.iter().all(|&s| s == Standing::Joined));
+        // Wholly own or wholly halo, it stands free as before.
+        for own in [split.len(), 0] {
+            let standing = free_standing(&split, &delaunay_xy(&split), own);
+            for (p, s) in split.iter().zip(standing) {
+                assert_eq!(s == Standing::Slab, roof(*p), "at {p}");
+            }
+        }
     }
 }

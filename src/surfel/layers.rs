@@ -61,7 +61,8 @@ pub fn labels(g: &Geometry, own: usize, scale: f32) -> (Vec<Layer>, FirstTin) {
         .collect();
     let positions = pick(&g.positions, &ground);
     let delaunay = delaunay_xy(&positions);
-    let standing = free_roofs::free_standing(&positions, &delaunay);
+    let ground_own = ground.partition_point(|&i| (i as usize) < own);
+    let standing = free_roofs::free_standing(&positions, &delaunay, ground_own);
     drop(positions);
     for (&i, standing) in ground.iter().zip(standing) {
         match standing {
