@@ -208,10 +208,10 @@ fn covering_radius(frame: &RingFrame, (shape, minor): (&Shape, DVec3), corners: 
 /// `points` are the model's positions, `scale` its unit scale; the vertex normals are
 /// read from `surfels`, and returned. Only the first `kept` surfels are shaped: the
 /// rest (an out-of-core job's halo, dropped after its surfels are made) lend their
-/// positions and normals to their neighbours' rings. Each vertex gathers over its own corners
-/// (`rings`, of `triangles`), in parallel, and everything it needs is its own: one pass,
-/// with no per-vertex temporaries (on the Lucy-size model they were 1.7 GB of fresh
-/// pages to fault in).
+/// positions and normals to their neighbours' rings. Each vertex gathers over its own
+/// corners (`rings`, of `triangles`), in parallel, and everything it needs is its own:
+/// one pass, with no per-vertex temporaries (on the Lucy-size model they were 1.7 GB
+/// of fresh pages to fault in).
 pub fn ring_shapes(
     points: &[Vec3],
     scale: f32,
