@@ -10,8 +10,9 @@
 //! ```
 //!
 //! A job holds at most N points (from the memory budget, [`Options::job_points`]) and
-//! the points of its halo: those of the neighbouring cells within a quarter cell of
-//! its border, so that the neighbourhoods of its points near the border see past it.
+//! the points of its halo: those of the neighbouring cells within 16 spacings of the
+//! sampling of its border ([`halo`]), so that the neighbourhoods of its points near the
+//! border see past it.
 //! A mesh's jobs get, instead of a halo by distance, exactly the triangles and
 //! vertices their surfels read (the two-ring around their border, [`mesh_spill`]),
 //! and the model's orientation is voted over every job before any is built
@@ -35,6 +36,7 @@
 
 pub(crate) mod assemble;
 pub mod checksums;
+pub mod halo;
 pub(crate) mod job;
 pub mod join;
 pub mod manifest;

@@ -9,6 +9,7 @@ use std::sync::OnceLock;
 use glam::IVec3;
 
 use super::checksums::{self, FileEntry};
+use super::halo::Halo;
 use super::job::Model;
 use super::manifest::{self, BuildParams, Input, JobEntry, Manifest};
 use super::spill::{self, GRID, Grid, JobBox, Scan, Split};
@@ -66,6 +67,7 @@ pub fn plan(
     let mut boxes = Vec::new();
     let whole = (IVec3::ZERO, IVec3::splat(GRID));
     let split = spill::split(&counts, &grid, whole, options.job_points, &mut boxes);
+    let halo = Halo::of(&counts, grid.cell);
     drop(counts);
     let (split, boxes) = drop_empty(split, boxes);
     let model = model_of(&stream, &scan);
@@ -73,6 +75,7 @@ pub fn plan(
         stream: &stream,
         scan: &scan,
         grid: &grid,
+        halo: &halo,
         jobs: &boxes,
         model: &model,
         dir,
@@ -165,6 +168,8 @@ struct Spilling<'a> {
     stream: &'a ModelStream,
     scan: &'a Scan,
     grid: &'a Grid,
+    /// A cloud's halo (a mesh's jobs read the rings their surfels need instead).
+    halo: &'a Halo,
     jobs: &'a [JobBox],
     model: &'a Model,
     dir: &'a Path,
@@ -206,6 +211,7 @@ impl Spilling<'_> {
         let files = spill::spill(
             self.stream,
             (self.grid, &table, self.jobs.len()),
+            self.halo,
             (self.scan, self.model.origin),
             self.dir,
             self.buffer(2),

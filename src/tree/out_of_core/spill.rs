@@ -2,8 +2,8 @@
 //! colours fit 8 bits), a count of the points per cell of a grid over the bounds, the
 //! split of the grid into jobs of at most a given number of points (a k-d tree over
 //! the cells, halving the count at each split), and the spill of every point to its
-//! job's file, and to its neighbours' halo files when it lies within a margin of their
-//! cells.
+//! job's file, and to its neighbours' halo files when it lies within their halo
+//! ([`super::halo`]).
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -13,6 +13,7 @@ use arrayvec::ArrayVec;
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, IVec3};
 
+use super::halo::Halo;
 use crate::io::format::PointBatch;
 use crate::io::formats::ModelStream;
 use crate::io::model::ModelError;
@@ -21,9 +22,6 @@ use crate::io::{Bounds, PointAttributes};
 
 /// Cells per axis of the counting grid.
 pub const GRID: i32 = 64;
-/// A point near a cell's face (within this fraction of the cell) is also spilled to the
-/// job across that face, as part of its halo.
-pub const HALO: f64 = 0.25;
 
 /// A point as the spill files hold it (20 bytes): position relative to the origin,
 /// colour and LiDAR attributes.
@@ -308,33 +306,63 @@ pub struct JobFiles<'a> {
     pub normals: Option<(&'a Path, &'a Path)>,
 }
 
-/// The jobs other than `job` whose cells lie within [`HALO`] of `p`'s cell faces.
-/// Called for every point of the spill, so nothing here allocates: three small
-/// vectors a point had made the 200 M-point city tile's spill take 32.7–33.8 s, against
-/// 19.5 s so (2 cores, 2026-11-30, alternated).
-fn halo_jobs(table: &[u32], (cell, frac): (IVec3, DVec3), job: u32, out: &mut Vec<u32>) {
-    out.clear();
-    let steps = |k: usize| {
-        let mut s = ArrayVec::<i32, 3>::new();
-        s.push(0);
-        if frac[k] < HALO && cell[k] > 0 {
-            s.push(-1);
-        }
-        if frac[k] > 1.0 - HALO && cell[k] < GRID - 1 {
-            s.push(1);
-        }
-        s
-    };
-    let (sx, sy, sz) = (steps(0), steps(1), steps(2));
-    if sx.len() + sy.len() + sz.len() == 3 {
-        return;
+/// Where a point's halo copies go: the cell table ([`cell_jobs`]), the cells whose 26
+/// neighbours all belong to their own job or to none (a point there is in no other
+/// job's halo), and the halo's reach.
+struct HaloRoute<'a> {
+    table: &'a [u32],
+    inner: Vec<bool>,
+    halo: &'a Halo,
+}
+
+impl<'a> HaloRoute<'a> {
+    fn new(table: &'a [u32], halo: &'a Halo) -> Self {
+        let last = GRID - 1;
+        let inner = (0..table.len())
+            .map(|i| {
+                let i = i as i32;
+                let cell = IVec3::new(i % GRID, (i / GRID) % GRID, i / (GRID * GRID));
+                let near = (-1..=1).flat_map(|z| {
+                    (-1..=1).flat_map(move |y| (-1..=1).map(move |x| IVec3::new(x, y, z)))
+                });
+                let job = table[i as usize];
+                near.map(|d| cell + d)
+                    .filter(|c| c.min_element() >= 0 && c.max_element() <= last)
+                    .all(|c| matches!(table[Grid::index(c)], j if j == job || j == NO_CELL_JOB))
+            })
+            .collect();
+        HaloRoute { table, inner, halo }
     }
-    for &dz in &sz {
-        for &dy in &sy {
-            for &dx in &sx {
-                let other = table[Grid::index(cell + IVec3::new(dx, dy, dz))];
-                if other != job && other != NO_CELL_JOB && !out.contains(&other) {
-                    out.push(other);
+
+    /// The jobs other than `job` whose cells lie within the halo's reach of the point
+    /// at `frac` (0–1 per axis) within `cell`, in `out`. Called for every point of the
+    /// spill, so nothing here allocates: three small vectors a point had made the
+    /// 200 M-point city tile's spill take 32.7–33.8 s, against 19.5 s so (2 cores,
+    /// 2026-11-30, alternated).
+    fn jobs(&self, (cell, frac): (IVec3, DVec3), job: u32, out: &mut Vec<u32>) {
+        out.clear();
+        if self.inner[Grid::index(cell)] {
+            return;
+        }
+        let steps = |k: usize| {
+            let mut s = ArrayVec::<i32, 3>::new();
+            s.push(0);
+            if frac[k] < self.halo.reach[k] && cell[k] > 0 {
+                s.push(-1);
+            }
+            if frac[k] > 1.0 - self.halo.reach[k] && cell[k] < GRID - 1 {
+                s.push(1);
+            }
+            s
+        };
+        let (sx, sy, sz) = (steps(0), steps(1), steps(2));
+        for &dz in &sz {
+            for &dy in &sy {
+                for &dx in &sx {
+                    let other = self.table[Grid::index(cell + IVec3::new(dx, dy, dz))];
+                    if other != job && other != NO_CELL_JOB && !out.contains(&other) {
+                        out.push(other);
+                    }
                 }
             }
         }
@@ -342,10 +370,11 @@ fn halo_jobs(table: &[u32], (cell, frac): (IVec3, DVec3), job: u32, out: &mut Ve
 }
 
 /// The last pass: every kept point to its job's file and to the halo files of the jobs
-/// around it, relative to `origin`, colours as 8-bit RGBA.
+/// within `reach` of it, relative to `origin`, colours as 8-bit RGBA.
 pub fn spill(
     input: &ModelStream,
     (grid, table, job_count): (&Grid, &[u32], usize),
+    reach: &Halo,
     (scan, origin): (&Scan, DVec3),
     dir: &Path,
     buffer_bytes: usize,
@@ -366,6 +395,7 @@ pub fn spill(
         Some((o, h)) => (open(o)?, open(h)?),
         None => (Vec::new(), Vec::new()),
     };
+    let route = HaloRoute::new(table, reach);
     let mut failed: Option<std::io::Error> = None;
     let mut around = Vec::new();
     input.points_ahead(|b| {
@@ -394,7 +424,7 @@ pub fn spill(
                 r
             };
             let mut result = write(&mut own, &mut own_n, job);
-            halo_jobs(table, located, job, &mut around);
+            route.jobs(located, job, &mut around);
             for &other in &around {
                 result = result.and(write(&mut halo, &mut halo_n, other));
             }
@@ -478,11 +508,15 @@ mod tests {
     #[test]
     fn a_point_takes_the_jobs_across_the_faces_it_lies_near() {
         let table = cell_per_job();
+        let halo = Halo {
+            reach: DVec3::splat(0.25),
+        };
+        let route = HaloRoute::new(&table, &halo);
         let cell = IVec3::new(5, 6, 7);
         let job = table[Grid::index(cell)];
         let jobs_near = |frac: DVec3| {
             let mut out = Vec::new();
-            halo_jobs(&table, (cell, frac), job, &mut out);
+            route.jobs((cell, frac), job, &mut out);
             out.sort_unstable();
             out
         };
@@ -503,7 +537,26 @@ mod tests {
         assert_eq!(near_corner, corner);
         // At the grid's edge there is no cell beyond.
         let mut out = Vec::new();
-        halo_jobs(&table, (IVec3::ZERO, DVec3::splat(0.1)), 0, &mut out);
+        route.jobs((IVec3::ZERO, DVec3::splat(0.1)), 0, &mut out);
         assert!(out.is_empty(), "{out:?}");
+    }
+
+    #[test]
+    fn a_point_away_from_other_jobs_goes_to_no_halo() {
+        // Two jobs, split at x = 32, reaching a whole cell: a point near the faces of a
+        // cell whose neighbours are all its job's goes to no halo; one in the column
+        // beside the split goes to the other job's, from any y or z.
+        let table: Vec<u32> = (0..(GRID * GRID * GRID))
+            .map(|i| u32::from(i % GRID >= 32))
+            .collect();
+        let halo = Halo { reach: DVec3::ONE };
+        let route = HaloRoute::new(&table, &halo);
+        let mut out = Vec::new();
+        route.jobs((IVec3::new(10, 5, 7), DVec3::splat(0.01)), 0, &mut out);
+        assert!(out.is_empty(), "{out:?}");
+        route.jobs((IVec3::new(31, 63, 0), DVec3::splat(0.01)), 0, &mut out);
+        assert_eq!(out, [1]);
+        route.jobs((IVec3::new(32, 20, 40), DVec3::splat(0.99)), 1, &mut out);
+        assert_eq!(out, [0]);
     }
 }
