@@ -36,7 +36,7 @@
 
 pub(crate) mod assemble;
 pub mod checksums;
-pub mod halo;
+pub(crate) mod halo;
 pub(crate) mod job;
 pub mod join;
 pub mod manifest;

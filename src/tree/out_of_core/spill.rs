@@ -190,6 +190,12 @@ impl Grid {
     pub fn index(i: IVec3) -> usize {
         ((i.z * GRID + i.y) * GRID + i.x) as usize
     }
+
+    /// The cell whose [`Grid::index`] is `index`.
+    pub fn cell(index: usize) -> IVec3 {
+        let i = index as i32;
+        IVec3::new(i % GRID, (i / GRID) % GRID, i / (GRID * GRID))
+    }
 }
 
 /// A job of the split: a box of cells (`lo..hi` per axis) and its points.
@@ -320,12 +326,11 @@ impl<'a> HaloRoute<'a> {
         let last = GRID - 1;
         let inner = (0..table.len())
             .map(|i| {
-                let i = i as i32;
-                let cell = IVec3::new(i % GRID, (i / GRID) % GRID, i / (GRID * GRID));
+                let cell = Grid::cell(i);
                 let near = (-1..=1).flat_map(|z| {
                     (-1..=1).flat_map(move |y| (-1..=1).map(move |x| IVec3::new(x, y, z)))
                 });
-                let job = table[i as usize];
+                let job = table[i];
                 near.map(|d| cell + d)
                     .filter(|c| c.min_element() >= 0 && c.max_element() <= last)
                     .all(|c| matches!(table[Grid::index(c)], j if j == job || j == NO_CELL_JOB))
@@ -513,6 +518,7 @@ mod tests {
         };
         let route = HaloRoute::new(&table, &halo);
         let cell = IVec3::new(5, 6, 7);
+        assert_eq!(Grid::cell(Grid::index(cell)), cell);
         let job = table[Grid::index(cell)];
         let jobs_near = |frac: DVec3| {
             let mut out = Vec::new();
