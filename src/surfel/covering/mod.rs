@@ -48,7 +48,7 @@
 mod axes;
 
 use arrayvec::ArrayVec;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use super::{distance_rank, rank_parts};
 use axes::{Columns, Mapped, Metric, axes};
@@ -210,7 +210,7 @@ fn surrounding_distance(lanes: &Mapped) -> Result<f32, (f32, f32)> {
     let mut gaps = Gaps::default();
     let closing = ranked.iter().find_map(|r| {
         let (d2, xy) = lanes.get(rank_parts(*r).1);
-        gaps.add(d2, xy)
+        gaps.add(d2, angle(xy.x, xy.y))
     });
     if let Some(r) = closing {
         return Ok(r);
@@ -228,15 +228,14 @@ struct Gaps {
 }
 
 impl Gaps {
-    /// Takes the neighbour at squared metric distance `d2` and plane coordinates `xy`;
-    /// its distance when the neighbours taken leave no gap wider than [`MAX_GAP`].
-    fn add(&mut self, d2: f32, xy: Vec2) -> Option<f32> {
-        let angle = angle(xy);
+    /// Takes the neighbour at squared metric distance `d2` and `angle` ([`angle`]); its
+    /// distance when the neighbours taken leave no gap wider than [`MAX_GAP`].
+    fn add(&mut self, d2: f32, angle: f32) -> Option<f32> {
         let at = self.angles.partition_point(|a| *a < angle);
         self.angles.insert(at, angle);
         let inside = self
             .widest
-            .is_none_or(|(start, width)| (angle - start).rem_euclid(std::f32::consts::TAU) < width);
+            .is_none_or(|(start, width)| turn(angle - start) < width);
         if self.angles.len() >= 3 && inside {
             let gap = widest_gap(&self.angles);
             if gap.1 <= MAX_GAP {
@@ -253,28 +252,31 @@ impl Gaps {
     }
 }
 
-/// The angle of `xy` from the x axis, in [−π, π], within 10⁻⁵ rad (a polynomial for
-/// atan on [0, 1], Abramowitz and Stegun 4.4.49 form): libm's `atan2` was a third of the
-/// covering's time.
-fn angle(xy: Vec2) -> f32 {
+/// `x` in [0, 2π) for `x` in [−2π, 2π]: x mod 2π, as `rem_euclid` gives it (a libm
+/// call, whose branches were mispredicted), up to the sign of a zero.
+fn turn(x: f32) -> f32 {
+    use std::f32::consts::TAU;
+    let below = f32::from(u8::from(x < 0.0));
+    let past = f32::from(u8::from(x >= TAU));
+    x + TAU * (below - past)
+}
+
+/// The angle of (`x`, `y`) from the x axis, in [−π, π], within 10⁻⁵ rad (a polynomial
+/// for atan on [0, 1], Abramowitz and Stegun 4.4.49 form): libm's `atan2` was a third of
+/// the covering's time. Without branches: the directions' signs are a coin's toss.
+pub(super) fn angle(x: f32, y: f32) -> f32 {
     use std::f32::consts::{FRAC_PI_2, PI};
-    let (ax, ay) = (xy.x.abs(), xy.y.abs());
+    let (ax, ay) = (x.abs(), y.abs());
     let (lo, hi) = (ax.min(ay), ax.max(ay));
-    if hi == 0.0 {
-        return 0.0;
-    }
-    let t = lo / hi;
+    let t = if hi == 0.0 { 0.0 } else { lo / hi };
     let t2 = t * t;
-    let mut a = t
+    let a = t
         * (0.999_866
             + t2 * (-0.330_299_5 + t2 * (0.180_141 + t2 * (-0.085_133 + t2 * 0.020_835_1))));
-    if ay > ax {
-        a = FRAC_PI_2 - a;
-    }
-    if xy.x < 0.0 {
-        a = PI - a;
-    }
-    if xy.y < 0.0 { -a } else { a }
+    let a = if ay > ax { FRAC_PI_2 - a } else { a };
+    let a = if x < 0.0 { PI - a } else { a };
+    // The sign bit flipped where y < 0: −a.
+    f32::from_bits(a.to_bits() ^ (u32::from(y < 0.0) << 31))
 }
 
 /// The widest gap between consecutive sorted angles (radians in (−π, π]), around the
@@ -539,19 +541,29 @@ mod tests {
     }
 
     #[test]
+    fn a_turn_is_the_euclidean_remainder() {
+        use std::f32::consts::{PI, TAU};
+        for k in -2000..=2000 {
+            let x = k as f32 * (TAU / 2000.0);
+            assert_eq!(turn(x), x.rem_euclid(TAU) + 0.0, "{x}");
+        }
+        for x in [-TAU, -PI - PI, PI - -PI, TAU, -0.0, 1e-9, -1e-9] {
+            assert_eq!(turn(x), x.rem_euclid(TAU) + 0.0, "{x}");
+        }
+    }
+
+    #[test]
     fn the_fast_angle_is_atan2() {
         for k in 0..3600 {
             let t = k as f32 * 0.1f32.to_radians() - std::f32::consts::PI;
             for r in [1e-3f32, 1.0, 7e4] {
-                let xy = Vec2::new(t.cos(), t.sin()) * r;
-                assert!(
-                    (angle(xy) - xy.y.atan2(xy.x)).abs() < 2e-5,
-                    "{t}: {}",
-                    angle(xy)
-                );
+                let xy = glam::Vec2::new(t.cos(), t.sin()) * r;
+                let a = angle(xy.x, xy.y);
+                assert!((a - xy.y.atan2(xy.x)).abs() < 2e-5, "{t}: {a}");
             }
         }
-        assert_eq!(angle(Vec2::ZERO), 0.0);
+        assert_eq!(angle(0.0, 0.0), 0.0);
+        assert_eq!(angle(-0.0, -0.0), 0.0);
     }
 
     #[test]
