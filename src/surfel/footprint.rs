@@ -45,11 +45,8 @@ pub fn angular_pitch(sensor: Vec3, pairs: impl Iterator<Item = (Vec3, Vec3)>) ->
         .map(|(p, q)| 2.0 * (0.5 * direction(p).distance(direction(q))).min(1.0).asin())
         .collect();
     angles.sort_unstable_by(f32::total_cmp);
-    let at = |q: f32| {
-        angles
-            .get((q * (angles.len() - 1) as f32).round() as usize)
-            .copied()
-    };
+    let last = angles.len().checked_sub(1)?;
+    let at = |q: f32| angles.get((q * last as f32).round() as usize).copied();
     let (low, median, high) = (at(0.1)?, at(0.5)?, at(0.9)?);
     (high <= MAX_PITCH_SPREAD * low).then_some(median)
 }
