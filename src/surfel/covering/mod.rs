@@ -327,7 +327,11 @@ fn median_spacing(points: &[Vec3]) -> f32 {
     // Positive finite distances order as their bits do; the infinite ones (no other
     // member, or past the last) count as the largest integer.
     let nearest: [u32; SPACING_MEMBERS] = std::array::from_fn(|lane| {
-        let d = if second[lane].is_finite() { second[lane] } else { least[lane] };
+        let d = if second[lane].is_finite() {
+            second[lane]
+        } else {
+            least[lane]
+        };
         if d.is_finite() { d.to_bits() } else { u32::MAX }
     });
     let count = nearest.iter().filter(|&&d| d != u32::MAX).count();
@@ -468,7 +472,11 @@ mod tests {
         for seed in 1..200u32 {
             let values: [u32; SPACING_MEMBERS] = std::array::from_fn(|k| {
                 let padded = seed % 2 == 1 && k as u32 % 4 == seed % 4;
-                if padded { u32::MAX } else { (k as u32 * seed + seed / 3) % 5 * 7 }
+                if padded {
+                    u32::MAX
+                } else {
+                    (k as u32 * seed + seed / 3) % 5 * 7
+                }
             });
             let mut sorted = values;
             sorted.sort_unstable();
