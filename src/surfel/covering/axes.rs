@@ -132,18 +132,18 @@ impl Mapped {
         let mut lanes = [[u32::MAX; LANES]; SECTORS];
         for g in 0..groups {
             for (s, least) in lanes.iter_mut().enumerate() {
-                for l in 0..LANES {
-                    least[l] = least[l].min(key(g, l, s));
+                for (l, least) in least.iter_mut().enumerate() {
+                    *least = (*least).min(key(g, l, s));
                 }
             }
         }
         let least = lanes.map(|lanes| lanes.into_iter().fold(u32::MAX, u32::min));
         let mut lanes = [[u32::MAX; LANES]; SECTORS];
-        for g in 0..groups {
+        for (g, index) in LANE_INDEX.iter().enumerate().take(groups) {
             for (s, first) in lanes.iter_mut().enumerate() {
-                for l in 0..LANES {
+                for (l, first) in first.iter_mut().enumerate() {
                     let other = u32::from(key(g, l, s) != least[s]).wrapping_neg();
-                    first[l] = first[l].min(LANE_INDEX[g][l] | other);
+                    *first = (*first).min(index[l] | other);
                 }
             }
         }

@@ -480,8 +480,8 @@ mod tests {
             });
             let mut sorted = values;
             sorted.sort_unstable();
-            for at in 0..SPACING_MEMBERS {
-                assert_eq!(ranked(&values, at), sorted[at], "{values:?} at {at}");
+            for (at, &value) in sorted.iter().enumerate() {
+                assert_eq!(ranked(&values, at), value, "{values:?} at {at}");
             }
         }
     }
