@@ -264,7 +264,7 @@ fn turn(x: f32) -> f32 {
 /// The angle of (`x`, `y`) from the x axis, in [−π, π], within 10⁻⁵ rad (a polynomial
 /// for atan on [0, 1], Abramowitz and Stegun 4.4.49 form): libm's `atan2` was a third of
 /// the covering's time. Without branches: the directions' signs are a coin's toss.
-pub(super) fn angle(x: f32, y: f32) -> f32 {
+fn angle(x: f32, y: f32) -> f32 {
     use std::f32::consts::{FRAC_PI_2, PI};
     let (ax, ay) = (x.abs(), y.abs());
     let (lo, hi) = (ax.min(ay), ax.max(ay));
