@@ -338,14 +338,14 @@ fn median_spacing(points: &[Vec3]) -> f32 {
     if count == 0 {
         return 0.0;
     }
-    f32::from_bits(ranked(&nearest, count / 2)).sqrt()
+    f32::from_bits(at_place(&nearest, count / 2)).sqrt()
 }
 
 /// The value at place `at` of `values` sorted ascending, without a branch on them (a
 /// sort of 16 was mispredicted about 14 times a point): each value's place is the
 /// count of those less than it, and of its equals, those before it; exactly one value
 /// has each place.
-fn ranked(values: &[u32; SPACING_MEMBERS], at: usize) -> u32 {
+fn at_place(values: &[u32; SPACING_MEMBERS], at: usize) -> u32 {
     let mut place = [0u32; SPACING_MEMBERS];
     for (j, &v) in values.iter().enumerate() {
         for (i, place) in place.iter_mut().enumerate() {
@@ -481,7 +481,7 @@ mod tests {
             let mut sorted = values;
             sorted.sort_unstable();
             for (at, &value) in sorted.iter().enumerate() {
-                assert_eq!(ranked(&values, at), value, "{values:?} at {at}");
+                assert_eq!(at_place(&values, at), value, "{values:?} at {at}");
             }
         }
     }
