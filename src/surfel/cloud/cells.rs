@@ -51,6 +51,12 @@ fn key_of(c: Cell) -> u64 {
     ((c[0] as u64) << 42) | ((c[1] as u64) << 21) | c[2] as u64
 }
 
+/// The cell of a key ([`key_of`]).
+fn cell_of_key(key: u64) -> Cell {
+    let axis = |shift: u32| ((key >> shift) & (CELLS_PER_AXIS as u64 - 1)) as i64;
+    [axis(42), axis(21), axis(0)]
+}
+
 fn inside(c: Cell) -> bool {
     c.iter().all(|i| (0..CELLS_PER_AXIS).contains(i))
 }
@@ -157,8 +163,10 @@ impl Cells {
         k: NonZero<usize>,
         queries: &[Vec3],
     ) -> Vec<ArrayVec<u32, K>> {
-        let mut order: Vec<(Cell, u32)> = (queries.iter().enumerate())
-            .map(|(q, p)| (self.cell_of(*p), q as u32))
+        // By cell key, then query: the cells in their keys' order, each cell's queries
+        // together (those outside the grid last, under the largest key).
+        let mut order: Vec<(u64, u32)> = (queries.iter().enumerate())
+            .map(|(q, p)| (self.key(*p), q as u32))
             .collect();
         order.sort_unstable();
         let mut found = vec![ArrayVec::new(); queries.len()];
@@ -168,7 +176,14 @@ impl Cells {
         let mut fingers = [0; 9];
         let mut last: Option<f32> = None;
         for group in order.chunk_by(|a, b| a.0 == b.0) {
-            let cell = group[0].0;
+            if group[0].0 == u64::MAX {
+                for &(_, q) in group {
+                    let p = queries[q as usize];
+                    found[q as usize] = self.searched(coords, k, (p, self.cell_of(p)), &mut far);
+                }
+                continue;
+            }
+            let cell = cell_of_key(group[0].0);
             candidates.gather(coords, self.block((cell, 1), &mut fingers));
             for &(_, q) in group {
                 let p = queries[q as usize];
@@ -272,12 +287,10 @@ struct Candidates {
     y: Vec<f32>,
     z: Vec<f32>,
     id: Vec<u32>,
-    /// Every candidate's rank, in gathered order.
-    ranked: Vec<u64>,
-    /// The ranks within a query's first bound (and garbage past their count).
-    kept: Vec<u64>,
-    /// Those within its second bound (the same).
-    refined: Vec<u64>,
+    /// Every candidate's squared distance to the query, in gathered order.
+    squared: Vec<f32>,
+    /// The ranks of those within the query's bound (and garbage past their count).
+    chosen: Vec<u64>,
 }
 
 impl Candidates {
@@ -296,37 +309,33 @@ impl Candidates {
     }
 
     /// The `k` nearest candidates to `p` as (squared distance, id), nearest first; of
-    /// equally distant ones, the first gathered. Each candidate is ranked by one
-    /// integer ([`distance_rank`]: its squared distance's bits above its place among
-    /// the candidates), all of them in one pass of lane-wise arithmetic.
+    /// equally distant ones, the first gathered. Every squared distance is found in one
+    /// pass of lane-wise arithmetic; those within a bound are ranked by one integer
+    /// ([`distance_rank`]: the distance's bits above the candidate's place) and sorted.
     ///
-    /// Only the ranks within a bound are selected from when at least `k` are: then
-    /// the k least ranks of the whole block lie within it. The bound is any guess: it
-    /// changes only how many are selected from. The first is `within` ([`NEXT_REACH`]
-    /// times the last query's k-th distance); from the m candidates within it, the
-    /// second ([`narrower`]) expects a little more than k, few enough to be sorted
-    /// whole. When a bound holds fewer than k, the last one that held k is kept, and
-    /// when none does, all candidates are selected from.
+    /// The bound holds at least `k` candidates, so the k least ranks of the whole block
+    /// lie within it; it changes only how many are sorted. The first guess is `within`
+    /// ([`NEXT_REACH`] times the last query's k-th distance); from the m candidates
+    /// within it, the second ([`narrower`]) expects a little more than k. Each guess is
+    /// only counted, lane-wise; the last one that holds k is taken, or none (every
+    /// candidate) when neither does.
     fn nearest(&mut self, p: Vec3, k: usize, within: f32) -> ArrayVec<(f32, u32), K> {
         let squared = (self.x.iter().zip(&self.y).zip(&self.z))
             .map(|((x, y), z)| (x - p.x).powi(2) + (y - p.y).powi(2) + (z - p.z).powi(2));
-        self.ranked.clear();
-        (self.ranked).extend(squared.enumerate().map(|(i, d)| distance_rank(d, i)));
+        self.squared.clear();
+        self.squared.extend(squared);
         let bound = within * within;
-        let kept = compact(&self.ranked, bound, &mut self.kept);
+        let kept = count_within(&self.squared, bound);
         let narrow = narrower(bound, kept, k);
-        let refined = if kept >= k && narrow < bound {
-            compact(&self.kept[..kept], narrow, &mut self.refined)
+        let threshold = if kept < k {
+            f32::INFINITY
+        } else if narrow < bound && count_within(&self.squared, narrow) >= k {
+            narrow
         } else {
-            0
+            bound
         };
-        let chosen = if refined >= k {
-            &mut self.refined[..refined]
-        } else if kept >= k {
-            &mut self.kept[..kept]
-        } else {
-            &mut self.ranked[..]
-        };
+        let count = compact(&self.squared, threshold, &mut self.chosen);
+        let chosen = &mut self.chosen[..count];
         let k = k.min(chosen.len());
         if chosen.len() > SORTED_WHOLE {
             chosen.select_nth_unstable(k);
@@ -346,18 +355,21 @@ impl Candidates {
 /// least first: the standard library sorts up to 32 integers by a sorting network.
 const SORTED_WHOLE: usize = 32;
 
-/// Writes the `ranks` whose squared distance is at most `bound` to the start of `out`
-/// (resized to hold them all), in their order; returns how many. Without a branch:
-/// every rank is written, and the next one overwrites it unless it lies within the
-/// bound. A squared distance d lies within it when d's rank is at most the bound's
-/// with the largest index, as d's bits are at most the bound's.
-fn compact(ranks: &[u64], bound: f32, out: &mut Vec<u64>) -> usize {
-    let bound = distance_rank(bound, u32::MAX as usize);
-    out.resize(ranks.len(), 0);
+/// How many of the `squared` distances are at most `bound`.
+fn count_within(squared: &[f32], bound: f32) -> usize {
+    squared.iter().map(|&d| usize::from(d <= bound)).sum()
+}
+
+/// Writes the ranks ([`distance_rank`]) of the `squared` distances that are at most
+/// `bound` (all of them when it is infinite) to the start of `out` (resized to hold
+/// them all), in their order; returns how many. Without a branch: every rank is
+/// written, and the next one overwrites it unless it lies within the bound.
+fn compact(squared: &[f32], bound: f32, out: &mut Vec<u64>) -> usize {
+    out.resize(squared.len(), 0);
     let mut kept = 0;
-    for &rank in ranks {
-        out[kept] = rank;
-        kept += (rank <= bound) as usize;
+    for (i, &d) in squared.iter().enumerate() {
+        out[kept] = distance_rank(d, i);
+        kept += usize::from(d <= bound);
     }
     kept
 }
@@ -420,3 +432,22 @@ fn cell_edge(coords: &[[f32; 3]]) -> f64 {
 /// queries at the 75th percentile, 1.9 % at the 90th and 0.3 % at the 97th, where a
 /// block holds 136 candidates; its surfels took 24.2, 21.4 and 20.8 s.
 const EDGE_QUANTILE: usize = 97;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_key_names_its_cell() {
+        let last = CELLS_PER_AXIS - 1;
+        for cell in [
+            [0, 0, 0],
+            [1, 2, 3],
+            [last, 0, last],
+            [7, last, 0],
+            [last; 3],
+        ] {
+            assert_eq!(cell_of_key(key_of(cell)), cell);
+        }
+    }
+}

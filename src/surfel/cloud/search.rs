@@ -137,6 +137,9 @@ mod tests {
             Vec3::splat(3.0),
             Vec3::new(-5.0, 0.5, 0.0),
             Vec3::new(0.5, 0.5, 9.0),
+            // Beyond the grid's 2²¹ cells along an axis: searched apart.
+            Vec3::new(4.0e6, 0.5, 0.0),
+            Vec3::new(0.5, 3.0e6, 1.0),
         ]);
         let search = Search::new(&points, 1.0);
         let tree = ImmutableKdTree::<f32, 3>::new_from_slice(&search.coords).unwrap();
