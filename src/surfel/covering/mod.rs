@@ -197,23 +197,28 @@ pub fn samples_no_surface(offsets: &[Vec3]) -> bool {
 /// wider than [`MAX_GAP`]; when even all of them do, their widest gap (its start,
 /// counter-clockwise, and width; radians in the metric).
 ///
-/// Each offset is ranked by one integer ([`distance_rank`]) and all are sorted at
-/// once: the standard library sorts up to 32 integers by a sorting network and merges,
-/// with few branches to mispredict. Neither result depends on how equal distances are
-/// ordered: the ring closes at the same distance whichever of them comes first, and
-/// the widest gap is that of the same angles.
+/// The offsets are taken nearest first by their ranks ([`distance_rank`]): each next
+/// one is the least rank left, a lane-wise minimum over [`MAX_NEIGHBOURS`] ranks, its
+/// place then set to the largest. Most neighbourhoods close within their 4 to 6
+/// nearest (all of the Lucy-size cloud's that close; 88 % of the knot's vertices as a
+/// cloud), where a sort of all of them was mispredicted about 7 times a point. Neither
+/// result depends on how equal distances are ordered: the ring closes at the same
+/// distance whichever of them comes first, and the widest gap is that of the same
+/// angles.
 fn surrounding_distance(lanes: &Mapped) -> Result<f32, (f32, f32)> {
-    let mut ranked: ArrayVec<u64, MAX_NEIGHBOURS> = (0..lanes.len)
-        .map(|k| distance_rank(lanes.get(k).0, k))
-        .collect();
-    ranked.sort_unstable();
+    let mut ranks = [u64::MAX; MAX_NEIGHBOURS];
+    for (k, rank) in ranks.iter_mut().enumerate().take(lanes.len) {
+        *rank = distance_rank(lanes.get(k).0, k);
+    }
     let mut gaps = Gaps::default();
-    let closing = ranked.iter().find_map(|r| {
-        let (d2, xy) = lanes.get(rank_parts(*r).1);
-        gaps.add(d2, angle(xy.x, xy.y))
-    });
-    if let Some(r) = closing {
-        return Ok(r);
+    for _ in 0..lanes.len {
+        let least = ranks.iter().fold(u64::MAX, |a, &b| a.min(b));
+        let k = rank_parts(least).1;
+        ranks[k] = u64::MAX;
+        let (d2, xy) = lanes.get(k);
+        if let Some(r) = gaps.add(d2, angle(xy.x, xy.y)) {
+            return Ok(r);
+        }
     }
     Err(gaps.widest())
 }
