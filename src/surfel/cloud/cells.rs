@@ -24,6 +24,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use super::K;
+use super::within::places_within;
 use crate::surfel::{distance_rank, rank_parts};
 
 /// Cells per axis: a cell index takes 21 bits, a key three of them.
@@ -289,7 +290,9 @@ struct Candidates {
     id: Vec<u32>,
     /// Every candidate's squared distance to the query, in gathered order.
     squared: Vec<f32>,
-    /// The ranks of those within the query's bound (and garbage past their count).
+    /// The places of those within the query's bound (and garbage past their count).
+    places: Vec<u32>,
+    /// Their ranks, or every candidate's when no bound holds k.
     chosen: Vec<u64>,
 }
 
@@ -328,14 +331,21 @@ impl Candidates {
         let kept = count_within(&self.squared, bound);
         let narrow = narrower(bound, kept, k);
         let threshold = if kept < k {
-            f32::INFINITY
+            None
         } else if narrow < bound && count_within(&self.squared, narrow) >= k {
-            narrow
+            Some(narrow)
         } else {
-            bound
+            Some(bound)
         };
-        let count = compact(&self.squared, threshold, &mut self.chosen);
-        let chosen = &mut self.chosen[..count];
+        let rank = |i: usize| distance_rank(self.squared[i], i);
+        self.chosen.clear();
+        if let Some(threshold) = threshold {
+            let count = places_within(&self.squared, threshold, &mut self.places);
+            (self.chosen).extend(self.places[..count].iter().map(|&i| rank(i as usize)));
+        } else {
+            self.chosen.extend((0..self.squared.len()).map(rank));
+        }
+        let chosen = &mut self.chosen[..];
         let k = k.min(chosen.len());
         if chosen.len() > SORTED_WHOLE {
             chosen.select_nth_unstable(k);
@@ -358,20 +368,6 @@ const SORTED_WHOLE: usize = 32;
 /// How many of the `squared` distances are at most `bound`.
 fn count_within(squared: &[f32], bound: f32) -> usize {
     squared.iter().map(|&d| usize::from(d <= bound)).sum()
-}
-
-/// Writes the ranks ([`distance_rank`]) of the `squared` distances that are at most
-/// `bound` (all of them when it is infinite) to the start of `out` (resized to hold
-/// them all), in their order; returns how many. Without a branch: every rank is
-/// written, and the next one overwrites it unless it lies within the bound.
-fn compact(squared: &[f32], bound: f32, out: &mut Vec<u64>) -> usize {
-    out.resize(squared.len(), 0);
-    let mut kept = 0;
-    for (i, &d) in squared.iter().enumerate() {
-        out[kept] = distance_rank(d, i);
-        kept += usize::from(d <= bound);
-    }
-    kept
 }
 
 /// A squared distance within which about [`NARROWED`] times `k` of the `kept`

@@ -27,6 +27,7 @@ mod cells;
 mod orientation;
 mod search;
 mod smoothed;
+mod within;
 
 use arrayvec::ArrayVec;
 use glam::Vec3;
