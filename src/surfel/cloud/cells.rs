@@ -323,10 +323,11 @@ impl Candidates {
     /// only counted, lane-wise; the last one that holds k is taken, or none (every
     /// candidate) when neither does.
     fn nearest(&mut self, p: Vec3, k: usize, within: f32) -> ArrayVec<(f32, u32), K> {
-        let squared = (self.x.iter().zip(&self.y).zip(&self.z))
-            .map(|((x, y), z)| (x - p.x).powi(2) + (y - p.y).powi(2) + (z - p.z).powi(2));
-        self.squared.clear();
-        self.squared.extend(squared);
+        self.squared.resize(self.x.len(), 0.0);
+        let columns = self.x.iter().zip(&self.y).zip(&self.z);
+        for (d, ((x, y), z)) in self.squared.iter_mut().zip(columns) {
+            *d = (x - p.x).powi(2) + (y - p.y).powi(2) + (z - p.z).powi(2);
+        }
         let bound = within * within;
         let kept = count_within(&self.squared, bound);
         let narrow = narrower(bound, kept, k);
@@ -367,7 +368,9 @@ const SORTED_WHOLE: usize = 32;
 
 /// How many of the `squared` distances are at most `bound`.
 fn count_within(squared: &[f32], bound: f32) -> usize {
-    squared.iter().map(|&d| usize::from(d <= bound)).sum()
+    // Counted in u32 lanes, eight to a vector (a block holds far fewer than 2³²).
+    let count: u32 = squared.iter().map(|&d| u32::from(d <= bound)).sum();
+    count as usize
 }
 
 /// A squared distance within which about [`NARROWED`] times `k` of the `kept`
