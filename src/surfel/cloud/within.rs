@@ -99,8 +99,8 @@ mod tests {
 
     #[test]
     fn the_places_within_are_those_a_filter_keeps() {
-        // Every length up to a few groups past 16, bounds that keep none, some and all,
-        // equal values at the bound, a NaN and an infinity.
+        // Every length from none to five groups (whole groups and remainders), bounds
+        // that keep none, some and all, values equal to the bound, a NaN and an infinity.
         let mut state = 0x2545_f491_u32;
         let mut next = || {
             state ^= state << 13;
