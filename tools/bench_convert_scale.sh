@@ -9,7 +9,8 @@
 # memory from GNU time. Where Open3D is installed (pip install open3d), its normal
 # estimation alone on the Lucy-size cloud (tools/open3d_normals.py, k = 24) runs in the
 # same rotation: the neighbour search and fit that any splat needs, without the rest of
-# a conversion. Prints a Markdown table.
+# a conversion; so, where SciPy is installed (pip install scipy), does its k-d tree's
+# search for the same 24 nearest (tools/kdtree_neighbours.py). Prints a Markdown table.
 #
 #   tools/bench_convert_scale.sh          # RUNS=3 on Lucy, 1 on the 200 M tile
 #   POINTS=50000000 tools/bench_convert_scale.sh   # a smaller tile
@@ -35,6 +36,8 @@ city=data/large/city_$((points / 1000000))m.las
 logs=$(mktemp -d)
 open3d=0
 python3 -c "import open3d" 2> /dev/null && open3d=1
+scipy=0
+python3 -c "import scipy.spatial" 2> /dev/null && scipy=1
 # One timed run: "seconds peak_kib" appended to $logs/$1.
 timed() {
   local name=$1; shift
@@ -52,6 +55,10 @@ for i in $(seq "$runs"); do
   if [ "$open3d" = 1 ]; then
     timed open3d_cloud python3 tools/open3d_normals.py "$cloud" 24
     cat "$logs/open3d_cloud.out" >> "$logs/open3d_cloud.fits"
+  fi
+  if [ "$scipy" = 1 ]; then
+    timed kdtree_cloud python3 tools/kdtree_neighbours.py "$cloud" 24
+    cat "$logs/kdtree_cloud.out" >> "$logs/kdtree_cloud.fits"
   fi
 done
 cp "$logs/spt_cloud.out" "$logs/spt_cloud.stages"
@@ -87,10 +94,13 @@ for label, n, a, b in [("Lucy-size mesh, in memory", 14028800, "spt_lucy", "potr
     cell = lambda r: "–" if r is None else f"{r[0]:.1f} s, {r[1]:.2f} GiB ({n / r[0] / 1e6:.2f} M points/s, {r[2]} run{'s' if r[2] > 1 else ''})"
     ratio = lambda k: "–" if p is None else f"{s[k] / p[k]:.2f}"
     print(f"| {label} | {n:,} | {cell(s)} | {cell(p)} | {ratio(0)} | {ratio(1)} |")
-peer, potree = runs("open3d_cloud"), runs("potree_cloud")
-if peer is not None:
-    fits = [l.strip() for l in open(os.path.join(logs, "open3d_cloud.fits")) if l.strip()]
-    print(f"\nOpen3D's normals alone on the Lucy-size cloud (read and fit, median of {peer[2]}): {peer[0]:.1f} s, {peer[1]:.2f} GiB,")
+potree = runs("potree_cloud")
+for name, what in [("open3d_cloud", "Open3D's normals alone on the Lucy-size cloud (read and fit"), ("kdtree_cloud", "SciPy's k-d tree alone on the Lucy-size cloud (read, build and search for the 24 nearest")]:
+    peer = runs(name)
+    if peer is None:
+        continue
+    fits = [l.strip() for l in open(os.path.join(logs, name + ".fits")) if l.strip()]
+    print(f"\n{what}, median of {peer[2]}): {peer[0]:.1f} s, {peer[1]:.2f} GiB,")
     print(f"{peer[0] / potree[0]:.2f}× PotreeConverter's whole conversion of the same points. Its runs: " + "; ".join(fits) + ".")
 for name, what in [("spt_lucy_ooc", "the Lucy-size mesh out of core (last run)"), ("spt_cloud", "the Lucy-size cloud (last run)"), ("spt_city", "the city tile")]:
     path = os.path.join(logs, name + ".stages")
