@@ -12,61 +12,24 @@ import sys
 import time
 
 import numpy as np
+from numpy.lib.recfunctions import structured_to_unstructured
 from scipy.spatial import cKDTree
 
-
-# PLY scalar types as NumPy's little-endian ones.
-TYPES = {
-    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
-    "short": "<i2", "int16": "<i2", "ushort": "<u2", "uint16": "<u2",
-    "int": "<i4", "int32": "<i4", "uint": "<u4", "uint32": "<u4",
-    "float": "<f4", "float32": "<f4", "double": "<f8", "float64": "<f8",
-}
+from ply_vertices import vertex_rows
 
 
 def vertices(path):
-    """The finite x, y, z of the vertices of a binary little-endian PLY whose first
-    element is its vertices, with scalar properties only; and the count of all of them."""
-    with open(path, "rb") as f:
-        data = f.read()
-    end = data.find(b"end_header\n")
-    if end < 0:
-        sys.exit(f"{path}: no PLY header")
-    header = data[:end].decode("ascii", "replace").splitlines()
-    if "format binary_little_endian 1.0" not in header:
-        sys.exit(f"{path}: not a binary little-endian PLY")
-    first = next((k for k, line in enumerate(header) if line.split()[:1] == ["element"]), None)
-    words = header[first].split() if first is not None else []
-    if words[:2] != ["element", "vertex"] or len(words) != 3 or not words[2].isdigit():
-        sys.exit(f"{path}: the first element is not its vertices")
-    count, fields = int(words[2]), []
-    for line in header[first + 1:]:
-        words = line.split()
-        if words[:1] != ["property"]:
-            break
-        if words[1] not in TYPES:
-            sys.exit(f"{path}: vertex property {' '.join(words[1:])} is not a scalar")
-        fields.append((words[2], TYPES[words[1]]))
-    names = [name for name, _ in fields]
-    if not all(axis in names for axis in "xyz"):
+    """The finite x, y, z of the vertices of the PLY at `path`
+    (tools/ply_vertices.py), and the count of all of them."""
+    rows = vertex_rows(path)
+    if not all(axis in rows.dtype.names for axis in "xyz"):
         sys.exit(f"{path}: vertices without x, y and z")
-    rows = np.dtype(fields)
-    start = end + len(b"end_header\n")
-    if len(data) - start < rows.itemsize * count:
-        sys.exit(f"{path}: {count} vertices announced, fewer stored")
-    offsets = [rows.fields[axis][1] for axis in "xyz"]
-    if [rows.fields[axis][0] for axis in "xyz"] == [np.dtype("<f4")] * 3 and offsets == [
-        offsets[0] + 4 * k for k in range(3)
-    ]:
-        # Consecutive floats: a view of the file's rows, as the tree takes them.
-        points = np.ndarray((count, 3), "<f4", data, start + offsets[0], (rows.itemsize, 4))
-    else:
-        table = np.frombuffer(data, dtype=rows, count=count, offset=start)
-        points = np.column_stack([table[axis].astype(np.float64) for axis in "xyz"])
+    # A view of the rows where x, y and z are floats one after another.
+    points = structured_to_unstructured(rows[["x", "y", "z"]])
     # As spt's loaders do, a vertex with a coordinate that is not finite is dropped.
     if np.isfinite(points).all():
-        return points, count
-    return points[np.isfinite(points).all(axis=1)], count
+        return points, len(rows)
+    return points[np.isfinite(points).all(axis=1)], len(rows)
 
 
 def main():

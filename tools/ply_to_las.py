@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Writes the vertices of a binary little-endian PLY (float x, y, z, optional uchar
-red, green, blue) as a LAS file, in slices of 4 M points (laspy), so that a peer that
+"""Writes the vertices of a binary little-endian PLY (x, y, z, optional uchar red,
+green, blue; tools/ply_vertices.py reads them) as a LAS file, in slices of 4 M points (laspy), so that a peer that
 reads only LAS (PotreeConverter) converts the same points as `spt convert` of the PLY.
 
     python3 tools/ply_to_las.py data/large/lucy_knot.ply data/large/lucy_knot.las
@@ -10,35 +10,11 @@ import sys
 import laspy
 import numpy as np
 
-TYPES = {"float": "<f4", "float32": "<f4", "double": "<f8", "float64": "<f8",
-         "uchar": "u1", "uint8": "u1"}
-
-
-def vertex_layout(f):
-    """(count, numpy dtype of a vertex row, byte offset of the first row)."""
-    count, fields, in_vertex = 0, [], False
-    while True:
-        line = f.readline().decode("ascii").strip()
-        if line.startswith("format") and "binary_little_endian" not in line:
-            sys.exit(f"{f.name}: only binary_little_endian PLY is read here")
-        if line.startswith("element"):
-            _, name, n = line.split()
-            in_vertex = name == "vertex"
-            if in_vertex:
-                count = int(n)
-        elif line.startswith("property") and in_vertex:
-            parts = line.split()
-            if parts[1] == "list":
-                sys.exit(f"{f.name}: a list property in the vertex element")
-            fields.append((parts[2], TYPES[parts[1]]))
-        elif line == "end_header":
-            return count, np.dtype(fields), f.tell()
-
+from ply_vertices import vertex_rows
 
 def main(src, dst):
-    with open(src, "rb") as f:
-        count, dtype, at = vertex_layout(f)
-    rows = np.memmap(src, dtype=dtype, mode="r", offset=at, shape=(count,))
+    rows = vertex_rows(src)
+    count, dtype = len(rows), rows.dtype
     colors = all(c in dtype.names for c in ("red", "green", "blue"))
     header = laspy.LasHeader(point_format=2 if colors else 0, version="1.2")
     lo = np.array([rows[k].min() for k in "xyz"], dtype=np.float64)
