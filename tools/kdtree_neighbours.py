@@ -27,9 +27,10 @@ def vertices(path):
     # A view of the rows where x, y and z are floats one after another.
     points = structured_to_unstructured(rows[["x", "y", "z"]])
     # As spt's loaders do, a vertex with a coordinate that is not finite is dropped.
-    if np.isfinite(points).all():
+    finite = np.isfinite(points)
+    if finite.all():
         return points, len(rows)
-    return points[np.isfinite(points).all(axis=1)], len(rows)
+    return points[finite.all(axis=1)], len(rows)
 
 
 def main():
@@ -44,7 +45,8 @@ def main():
     tree.query(points, k=k, workers=-1)
     queried = time.perf_counter()
     print(
-        f"{len(points)} points ({count - len(points)} not finite, dropped), read {read - start:.2f} s, tree {built - read:.2f} s, "
+        f"{len(points)} points ({count - len(points)} not finite, dropped), "
+        f"read {read - start:.2f} s, tree {built - read:.2f} s, "
         f"{k} nearest of every point {queried - built:.2f} s"
     )
 
