@@ -8,6 +8,7 @@
 pub mod atomic;
 pub(crate) mod bounds;
 pub mod delaunay;
+pub(crate) mod direct;
 pub mod format;
 pub mod formats;
 pub(crate) mod geometry;

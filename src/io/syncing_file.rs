@@ -5,10 +5,7 @@
 //! ([`start_writeback`]). From the end of that first step (a write that would cross it
 //! is cut there) it goes direct (Linux `O_DIRECT`): the bytes are gathered into an
 //! aligned chunk of [`DIRECT_CHUNK`] bytes and each full chunk goes straight to the
-//! device. The kernel then neither copies the file into fresh page-cache pages (which
-//! it must zero first) nor writes them back later: on a 2-core AMD EPYC machine (ext4
-//! on a virtual disk, 2026-11-24) `dd` of 1.2 GB took 2.7–3.9 s with its fsync, 2.3–3.4
-//! s of it kernel time, and 0.9–1.3 s direct, 0.2 s of it kernel time.
+//! device, past the page cache ([`super::direct`], where the figures are).
 //!
 //! The invariant of direct mode: the file holds exactly `direct_base` bytes, a multiple
 //! of [`ALIGN`], and `chunk` holds the bytes that follow. Any seek or flush leaves
@@ -19,13 +16,11 @@
 use std::fs::File;
 use std::io::{ErrorKind, Seek, SeekFrom, Write};
 
+use super::direct::{ALIGN, AlignedBuffer, set_direct};
+
 /// Bytes written between two starts of the writeback, and the size a file reaches
 /// before it goes direct.
 pub(crate) const WRITEBACK_STEP: u64 = 32 << 20;
-
-/// Alignment of direct writes' offsets, lengths and memory: the largest logical block
-/// size of common devices.
-const ALIGN: usize = 4096;
 
 /// Bytes gathered per direct write.
 const DIRECT_CHUNK: usize = 8 << 20;
@@ -37,7 +32,7 @@ enum Mode {
     /// Straight to the device (see the module's invariant).
     Direct {
         direct_base: u64,
-        chunk: AlignedChunk,
+        chunk: AlignedBuffer,
     },
 }
 
@@ -98,7 +93,7 @@ impl SyncingFile {
         if set_direct(&self.file, true) {
             self.mode = Mode::Direct {
                 direct_base: self.position,
-                chunk: AlignedChunk::new(DIRECT_CHUNK),
+                chunk: AlignedBuffer::new(DIRECT_CHUNK),
             };
         }
         None
@@ -165,53 +160,6 @@ impl Seek for SyncingFile {
     }
 }
 
-/// A buffer whose bytes start at an [`ALIGN`]-aligned address, as direct writes need:
-/// a vector one alignment longer than the chunk, used from its first aligned byte.
-struct AlignedChunk {
-    storage: Vec<u8>,
-    start: usize,
-    capacity: usize,
-    len: usize,
-}
-
-impl AlignedChunk {
-    fn new(capacity: usize) -> Self {
-        let storage = vec![0u8; capacity + ALIGN];
-        let start = storage.as_ptr().align_offset(ALIGN);
-        Self {
-            storage,
-            start,
-            capacity,
-            len: 0,
-        }
-    }
-
-    fn bytes(&self) -> &[u8] {
-        &self.storage[self.start..self.start + self.len]
-    }
-
-    /// Appends as much of `buf` as fits; returns how much.
-    fn append(&mut self, buf: &[u8]) -> usize {
-        let n = buf.len().min(self.capacity - self.len);
-        let at = self.start + self.len;
-        self.storage[at..at + n].copy_from_slice(&buf[..n]);
-        self.len += n;
-        n
-    }
-
-    fn is_full(&self) -> bool {
-        self.len == self.capacity
-    }
-
-    /// Zeroes up to the next multiple of [`ALIGN`] and counts those bytes in.
-    fn pad_to_align(&mut self) {
-        let padded = self.len.next_multiple_of(ALIGN);
-        let at = self.start;
-        self.storage[at + self.len..at + padded].fill(0);
-        self.len = padded;
-    }
-}
-
 /// Writes `bytes` at `offset`, the file's end. A direct write the file system refuses
 /// (`EINVAL`, which std reports as `InvalidInput`) is made again buffered.
 fn write_at_end(file: &mut File, offset: u64, bytes: &[u8]) -> std::io::Result<()> {
@@ -222,34 +170,6 @@ fn write_at_end(file: &mut File, offset: u64, bytes: &[u8]) -> std::io::Result<(
             file.write_all(bytes)
         }
         other => other,
-    }
-}
-
-/// Sets or clears `O_DIRECT` on `file`; returns whether it took (always false off
-/// Linux).
-fn set_direct(file: &File, direct: bool) -> bool {
-    #[cfg(target_os = "linux")]
-    {
-        use std::os::fd::AsRawFd;
-        let fd = file.as_raw_fd();
-        // SAFETY: plain system calls on an open descriptor; they read no memory of ours.
-        unsafe {
-            let flags = libc::fcntl(fd, libc::F_GETFL);
-            if flags < 0 {
-                return false;
-            }
-            let flags = if direct {
-                flags | libc::O_DIRECT
-            } else {
-                flags & !libc::O_DIRECT
-            };
-            libc::fcntl(fd, libc::F_SETFL, flags) == 0
-        }
-    }
-    #[cfg(not(target_os = "linux"))]
-    {
-        let _ = (file, direct);
-        false
     }
 }
 
@@ -285,14 +205,8 @@ fn start_writeback(file: &File, range: std::ops::Range<u64>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::direct::tests::pattern;
     use std::io::Read;
-
-    /// Bytes no two nearby offsets share, so a byte out of place shows.
-    fn pattern(n: usize) -> Vec<u8> {
-        (0..n as u64)
-            .map(|i| (i.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56) as u8)
-            .collect()
-    }
 
     /// Writes `bytes` in pieces of `piece` bytes, patches `patch` at `patch_at` after a
     /// seek back, and reads the file back.

@@ -15,7 +15,7 @@ use glam::Vec3;
 
 use super::job::{Model, Part};
 use super::order::Layout;
-use super::read_ahead::{PartFile, Span, stream};
+use super::read_ahead::{PartFile, Span, read_buffer, stream};
 use super::spill::Split;
 use crate::io::PointAttributes;
 use crate::surfel::NormalsTurned;
@@ -191,12 +191,14 @@ fn part_offsets(n: u64, has_attributes: bool) -> (u64, u64, u64, u64) {
 
 /// Each part's chunk table as its part file holds it.
 fn part_tables(parts: &[Part], has_attributes: bool) -> std::io::Result<Vec<Vec<Chunk>>> {
+    let mut buffer = read_buffer();
     parts
         .iter()
         .map(|p| {
             let at = part_offsets(p.nodes, has_attributes).3;
             let mut table = vec![<Chunk as bytemuck::Zeroable>::zeroed(); p.chunks as usize];
-            PartFile::open(p)?.read_at(Some(at), bytemuck::cast_slice_mut(&mut table))?;
+            let into = bytemuck::cast_slice_mut(&mut table);
+            PartFile::open(p)?.read_at((Some(at), 0), into, &mut buffer)?;
             Ok(table)
         })
         .collect()

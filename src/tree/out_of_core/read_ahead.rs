@@ -4,25 +4,36 @@
 //! once and written once), and one thread doing each in turn waited on each in turn.
 //! The bytes written and their order are the same either way.
 
-use std::fs::File;
-use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 
 use bytemuck::Pod;
 
 use super::job::Part;
+use crate::io::direct::{DirectFile, ReadBuffer};
 use crate::tree::spt_write::Hashed;
 
 /// Bytes per slab, at most.
 const SLAB_BYTES: usize = 8 << 20;
 /// Slabs in flight: the one being written, and the ones read ahead of it.
 const SLABS: usize = 3;
+/// Bytes per read of a part file, at most. The parts are read past the page cache
+/// ([`crate::io::direct`]), whose copies took a core's whole time in the 200 M-point
+/// tile's join; a read takes the spans that follow it in the same file along (most
+/// pieces of the join's layout are a part's consecutive chunks, of 40 kB in the median).
+const READ_BYTES: usize = 4 << 20;
+
+/// The buffer that part files' reads go through.
+pub fn read_buffer() -> ReadBuffer {
+    ReadBuffer::new(READ_BYTES)
+}
 
 /// An open part file and its path, which its read errors name.
 pub struct PartFile<'a> {
-    file: File,
+    file: DirectFile,
     path: &'a Path,
+    /// Where the last read ended.
+    position: u64,
 }
 
 impl<'a> PartFile<'a> {
@@ -31,17 +42,28 @@ impl<'a> PartFile<'a> {
     }
 
     fn at(path: &'a Path) -> std::io::Result<PartFile<'a>> {
-        let file = File::open(path).map_err(|e| cannot_read(path, e))?;
-        Ok(PartFile { file, path })
+        let file = DirectFile::open(path).map_err(|e| cannot_read(path, e))?;
+        Ok(PartFile {
+            file,
+            path,
+            position: 0,
+        })
     }
 
     /// Fills `into` from byte `at` on, or from where the last read ended when `at` is
-    /// `None`.
-    pub fn read_at(&mut self, at: Option<u64>, into: &mut [u8]) -> std::io::Result<()> {
-        if let Some(at) = at {
-            (self.file.seek(SeekFrom::Start(at))).map_err(|e| cannot_read(self.path, e))?;
-        }
-        (self.file.read_exact(into)).map_err(|e| cannot_read(self.path, e))
+    /// `None`, through `buffer` ([`read_buffer`]), reading up to `ahead` bytes past it
+    /// for the reads that follow.
+    pub fn read_at(
+        &mut self,
+        (at, ahead): (Option<u64>, u64),
+        into: &mut [u8],
+        buffer: &mut ReadBuffer,
+    ) -> std::io::Result<()> {
+        let at = at.unwrap_or(self.position);
+        let read = self.file.read_exact_at((at, ahead), into, buffer);
+        read.map_err(|e| cannot_read(self.path, e))?;
+        self.position = at + into.len() as u64;
+        Ok(())
     }
 }
 
@@ -141,6 +163,8 @@ fn read_slabs<T: Pod>(
     let Some(mut slab) = take() else {
         return;
     };
+    let mut buffer = read_buffer();
+    let following = following_bytes::<T>(spans);
     for (k, span) in spans.iter().enumerate() {
         let mut done = 0;
         while done < span.count {
@@ -154,7 +178,9 @@ fn read_slabs<T: Pod>(
             let n = (per_slab - slab.used).min(span.count - done);
             let into = &mut slab.values[slab.used..slab.used + n];
             let from = (done == 0).then_some(span.at);
-            if let Err(e) = files[span.part].read_at(from, bytemuck::cast_slice_mut(into)) {
+            let ahead = ((span.count - done - n) * size_of::<T>()) as u64 + following[k];
+            let into = bytemuck::cast_slice_mut(into);
+            if let Err(e) = files[span.part].read_at((from, ahead), into, &mut buffer) {
                 let _ = full.send(Err(e));
                 return;
             }
@@ -166,6 +192,20 @@ fn read_slabs<T: Pod>(
     if slab.used > 0 {
         let _ = full.send(Ok(slab));
     }
+}
+
+/// For each span, the bytes of the spans after it that continue it in its file: the
+/// run of spans each of which starts where the one before ends.
+fn following_bytes<T>(spans: &[Span]) -> Vec<u64> {
+    let bytes = |s: &Span| (s.count * size_of::<T>()) as u64;
+    let mut following = vec![0u64; spans.len()];
+    for k in (1..spans.len()).rev() {
+        let (before, span) = (&spans[k - 1], &spans[k]);
+        if span.part == before.part && span.at == before.at + bytes(before) {
+            following[k - 1] = bytes(span) + following[k];
+        }
+    }
+    following
 }
 
 #[cfg(test)]
