@@ -1,10 +1,11 @@
 //! Large files moved past the page cache (Linux `O_DIRECT`): the device reads into and
 //! writes from memory of ours, aligned to [`ALIGN`], and the kernel neither copies the
 //! bytes through its page cache nor zeroes fresh cache pages for them. On a 2-core AMD
-//! EPYC machine (ext4 on a virtual disk, 2026-12-01), `dd` read 4.2 GB of a file not
-//! in the cache at 405 MB/s buffered, one core busy in the kernel's copy, and 2.1 GB at
-//! 1.4 GB/s direct; it wrote 1.2 GB in 2.7–3.9 s with its fsync buffered and 0.9–1.3 s
-//! direct (2026-11-24).
+//! EPYC machine (ext4 on a virtual disk, 2026-12-01), `dd` read files not in the cache
+//! at 0.8–1.4 GB/s direct, and buffered at anywhere from 405 MB/s (4.2 GB after a
+//! conversion, one core busy in the kernel's copy) to 2.1 GB/s (a 0.3 GB part just
+//! after the cache was dropped); it wrote 1.2 GB in 2.7–3.9 s with its fsync buffered
+//! and 0.9–1.3 s direct (2026-11-24).
 //!
 //! Writes: [`super::syncing_file`]. Reads: [`DirectFile::read_exact_at`], through a
 //! [`ReadBuffer`] that the caller keeps for all its reads: a direct read waits on the
@@ -166,7 +167,7 @@ impl DirectFile {
         buffer.from = (u64::MAX, 0);
         self.file.seek(SeekFrom::Start(start))?;
         let got = loop {
-            match self.file.read(&mut buffer.aligned.room(room)[..room]) {
+            match self.file.read(buffer.aligned.room(room)) {
                 Err(e) if e.kind() == ErrorKind::Interrupted => continue,
                 Err(e) if e.kind() == ErrorKind::InvalidInput => {
                     self.direct = !set_direct(&self.file, false);
