@@ -38,27 +38,9 @@ pub fn write_atomically_seekable<T>(
     path: &Path,
     write: impl FnOnce(&mut AtomicWriter) -> std::io::Result<T>,
 ) -> std::io::Result<T> {
-    write_through(path, SyncingFile::new, write)
-}
-
-/// Like [`write_atomically`], its bytes kept in the page cache ([`SyncingFile::cached`])
-/// for a read that follows soon.
-pub fn write_atomically_cached<T>(
-    path: &Path,
-    write: impl FnOnce(&mut dyn Write) -> std::io::Result<T>,
-) -> std::io::Result<T> {
-    write_through(path, SyncingFile::cached, |w| write(w))
-}
-
-/// The atomic write of `path` through the temporary file that `syncing` makes.
-fn write_through<T>(
-    path: &Path,
-    syncing: fn(File) -> SyncingFile,
-    write: impl FnOnce(&mut AtomicWriter) -> std::io::Result<T>,
-) -> std::io::Result<T> {
     let tmp = temporary_path(path);
     let result = (|| {
-        let file = syncing(File::create(&tmp)?);
+        let file = SyncingFile::new(File::create(&tmp)?);
         let mut w = BufWriter::with_capacity(1 << 20, file);
         let value = write(&mut w)?;
         let file = w.into_inner().map_err(|e| e.into_error())?.finish()?;

@@ -11,10 +11,8 @@
 //! [`ReadBuffer`] that the caller keeps for all its reads: a direct read waits on the
 //! device, so a caller that knows the bytes it reads next in the same file asks for
 //! them too, and finds them in the buffer (a page-cache read has the kernel's
-//! read-ahead). Bytes the page cache already holds (an out-of-core part that this
-//! process just wrote, kept there: [`super::syncing_file::SyncingFile::cached`]) are
-//! copied from it instead, without waiting on the device. A file system that refuses
-//! `O_DIRECT` (tmpfs) gets the same reads buffered.
+//! read-ahead). A file system that refuses `O_DIRECT` (tmpfs) gets the same reads
+//! buffered.
 
 use std::fs::File;
 use std::io::{ErrorKind, Read, Seek, SeekFrom};
@@ -108,16 +106,10 @@ impl ReadBuffer {
     }
 }
 
-/// A file opened for reads straight from the device where its file system allows,
-/// except for the bytes that the page cache already holds (a part the same process
-/// just wrote, [`super::syncing_file::SyncingFile::cached`]), which are copied from
-/// there ([`DirectFile::read_cached`]).
+/// A file opened for reads straight from the device where its file system allows.
 pub struct DirectFile {
     file: File,
     direct: bool,
-    /// The same file opened buffered, for reads of the page cache alone; `None` once
-    /// such a read failed other than for want of cached pages.
-    cached: Option<File>,
     /// Which file a [`ReadBuffer`] holds bytes of: unique in the process.
     id: u64,
 }
@@ -128,26 +120,15 @@ impl DirectFile {
         static OPENED: AtomicU64 = AtomicU64::new(0);
         let file = File::open(path)?;
         let direct = set_direct(&file, true);
-        let cached = if direct {
-            Some(File::open(path)?)
-        } else {
-            None
-        };
         let id = OPENED.fetch_add(1, Ordering::Relaxed);
-        Ok(DirectFile {
-            file,
-            direct,
-            cached,
-            id,
-        })
+        Ok(DirectFile { file, direct, id })
     }
 
     /// Fills `into` with the file's bytes from `at` on, and reads up to `ahead` bytes
     /// past them into `buffer` for the reads that follow. Direct, bytes that `buffer`
-    /// holds are copied out of it, then those that the page cache holds out of that;
-    /// each read of the device fills `buffer` from the aligned block around the next
-    /// byte wanted with as many blocks as the bytes wanted and `ahead` cover, at most
-    /// its capacity. A read the file system refuses (`EINVAL`) is made again
+    /// holds are copied out of it; each read fills it from the aligned block around the
+    /// next byte wanted with as many blocks as the bytes wanted and `ahead` cover, at
+    /// most its capacity. A read the file system refuses (`EINVAL`) is made again
     /// buffered, as are all later ones. A file that ends before `into` is full is an
     /// `UnexpectedEof` error.
     pub(crate) fn read_exact_at(
@@ -163,11 +144,6 @@ impl DirectFile {
                 let n = held.len().min(into.len() - done);
                 into[done..done + n].copy_from_slice(&held[..n]);
                 (at, done) = (at + n as u64, done + n);
-                continue;
-            }
-            let n = self.read_cached(at, &mut into[done..]);
-            if n > 0 {
-                (at, done) = (at + n as u64, done + n);
             } else if !self.direct || !self.fill(at, (into.len() - done) as u64 + ahead, buffer)? {
                 break;
             }
@@ -177,40 +153,6 @@ impl DirectFile {
             self.file.read_exact(&mut into[done..])?;
         }
         Ok(())
-    }
-
-    /// Copies into `into` the file's bytes from `at` on that the page cache holds, up
-    /// to the first it does not (Linux `preadv2` with `RWF_NOWAIT`, which never waits
-    /// on the device); returns how many (0 off Linux, or when it holds byte `at` not).
-    fn read_cached(&mut self, at: u64, into: &mut [u8]) -> usize {
-        let Some(cached) = &self.cached else {
-            return 0;
-        };
-        #[cfg(target_os = "linux")]
-        {
-            use std::os::fd::AsRawFd;
-            let iov = libc::iovec {
-                iov_base: into.as_mut_ptr().cast(),
-                iov_len: into.len(),
-            };
-            // SAFETY: one iovec over `into`, which the kernel writes at most its length
-            // of; `into` outlives the call.
-            let n =
-                unsafe { libc::preadv2(cached.as_raw_fd(), &iov, 1, at as i64, libc::RWF_NOWAIT) };
-            if n >= 0 {
-                return n as usize;
-            }
-            let e = std::io::Error::last_os_error().raw_os_error();
-            if !matches!(e, Some(libc::EAGAIN | libc::EINTR)) {
-                self.cached = None;
-            }
-            0
-        }
-        #[cfg(not(target_os = "linux"))]
-        {
-            let _ = (cached, at, into);
-            0
-        }
     }
 
     /// Reads `buffer` full from the aligned block that holds byte `at`, as far as
@@ -296,10 +238,6 @@ pub(crate) mod tests {
             .map(|(k, bytes)| {
                 let path = dir.path().join(format!("file{k}"));
                 std::fs::write(&path, bytes).unwrap();
-                // One read from the page cache, the other from the device.
-                if k == 1 {
-                    evict(&path);
-                }
                 DirectFile::open(&path).unwrap()
             })
             .collect();
@@ -334,43 +272,6 @@ pub(crate) mod tests {
                 );
             }
         }
-    }
-
-    /// Drops the file at `path` from the page cache (once its bytes are on the device),
-    /// where the system lets it. Whole: the kernel keeps a large folio that the advice
-    /// covers in part.
-    fn evict(path: &Path) {
-        let file = File::open(path).unwrap();
-        file.sync_all().unwrap();
-        #[cfg(target_os = "linux")]
-        {
-            use std::os::fd::AsRawFd;
-            // SAFETY: advice on an open descriptor; it reads no memory of ours.
-            unsafe { libc::posix_fadvise(file.as_raw_fd(), 0, 0, libc::POSIX_FADV_DONTNEED) };
-        }
-    }
-
-    #[test]
-    fn bytes_in_the_page_cache_are_read_from_it() {
-        // A file just written is in the page cache; once it is dropped from there, a
-        // read waits on the device (where the file system reads direct).
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("file");
-        let bytes = pattern(4 * ALIGN);
-        std::fs::write(&path, &bytes).unwrap();
-        let mut file = DirectFile::open(&path).unwrap();
-        if file.cached.is_none() {
-            return;
-        }
-        let mut into = vec![0u8; bytes.len()];
-        assert_eq!(file.read_cached(0, &mut into), bytes.len());
-        assert!(into == bytes);
-        evict(&path);
-        assert_eq!(file.read_cached(0, &mut into), 0, "a dropped file");
-        let mut buffer = ReadBuffer::new(ALIGN);
-        into.fill(0);
-        file.read_exact_at((0, 0), &mut into, &mut buffer).unwrap();
-        assert!(into == bytes);
     }
 
     #[test]

@@ -2,8 +2,7 @@
 //! sync has little left to do and a large file does not pass through the page cache.
 //!
 //! A file starts buffered, its writeback started every [`WRITEBACK_STEP`] bytes
-//! ([`start_writeback`]); a [`SyncingFile::cached`] one stays so. From the end of that
-//! first step (a write that would cross it
+//! ([`start_writeback`]). From the end of that first step (a write that would cross it
 //! is cut there) it goes direct (Linux `O_DIRECT`): the bytes are gathered into an
 //! aligned chunk of [`DIRECT_CHUNK`] bytes and each full chunk goes straight to the
 //! device, past the page cache ([`super::direct`], where the figures are).
@@ -48,22 +47,13 @@ pub struct SyncingFile {
 
 impl SyncingFile {
     pub fn new(file: File) -> Self {
-        Self::with_direct(file, cfg!(target_os = "linux"))
-    }
-
-    /// A file that stays buffered to its end (its writeback still started every step),
-    /// so that its pages stay in the page cache for a read that follows soon: an
-    /// out-of-core part, which the join reads back (`super::direct`).
-    pub fn cached(file: File) -> Self {
-        Self::with_direct(file, false)
-    }
-
-    fn with_direct(file: File, may_go_direct: bool) -> Self {
         Self {
             file,
             position: 0,
             written_back: 0,
-            mode: Mode::Buffered { may_go_direct },
+            mode: Mode::Buffered {
+                may_go_direct: cfg!(target_os = "linux"),
+            },
         }
     }
 

@@ -14,7 +14,7 @@ use xxhash_rust::xxh3::Xxh3;
 
 use super::checksums::FileEntry;
 use super::spill::{JobFiles, SpillPoint, read_records, read_spill};
-use crate::io::atomic::write_atomically_cached;
+use crate::io::atomic::write_atomically;
 use crate::io::up::UpAxis;
 use crate::io::{Bounds, Geometry, PointAttributes};
 use crate::surfel::shape::SplatShape;
@@ -213,7 +213,7 @@ fn write_part(
     ];
     let mut hash = Xxh3::new();
     let mut bytes = 0;
-    write_atomically_cached(path, |w| {
+    write_atomically(path, |w| {
         for s in sections {
             w.write_all(s)?;
             hash.update(s);
