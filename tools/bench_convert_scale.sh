@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Conversion at scale, against PotreeConverter 2 built from its public
 # source (tools/build_potree.sh): the Lucy-size mesh (14,028,800 vertices; spt reads the
-# PLY, Potree the same points as LAS, tools/ply_to_las.py), the same vertices as a cloud
+# PLY, Potree the same points as LAS, both written by gen_model), the same vertices as a cloud
 # (`gen_model --preset lucy --no-faces`, in memory) and a generated city tile of
 # 200 M points with colours (LAS, tools/gen_cloud.rs). Lucy is converted in memory (the
 # default where it fits) and out of core (--out-of-core --memory LUCY_MEMORY_MIB, 1024
@@ -15,6 +15,14 @@
 #   tools/bench_convert_scale.sh          # RUNS=3 on Lucy, 1 on the 200 M tile
 #   POINTS=50000000 tools/bench_convert_scale.sh   # a smaller tile
 #   CITY=0 tools/bench_convert_scale.sh   # Lucy only
+#   MESH=0 CITY=0 tools/bench_convert_scale.sh   # the Lucy-size cloud only
+#   TUNABLES="glibc.malloc.mmap_max=0 glibc.malloc.hugetlb=1" tools/bench_convert_scale.sh
+#                                         # the cloud also with each of these glibc
+#                                         # allocator settings, in the same rotation
+#   SPT=… GEN_MODEL=… GEN_CLOUD=… POTREE=… tools/bench_convert_scale.sh
+#                                         # prebuilt binaries: no cargo or cmake needed
+#                                         # (a machine without a toolchain; python3 for
+#                                         # the table)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 runs=${RUNS:-3}
@@ -22,34 +30,58 @@ points=${POINTS:-200000000}
 memory=${MEMORY_MIB:-4096}
 lucy_memory=${LUCY_MEMORY_MIB:-1024}
 city_wanted=${CITY:-1}
-cargo build --release --quiet --bin spt --example gen_model --example gen_cloud
-potree=$(tools/build_potree.sh)
+mesh_wanted=${MESH:-1}
+if [ -z "${SPT:-}" ]; then
+  cargo build --release --quiet --bin spt --example gen_model --example gen_cloud
+  SPT=./target/release/spt
+  GEN_MODEL=./target/release/examples/gen_model
+  GEN_CLOUD=./target/release/examples/gen_cloud
+fi
+potree=${POTREE:-$(tools/build_potree.sh)}
 mkdir -p data/large
 lucy=data/large/lucy_knot.ply
 cloud=data/large/lucy_cloud.ply
 city=data/large/city_$((points / 1000000))m.las
-[ -f "$lucy" ] || ./target/release/examples/gen_model --preset lucy
-[ -f "${lucy%.ply}.las" ] || python3 tools/ply_to_las.py "$lucy" "${lucy%.ply}.las"
-[ -f "$cloud" ] || ./target/release/examples/gen_model --preset lucy --no-faces -o "$cloud"
-[ -f "${cloud%.ply}.las" ] || python3 tools/ply_to_las.py "$cloud" "${cloud%.ply}.las"
-[ "$city_wanted" = 0 ] || [ -f "$city" ] || ./target/release/examples/gen_cloud --points "$points" --out "$city"
+# Each PLY with the same points as LAS, made together.
+if [ "$mesh_wanted" != 0 ] && [ ! -f "${lucy%.ply}.las" ]; then
+  "$GEN_MODEL" --preset lucy -o "$lucy" --las "${lucy%.ply}.las" > /dev/null
+fi
+[ -f "${cloud%.ply}.las" ] || "$GEN_MODEL" --preset lucy --no-faces -o "$cloud" --las "${cloud%.ply}.las" > /dev/null
+[ "$city_wanted" = 0 ] || [ -f "$city" ] || "$GEN_CLOUD" --points "$points" --out "$city"
 logs=$(mktemp -d)
 open3d=0
 python3 -c "import open3d" 2> /dev/null && open3d=1
 scipy=0
 python3 -c "import scipy.spatial" 2> /dev/null && scipy=1
 # One timed run: "seconds peak_kib" appended to $logs/$1.
+# GNU time where installed, else the same two figures from Python's rusage.
 timed() {
   local name=$1; shift
-  /usr/bin/time -f "%e %M" -o "$logs/time" "$@" > "$logs/$name.out" 2>&1
+  if [ -x /usr/bin/time ]; then
+    /usr/bin/time -f "%e %M" -o "$logs/time" "$@" > "$logs/$name.out" 2>&1
+  else
+    python3 -c '
+import resource, subprocess, sys, time
+start = time.monotonic()
+subprocess.run(sys.argv[2:], stdout=open(sys.argv[1], "w"), stderr=subprocess.STDOUT, check=True)
+peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+print(f"{time.monotonic() - start:.2f} {peak}")' "$logs/$name.out" "$@" > "$logs/time"
+  fi
   cat "$logs/time" >> "$logs/$name"
 }
 for i in $(seq "$runs"); do
-  timed spt_lucy ./target/release/spt convert "$lucy" "$logs/lucy.spt"
-  timed spt_lucy_ooc ./target/release/spt convert "$lucy" "$logs/lucy.spt" --out-of-core --memory "$lucy_memory"
-  rm -rf "$logs/potree_out"
-  timed potree_lucy "$potree" "${lucy%.ply}.las" -o "$logs/potree_out"
-  timed spt_cloud ./target/release/spt convert "$cloud" "$logs/lucy.spt"
+  if [ "$mesh_wanted" != 0 ]; then
+    timed spt_lucy "$SPT" convert "$lucy" "$logs/lucy.spt"
+    timed spt_lucy_ooc "$SPT" convert "$lucy" "$logs/lucy.spt" --out-of-core --memory "$lucy_memory"
+    rm -rf "$logs/potree_out"
+    timed potree_lucy "$potree" "${lucy%.ply}.las" -o "$logs/potree_out"
+  fi
+  timed spt_cloud "$SPT" convert "$cloud" "$logs/lucy.spt"
+  k=0
+  for tunables in ${TUNABLES:-}; do
+    timed "spt_cloud_tunables_$k" env GLIBC_TUNABLES="$tunables" "$SPT" convert "$cloud" "$logs/lucy.spt"
+    k=$((k + 1))
+  done
   rm -rf "$logs/potree_out"
   timed potree_cloud "$potree" "${cloud%.ply}.las" -o "$logs/potree_out"
   if [ "$open3d" = 1 ]; then
@@ -62,9 +94,9 @@ for i in $(seq "$runs"); do
   fi
 done
 cp "$logs/spt_cloud.out" "$logs/spt_cloud.stages"
-cp "$logs/spt_lucy_ooc.out" "$logs/spt_lucy_ooc.stages"
+[ "$mesh_wanted" = 0 ] || cp "$logs/spt_lucy_ooc.out" "$logs/spt_lucy_ooc.stages"
 if [ "$city_wanted" != 0 ]; then
-timed spt_city ./target/release/spt convert "$city" "$logs/city.spt" --memory "$memory"
+timed spt_city "$SPT" convert "$city" "$logs/city.spt" --memory "$memory"
 cp "$logs/spt_city.out" "$logs/spt_city.stages"
 rm -f "$logs/city.spt"
 if [ -z "${SKIP_POTREE_CITY:-}" ]; then
@@ -73,9 +105,10 @@ if [ -z "${SKIP_POTREE_CITY:-}" ]; then
 fi
 fi
 rm -rf "$logs/potree_out" "$logs/lucy.spt"
-python3 - "$logs" "$points" "$lucy_memory" <<'PY'
+python3 - "$logs" "$points" "$lucy_memory" ${TUNABLES:-} <<'PY'
 import sys, os, statistics, datetime
 logs, points, lucy_memory = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+tunables = sys.argv[4:]
 def runs(name):
     path = os.path.join(logs, name)
     if not os.path.exists(path):
@@ -87,7 +120,10 @@ mem = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
 print(f"{datetime.date.today()}, {os.cpu_count()} cores ({cpu}), {mem:.0f} GiB; median wall time, largest peak memory.\n")
 print("| model | points | spt convert | PotreeConverter 2 | time spt / Potree | memory spt / Potree |")
 print("| --- | --- | --- | --- | --- | --- |")
-for label, n, a, b in [("Lucy-size mesh, in memory", 14028800, "spt_lucy", "potree_lucy"), (f"Lucy-size mesh, out of core (--memory {lucy_memory})", 14028800, "spt_lucy_ooc", "potree_lucy"), ("Lucy-size cloud, in memory", 14028800, "spt_cloud", "potree_cloud"), (f"city tile", points, "spt_city", "potree_city")]:
+rows = [("Lucy-size mesh, in memory", 14028800, "spt_lucy", "potree_lucy"), (f"Lucy-size mesh, out of core (--memory {lucy_memory})", 14028800, "spt_lucy_ooc", "potree_lucy"), ("Lucy-size cloud, in memory", 14028800, "spt_cloud", "potree_cloud")]
+rows += [(f"Lucy-size cloud, in memory, GLIBC_TUNABLES={t}", 14028800, f"spt_cloud_tunables_{k}", "potree_cloud") for k, t in enumerate(tunables)]
+rows.append((f"city tile", points, "spt_city", "potree_city"))
+for label, n, a, b in rows:
     s, p = runs(a), runs(b)
     if s is None:
         continue

@@ -3,13 +3,17 @@
 //! ```text
 //! cargo run --release --example gen_model                  # data/torus_knot.ply, 50,000 vertices
 //! cargo run --release --example gen_model -- --preset lucy # 14,028,800 vertices / 28,057,600 faces
+//! cargo run --release --example gen_model -- --preset lucy --no-faces \
+//!     -o data/large/lucy_cloud.ply --las data/large/lucy_cloud.las  # the vertices as a cloud, also as LAS
 //! ```
 //!
 //! The model itself is `spt::io::torus_knot`.
 
+use std::io::Cursor;
 use std::path::PathBuf;
 
 use clap::{Parser, ValueEnum};
+use glam::{DVec3, Vec3};
 use spt::io::ply::{Encoding, FaceList, PlyLayout, write_ply};
 use spt::io::torus_knot::torus_knot;
 
@@ -52,6 +56,11 @@ struct Args {
     /// Output file (default: data/torus_knot.ply, or data/large/lucy_knot.ply for lucy).
     #[arg(short, long)]
     output: Option<PathBuf>,
+    /// Also write the vertices (and colours) as this LAS file, for peers that read only
+    /// LAS (PotreeConverter): the PLY's points, each axis quantised to 2⁻³⁰ of the
+    /// model's extent.
+    #[arg(long)]
+    las: Option<PathBuf>,
 }
 
 fn main() -> anyhow::Result<()> {
@@ -90,5 +99,50 @@ fn main() -> anyhow::Result<()> {
         mesh.faces.sizes.len(),
         std::fs::metadata(&output)?.len()
     );
+    if let Some(path) = &args.las {
+        let bytes = las_bytes(&mesh.positions, mesh.colors.as_deref())?;
+        spt::io::atomic::write_atomically(path, |w| w.write_all(&bytes))?;
+        println!("wrote {} ({} bytes)", path.display(), bytes.len());
+    }
     Ok(())
+}
+
+/// The points at `positions` as the PLY stores them (f32), with `colors` if any, as a
+/// LAS 1.2 file (point format 2 with colours, 0 without), each axis offset by its least
+/// coordinate and scaled by 2⁻³⁰ of its extent (at least 10⁻⁹).
+fn las_bytes(positions: &[[f64; 3]], colors: Option<&[[u8; 3]]>) -> anyhow::Result<Vec<u8>> {
+    let stored = |p: &[f64; 3]| Vec3::from(p.map(|v| v as f32)).as_dvec3();
+    let lo = positions
+        .iter()
+        .fold(DVec3::INFINITY, |m, p| m.min(stored(p)));
+    let hi = positions
+        .iter()
+        .fold(DVec3::NEG_INFINITY, |m, p| m.max(stored(p)));
+    let mut builder = las::Builder::from((1, 2));
+    builder.point_format = las::point::Format::new(if colors.is_some() { 2 } else { 0 })?;
+    let transforms = [
+        &mut builder.transforms.x,
+        &mut builder.transforms.y,
+        &mut builder.transforms.z,
+    ];
+    for (axis, t) in transforms.into_iter().enumerate() {
+        t.offset = lo[axis];
+        t.scale = ((hi[axis] - lo[axis]) / f64::from(1u32 << 30)).max(1e-9);
+    }
+    let mut writer = las::Writer::new(Cursor::new(Vec::new()), builder.into_header()?)?;
+    for (k, p) in positions.iter().enumerate() {
+        let color = colors.map(|c| {
+            let [r, g, b] = c[k].map(|v| u16::from(v) * 257);
+            las::Color::new(r, g, b)
+        });
+        let DVec3 { x, y, z } = stored(p);
+        writer.write_point(las::Point {
+            x,
+            y,
+            z,
+            color,
+            ..Default::default()
+        })?;
+    }
+    Ok(writer.into_inner()?.into_inner())
 }
