@@ -42,19 +42,20 @@ mkdir -p data/large
 lucy=data/large/lucy_knot.ply
 cloud=data/large/lucy_cloud.ply
 city=data/large/city_$((points / 1000000))m.las
-# Each PLY with the same points as LAS, made together.
-if [ "$mesh_wanted" != 0 ] && [ ! -f "${lucy%.ply}.las" ]; then
+# Each PLY and the same points as LAS, made together where either is missing.
+made() { [ -f "$1" ] && [ -f "${1%.ply}.las" ]; }
+if [ "$mesh_wanted" != 0 ] && ! made "$lucy"; then
   "$GEN_MODEL" --preset lucy -o "$lucy" --las "${lucy%.ply}.las" > /dev/null
 fi
-[ -f "${cloud%.ply}.las" ] || "$GEN_MODEL" --preset lucy --no-faces -o "$cloud" --las "${cloud%.ply}.las" > /dev/null
+made "$cloud" || "$GEN_MODEL" --preset lucy --no-faces -o "$cloud" --las "${cloud%.ply}.las" > /dev/null
 [ "$city_wanted" = 0 ] || [ -f "$city" ] || "$GEN_CLOUD" --points "$points" --out "$city"
 logs=$(mktemp -d)
 open3d=0
 python3 -c "import open3d" 2> /dev/null && open3d=1
 scipy=0
 python3 -c "import scipy.spatial" 2> /dev/null && scipy=1
-# One timed run: "seconds peak_kib" appended to $logs/$1.
-# GNU time where installed, else the same two figures from Python's rusage.
+# One timed run: "seconds peak_kib" appended to $logs/$1, from GNU time where
+# installed, else from Python's rusage.
 timed() {
   local name=$1; shift
   if [ -x /usr/bin/time ]; then
