@@ -26,3 +26,29 @@ fn every_subcommand_explains_itself() {
         }
     }
 }
+
+/// A reader that closes the pipe before spt prints (`spt info MODEL | head -0`) ends it
+/// quietly: killed by SIGPIPE or finished, never a panic on the failed print.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_closed_pipe_ends_spt_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_spt"))
+        .arg("info")
+        .arg(common::default_model())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run spt");
+    // Closed before spt has read the model, so its first print meets a closed pipe.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("wait for spt");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(
+        out.status.success() || out.status.signal() == Some(libc::SIGPIPE),
+        "{:?}: {stderr}",
+        out.status
+    );
+}
