@@ -39,8 +39,9 @@ struct Frame {
     // 1 for a terrain's estimated normals, which face up (the rule that turned them):
     // a splat seen from behind is then the ground's underside (see fs_attributes).
     normals_up: u32,
-    // Padding: elevation_range is 8-byte aligned.
-    pad_b: f32,
+    // 1 for a cloud's estimated normals that no rule turned: each faces either way, and
+    // a splat is drawn from whichever side the eye sees (see shade.wgsl's rim_normal).
+    normals_unknown: u32,
     // Lowest and highest node centre height along elevation_up, relative to the model
     // origin (MODE_ELEVATION).
     elevation_range: vec2<f32>,

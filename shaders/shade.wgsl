@@ -70,7 +70,7 @@ fn fs_shade(@builtin(position) frag: vec4<f32>) -> Shaded {
 // front side: there the diffuse term takes the normalized n̄ (docs/point-clouds.md).
 fn shade(frag: vec2<f32>, texel: vec2<i32>, sums: Sums, alpha: f32, inside: bool) -> vec3<f32> {
     let color = sums.c.rgb / sums.c.w;
-    let mean_n = sums.nz.xyz / sums.c.w;
+    let mean_n = rim_normal(texel, sums.nz.xyz / sums.c.w);
     let n = normalize(mean_n);
     if frame.mode == MODE_NORMALS {
         return n * 0.5 + 0.5;
@@ -89,6 +89,33 @@ fn shade(frag: vec2<f32>, texel: vec2<i32>, sums: Sums, alpha: f32, inside: bool
     let shaded = color * (0.25 + 0.75 * diffuse) + vec3<f32>(specular);
     return mix(frame.background.rgb, shaded, alpha);
 }
+
+// The mean normal `mean_n` at a pixel; on a cloud of unknown orientation where it has
+// cancelled (shorter than CANCELLED), the mean of the normals of the pixel's four
+// neighbours that show the same surface and did not cancel. Normals flipped to face
+// the eye cancel only where they lie nearly in the picture's plane and point opposite
+// ways: on a rim, where a splat just past the horizon faces away, flips, and points
+// into the surface (docs/point-clouds.md); its pixel showed as a dark dot.
+fn rim_normal(texel: vec2<i32>, mean_n: vec3<f32>) -> vec3<f32> {
+    if frame.normals_unknown == 0u || dot(mean_n, mean_n) >= CANCELLED * CANCELLED {
+        return mean_n;
+    }
+    let here = textureLoad(depth, texel, 0).x;
+    let last = vec2<i32>(textureDimensions(depth)) - 1;
+    var borrowed = vec3<f32>(0.0);
+    for (var k = 1; k < 5; k++) {
+        let there = clamp(texel + CROSS[k], vec2<i32>(0), last);
+        let w = textureLoad(color_sum, there, 0).w;
+        let nz = textureLoad(normal_sum, there, 0).xyz / max(w, 1e-30);
+        if w > 0.0 && dot(nz, nz) >= CANCELLED * CANCELLED && one_surface(here, textureLoad(depth, there, 0).x) {
+            borrowed += normalize(nz);
+        }
+    }
+    return select(mean_n, normalize(borrowed), dot(borrowed, borrowed) > 0.0);
+}
+
+// Below this length an unoriented cloud's mean normal has cancelled (`rim_normal`).
+const CANCELLED: f32 = 0.5;
 
 // The Blinn-Phong exponent of the highlight.
 const SHININESS: f32 = 32.0;

@@ -6,6 +6,7 @@ use glam::{DVec3, Vec3};
 
 use super::camera::{Camera, heights};
 use super::settings::{DEPTH_PUSH, PREFILTER_PX, Settings};
+use crate::surfel::NormalsTurned;
 use crate::tree::TreeMeta;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl`, field for field (the WGSL file
@@ -34,7 +35,7 @@ pub(super) struct FrameUniform {
     pub lod_on: u32,
     pub lod_frozen: u32,
     pub normals_up: u32,
-    pub pad_b: f32,
+    pub normals_unknown: u32,
     pub elevation_range: [f32; 2],
     pub lod_eye: [f32; 3],
     pub edl_radius_px: f32,
@@ -122,7 +123,8 @@ impl FrameUniform {
             lod_on: (lod_eps > 0.0) as u32,
             lod_frozen: settings.lod_eye.is_some() as u32,
             normals_up: meta.normals_up() as u32,
-            pad_b: 0.0,
+            normals_unknown: (!meta.oriented_normals && meta.normals_turned == NormalsTurned::No)
+                as u32,
             elevation_range,
             lod_eye: settings
                 .lod_eye
