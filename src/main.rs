@@ -106,21 +106,6 @@ enum Command {
     },
 }
 
-/// Restores SIGPIPE's default action, so that a reader that closes the pipe early
-/// (`spt info MODEL | head -1`) ends spt quietly, as it ends other Unix tools. Rust
-/// ignores the signal, and every print to the closed pipe would then panic. Outputs are
-/// written to a temporary file and renamed, so an ended convert leaves no partial file.
-/// Not for the viewer: its display connection is a socket, where a broken pipe must stay
-/// an error that winit reports.
-fn end_quietly_on_closed_pipe() {
-    #[cfg(target_os = "linux")]
-    // SAFETY: called once from the main thread before any other thread starts; SIG_DFL
-    // installs no handler.
-    unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
-    }
-}
-
 fn main() -> ExitCode {
     // The LAZ decoder's panics on damaged files become errors that name the file
     // (spt::io::las); only other panics are reported as panics.
@@ -137,9 +122,6 @@ fn main() -> ExitCode {
     let command = cli
         .command
         .unwrap_or_else(|| Command::View(Box::new(ViewOnly::parse_from(["spt"]).args)));
-    if !matches!(command, Command::View(_)) {
-        end_quietly_on_closed_pipe();
-    }
     let result = match command {
         Command::View(args) => spt::apps::view::run(*args),
         Command::Bench(args) => spt::apps::bench::run(&args),

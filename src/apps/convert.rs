@@ -142,7 +142,7 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
     } else {
         0
     };
-    println!(
+    say!(
         "{} nodes ({} leaves, {} internal), depth {}, {} bytes per node ({record} record + \
          4 parent index + {shape} shape{})",
         count(set.meta.node_count),
@@ -157,11 +157,11 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
         }
     );
     if emax == 0.0 {
-        println!("errors: all zero (a single leaf)");
+        say!("errors: all zero (a single leaf)");
     } else {
-        println!("errors: {emin:.3e} to {emax:.3e} model units (error scale {scale:.6e})");
+        say!("errors: {emin:.3e} to {emax:.3e} model units (error scale {scale:.6e})");
     }
-    println!(
+    say!(
         "total {total:.2} s, {:.2} M points/s{}",
         rate(points as f64 / 1e6, total),
         peak_memory_bytes().map_or(String::new(), |b| format!(

@@ -98,7 +98,7 @@ pub fn options(output: &Path, memory: u64) -> Options {
         .unwrap_or(Path::new("."))
         .to_owned();
     let options = Options::for_memory(memory, temp_dir);
-    println!(
+    say!(
         "out of core: budget {:.2} GiB, jobs of at most {} points ({} bytes per point)",
         memory as f64 / (1u64 << 30) as f64,
         count(options.job_points),
@@ -127,7 +127,7 @@ pub fn summary(built: &Built, output: &Path, start: Instant) {
     let m = &built.meta;
     let total = start.elapsed().as_secs_f64();
     let walls = walls(built.walls);
-    println!(
+    say!(
         "{} nodes ({} leaves{walls}), depth {}, {} jobs, written to {}",
         count(m.node_count),
         count(m.leaf_count),
@@ -136,14 +136,14 @@ pub fn summary(built: &Built, output: &Path, start: Instant) {
         output.display()
     );
     if built.dropped + built.outliers > 0 {
-        println!(
+        say!(
             "{} points dropped (not finite, or too far from the rest to store), {} outliers \
              kept outside the model's core",
             count(built.dropped),
             count(built.outliers)
         );
     }
-    println!(
+    say!(
         "total {total:.2} s, {:.2} M points/s{}",
         m.leaf_count as f64 / 1e6 / total,
         peak_memory_bytes().map_or(String::new(), |b| format!(

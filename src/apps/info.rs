@@ -629,9 +629,9 @@ pub fn run(path: &Path, json: bool) -> anyhow::Result<()> {
     if is_spt(path) {
         let info = SptInfo::gather(path)?;
         if json {
-            println!("{}", serde_json::to_string_pretty(&info)?);
+            say!("{}", serde_json::to_string_pretty(&info)?);
         } else {
-            print!("{}", info.to_text());
+            crate::apps::say_text(&info.to_text());
         }
         if !info.checksum_ok {
             anyhow::bail!("{}: checksum mismatch: the file is corrupt", path.display());
@@ -643,9 +643,9 @@ pub fn run(path: &Path, json: bool) -> anyhow::Result<()> {
     }
     let info = ModelInfo::gather(path)?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&info)?);
+        say!("{}", serde_json::to_string_pretty(&info)?);
     } else {
-        print!("{}", info.to_text());
+        crate::apps::say_text(&info.to_text());
     }
     Ok(())
 }

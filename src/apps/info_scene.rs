@@ -99,9 +99,9 @@ impl SceneInfo {
 pub fn run(path: &Path, json: bool) -> anyhow::Result<()> {
     let info = SceneInfo::gather(path)?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&info)?);
+        say!("{}", serde_json::to_string_pretty(&info)?);
     } else {
-        print!("{}", info.to_text());
+        crate::apps::say_text(&info.to_text());
     }
     Ok(())
 }

@@ -89,7 +89,7 @@ fn run_plan(input: &Path, dir: &Path, memory: Option<u64>) -> anyhow::Result<()>
         Planned::New(_) => "planned",
         Planned::Kept(_) => "kept the plan already there:",
     };
-    println!(
+    say!(
         "{how} {} jobs over {} points, {:.2} GB of job inputs, in {}",
         m.jobs.len(),
         count(m.input.points),
@@ -109,7 +109,7 @@ fn run_build(dir: &Path, jobs: &[usize]) -> anyhow::Result<()> {
             Ran::Built(r) => ("built", r),
             Ran::Kept(r) => ("kept (already built)", r),
         };
-        println!(
+        say!(
             "job {j}: {how}: {} points, {} nodes, part {:.1} MB, {:.2} s",
             count(m.jobs[j].points),
             count(record.part.nodes),
@@ -119,7 +119,7 @@ fn run_build(dir: &Path, jobs: &[usize]) -> anyhow::Result<()> {
         Ok(())
     })?;
     if let Some(b) = peak_memory_bytes() {
-        println!("peak memory {:.2} GiB", b as f64 / (1u64 << 30) as f64);
+        say!("peak memory {:.2} GiB", b as f64 / (1u64 << 30) as f64);
     }
     Ok(())
 }

@@ -64,7 +64,7 @@ impl Stage {
     pub fn finish(&self, summary: &str) -> Duration {
         let took = self.start.elapsed();
         self.bar.finish_and_clear();
-        println!("{:>8}  {:>7.2} s  {summary}", self.name, took.as_secs_f64());
+        say!("{:>8}  {:>7.2} s  {summary}", self.name, took.as_secs_f64());
         took
     }
 }

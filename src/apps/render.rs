@@ -21,7 +21,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     };
     let camera = args.camera(&scene)?;
     let gpu = Gpu::new(args.backend.as_deref())?;
-    println!("adapter   {}", gpu.describe());
+    say!("adapter   {}", gpu.describe());
     let renderer = Renderer::new(gpu);
     let settings = args.settings();
     let uploaded = match budget {
@@ -30,7 +30,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
             let (mut uploaded, mut residency) = renderer.begin_streaming(&scene, bytes)?;
             let state = (&mut uploaded, &mut residency);
             renderer.stream_for_view(&scene, state, &camera, &settings, args.size);
-            println!(
+            say!(
                 "gpu memory {} ({} of {} slices)",
                 residency.memory_line(),
                 uploaded.resident_slices(),
@@ -63,11 +63,11 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
     crate::io::png::write_png(output, image.width, image.height, &image.rgba)?;
     if stats.coarsened {
         let px = stats.eps / error_per_distance(1.0, camera.fov_y, args.size.1);
-        println!(
+        say!(
             "lod       coarser than asked: ε = {px:.3} px (the rest of the list is not on the GPU)"
         );
     }
-    println!(
+    say!(
         "splats    {} drawn of {} nodes; the GPU tested {} nodes in {} ranges of {} chunks",
         count(stats.selected as u64),
         count(scene.nodes().len() as u64),
@@ -76,7 +76,7 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
         count(stats.chunks as u64),
     );
     if let Some(n) = stats.gpu_drawn {
-        println!(
+        say!(
             "culled    {} splats survived the compute culling: {:.2} nodes tested per survivor; \
              {} of them on an outline",
             count(n),
@@ -84,13 +84,13 @@ pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()>
             count(stats.gpu_outline.unwrap_or(0)),
         );
     }
-    println!("raster    {}", renderer.raster(settings.raster).name());
+    say!("raster    {}", renderer.raster(settings.raster).name());
     let plan = times.print(stats.selected);
     let cut = renderer.prefix_cut(settings.prefix_cut).name();
-    println!(
+    say!(
         "cpu plan  {plan:.3} ms per frame (median): chunks in view, their prefixes cut at the {cut}"
     );
-    println!("wrote     {}", output.display());
+    say!("wrote     {}", output.display());
     Ok(())
 }
 
@@ -148,22 +148,22 @@ fn print_times(
         _ => format!("{:.3} ms", v.first().copied().unwrap_or(0.0)),
     };
     match Summary::of(gpu_ms) {
-        None => println!("gpu time  not measured (the adapter has no timestamp queries)"),
+        None => say!("gpu time  not measured (the adapter has no timestamp queries)"),
         Some(s) => {
-            println!("gpu time  {}", summary(gpu_ms));
+            say!("gpu time  {}", summary(gpu_ms));
             let [visibility, attributes, shading] =
                 passes_ms.map(|mut v| Summary::of(&mut v).map_or(0.0, |s| s.median));
-            println!(
+            say!(
                 "passes    visibility {visibility:.3} ms, attributes {attributes:.3} ms, \
                  shading {shading:.3} ms (medians)"
             );
-            println!(
+            say!(
                 "rate      {:.3} M splats/s (GPU)",
                 selected as f64 / s.median / 1e3
             );
         }
     }
-    println!(
+    say!(
         "wall time {} per frame (read-back included)",
         summary(wall_ms)
     );

@@ -21,7 +21,7 @@ pub fn run(path: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> 
     let scene = InstancedScene::open(path, &Silent)?;
     let camera = args.camera_for(&scene.meta, &[scene.frame_chunk()])?;
     let gpu = Gpu::new(args.backend.as_deref())?;
-    println!("adapter   {}", gpu.describe());
+    say!("adapter   {}", gpu.describe());
     let renderer = Renderer::new(gpu);
     let settings = args.settings();
     let uploaded = renderer.upload_instanced(&scene);
@@ -38,24 +38,24 @@ pub fn run(path: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> 
     let (image, stats, visible) = last.expect("at least one frame");
     crate::io::png::write_png(output, image.width, image.height, &image.rgba)?;
     let models: usize = scene.models.iter().map(|m| m.nodes().len()).sum();
-    println!(
+    say!(
         "scene     {} models ({} nodes), {} instances in {} groups",
         scene.models.len(),
         count(models as u64),
         count(scene.instances.len() as u64),
         count(scene.groups.len() as u64)
     );
-    println!(
+    say!(
         "instances {} drawn (in view, with nodes to test), {} of them placed by the GPU",
         count(visible as u64),
         count(stats.gpu_placed.unwrap_or(0))
     );
     if stats.coarsened {
         let px = stats.eps / error_per_distance(1.0, camera.fov_y, args.size.1);
-        println!("lod       coarser than asked: ε = {px:.3} px (the survivor lists' room)");
+        say!("lod       coarser than asked: ε = {px:.3} px (the survivor lists' room)");
     }
     let drawn = stats.gpu_drawn.unwrap_or(0);
-    println!(
+    say!(
         "culled    {} splats survived the compute culling of {} nodes in {} ranges; {} of them \
          on an outline",
         count(drawn),
@@ -63,11 +63,11 @@ pub fn run(path: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> 
         count(stats.chunks_tested as u64),
         count(stats.gpu_outline.unwrap_or(0)),
     );
-    println!("raster    {}", renderer.raster(settings.raster).name());
+    say!("raster    {}", renderer.raster(settings.raster).name());
     let plan = times.print(drawn as usize);
-    println!("cpu plan  {plan:.3} ms per frame (median): instances in view, their prefixes");
+    say!("cpu plan  {plan:.3} ms per frame (median): instances in view, their prefixes");
     print_memory(&scene, &uploaded);
-    println!("wrote     {}", output.display());
+    say!("wrote     {}", output.display());
     Ok(())
 }
 
@@ -75,7 +75,7 @@ pub fn run(path: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> 
 fn print_memory(scene: &InstancedScene, gpu: &crate::render::GpuInstances) {
     let mib = |b: u64| b as f64 / (1 << 20) as f64;
     let m = gpu.memory();
-    println!(
+    say!(
         "memory    GPU: models {:.1} MiB, survivor room {:.1} MiB, instances {} B each \
          ({:.1} MiB)",
         mib(m.models),
@@ -83,7 +83,7 @@ fn print_memory(scene: &InstancedScene, gpu: &crate::render::GpuInstances) {
         m.per_instance,
         mib(m.per_instance * scene.instances.len() as u64),
     );
-    println!(
+    say!(
         "          CPU: instances {} B each ({:.1} MiB: transform and model {} B, groups {:.1} B)",
         scene.bytes_per_instance(),
         mib(scene.bytes_per_instance() * scene.instances.len() as u64),

@@ -63,14 +63,14 @@ pub fn run(args: &ScatterArgs) -> anyhow::Result<()> {
     write_instances(&table, &instances)?;
     let drawn_base = args.draw_base.as_ref().unwrap_or(&args.base);
     write_scene(&args.output, drawn_base, &args.models, &table)?;
-    println!(
+    say!(
         "scattered {} instances of {} models over {} triangles of {}",
         count(instances.len() as u64),
         models.len(),
         count(triangles.len() as u64),
         args.base.display()
     );
-    println!(
+    say!(
         "wrote     {} and {}",
         args.output.display(),
         table.display()

@@ -294,7 +294,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let renderer = Renderer::new(Gpu::new(args.backend.as_deref())?);
     args.raster = renderer.raster(args.raster);
     let env = environment(&args, &scene, &renderer.gpu);
-    println!("adapter   {}", env.label());
+    say!("adapter   {}", env.label());
     let gpu_scene = renderer.upload(&scene);
     let paths = camera_paths(&scene, &args);
     let progress = frame_progress(&args, &paths);
@@ -338,7 +338,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     )?;
     progress.finish_and_clear();
     for c in &checks {
-        println!("stability {c}");
+        say!("stability {c}");
     }
     write_results(&args.out, &env, &rows, &checks, &args.budget_ms)?;
     if !stable {
@@ -499,7 +499,7 @@ fn write_results(
     let summary = report::summary(env, rows, checks) + &report::budget_table(rows, budgets);
     report::write_text(&out.join("summary.md"), &summary)?;
     for (budget, path, best) in report::within_budgets(rows, budgets) {
-        println!(
+        say!(
             "budget    {budget} ms, {path}: {}",
             best.map_or("no ε of the sweep fits".into(), |r| format!(
                 "FLIP {:.4} at ε {} px ({:.1} ms)",
@@ -512,7 +512,7 @@ fn write_results(
     plot::write(&out.join("speed_vs_error.png"), env, rows)?;
     for pair in report::equal_budget_pairs(rows) {
         if report::verdict(pair.0, pair.1) == "**no**" {
-            println!(
+            say!(
                 "note      {} ε {}: random subset FLIP {:.4} < SPT {:.4} at {:.0} / {:.0} splats",
                 pair.0.path,
                 pair.0.eps_px,
@@ -523,7 +523,7 @@ fn write_results(
             );
         }
     }
-    println!(
+    say!(
         "wrote     {}",
         out.join("{results.csv, summary.md, speed_vs_error.png}")
             .display()
@@ -573,7 +573,7 @@ fn stability(swept: &Row, once: &Measured, twice: &Measured) -> (Vec<String>, bo
 }
 
 fn print_row(r: &Row) {
-    println!(
+    say!(
         "{:<12} {:<7} {:<8} ε {:<5} splats {:>10.0} tested {:>10.0} gpu {:>9} ms  psnr {:>6.2} dB  holes {:.3} %  flip {:.4}",
         r.path,
         r.strategy.name(),

@@ -46,7 +46,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot make the folder", args.out.display()))?;
     let renderer = Renderer::new(Gpu::new(args.backend.as_deref())?);
-    println!("adapter   {}", renderer.gpu.describe());
+    say!("adapter   {}", renderer.gpu.describe());
     let gpu = renderer.upload_instanced(&scene);
     let leaves: u64 = (scene.models.iter().enumerate())
         .map(|(m, model)| model.meta().leaf_count * scene.count_of(m) as u64)
@@ -87,7 +87,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         };
         for &e in eps.iter().filter(|&&e| e > 0.0 || affordable) {
             let row = bench.measure(path, cameras, e, references.as_deref())?;
-            println!(
+            say!(
                 "{path:<12} ε {e:>5} px: {:>10.0} splats, {:>7.0} instances, GPU {:.2} ms, plan {:.2} ms{}",
                 row.splats,
                 row.instances,
@@ -99,7 +99,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         }
     }
     write_results(&args.out, &rows, (&scene, leaves, affordable), &renderer)?;
-    println!("wrote     {}", args.out.join("summary.md").display());
+    say!("wrote     {}", args.out.join("summary.md").display());
     Ok(())
 }
 

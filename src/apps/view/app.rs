@@ -486,7 +486,7 @@ impl App {
         let Some(w) = &self.windowed else { return };
         let stats = &w.viewer.stats;
         if let Some(m) = &w.viewer.model {
-            println!(
+            say!(
                 "splats    {} drawn of {} nodes, {} tested",
                 stats.gpu.drawn.map_or("–".into(), count),
                 count(m.node_count()),
@@ -498,16 +498,18 @@ impl App {
             ("gpu", &mut self.script.gpu_ms),
         ] {
             if let Some(s) = Summary::of(values) {
-                println!(
+                say!(
                     "{name:<9} {:.2} ms median of {}, p95 {:.2} ms",
-                    s.median, s.count, s.p95
+                    s.median,
+                    s.count,
+                    s.p95
                 );
             }
         }
         if let Some(s) = Summary::of(&mut self.script.error_px)
             && self.args.target_ms.is_some()
         {
-            println!(
+            say!(
                 "ε_px      {:.3} median, {:.3} last (target {:.0} ms)",
                 s.median,
                 w.viewer.stats.frame_error_px,
@@ -515,9 +517,9 @@ impl App {
             );
         }
         if let Some(s) = w.viewer.model.as_ref().and_then(|m| m.streamer()) {
-            println!("gpu memory {}", s.residency.memory_line());
+            say!("gpu memory {}", s.residency.memory_line());
         }
-        println!("wrote     {}", path.display());
+        say!("wrote     {}", path.display());
     }
 
     /// Keeps drawing while something moves; while a model loads, redraws only to show
