@@ -95,10 +95,7 @@ fn contours_show_no_specks_of_the_hidden_side() {
     let scene = Scene::open(&common::default_model()).unwrap();
     let r = common::renderer();
     let uploaded = r.upload(&scene);
-    let fov = 45f64.to_radians();
-    let (width, height) = (800, 600);
-    let aspect = width as f64 / height as f64;
-    let camera = Camera::framed(scene.meta(), scene.index.chunks(), fov, aspect);
+    let (camera, (width, height)) = framed_800x600(&scene);
     for raster in common::rasters() {
         let settings = Settings {
             error_px: 0.0,
@@ -123,6 +120,15 @@ fn contours_show_no_specks_of_the_hidden_side() {
             "{raster}: {specks} pixels face against their neighbours"
         );
     }
+}
+
+/// The view that frames `scene` at 800×600 (a 45° field of view), and that size.
+fn framed_800x600(scene: &Scene) -> (Camera, (u32, u32)) {
+    let (width, height) = (800, 600);
+    let aspect = f64::from(width) / f64::from(height);
+    let fov = 45f64.to_radians();
+    let camera = Camera::framed(scene.meta(), scene.index.chunks(), fov, aspect);
+    (camera, (width, height))
 }
 
 /// Of the covered pixels of a normals-mode image whose four neighbours are covered and
@@ -475,10 +481,7 @@ fn an_unoriented_cloud_s_rims_show_no_dark_dots() {
         Scene::open(&cloud_path).unwrap(),
     );
     let r = common::renderer();
-    let fov = 45f64.to_radians();
-    let (width, height) = (800, 600);
-    let aspect = width as f64 / height as f64;
-    let camera = Camera::framed(mesh.meta(), mesh.index.chunks(), fov, aspect);
+    let (camera, (width, height)) = framed_800x600(&mesh);
     for raster in common::rasters() {
         let settings = Settings {
             error_px: 0.0,
