@@ -6,7 +6,6 @@ use glam::{DVec3, Vec3};
 
 use super::camera::{Camera, heights};
 use super::settings::{DEPTH_PUSH, PREFILTER_PX, Settings};
-use crate::surfel::NormalsTurned;
 use crate::tree::TreeMeta;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl`, field for field (the WGSL file
@@ -123,8 +122,7 @@ impl FrameUniform {
             lod_on: (lod_eps > 0.0) as u32,
             lod_frozen: settings.lod_eye.is_some() as u32,
             normals_up: meta.normals_up() as u32,
-            normals_unknown: (!meta.oriented_normals && meta.normals_turned == NormalsTurned::No)
-                as u32,
+            normals_unknown: meta.normals_unknown() as u32,
             elevation_range,
             lod_eye: settings
                 .lod_eye

@@ -91,6 +91,12 @@ impl TreeMeta {
         self.normals_turned == NormalsTurned::Up
     }
 
+    /// Whether the leaves' normals are a cloud's estimated ones that no rule turned:
+    /// each faces either way, and a splat is drawn from the side the eye sees.
+    pub fn normals_unknown(&self) -> bool {
+        !self.oriented_normals && self.normals_turned == NormalsTurned::No
+    }
+
     /// Whether the leaf box is a terrain's: less than a quarter as high as it is wide
     /// (the box rule of [`Orientation::of`]), which the default camera sees from
     /// above. A mesh can be flat too; only a cloud's normals are turned up.
