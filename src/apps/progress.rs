@@ -1,5 +1,8 @@
 //! Stage progress for long commands: a bar on a terminal (stderr), and one plain line
 //! per finished stage on stdout either way, so logs and pipes get the same summary.
+//! The line ends with the stage's CPU time and how many of the thread pool's threads
+//! that kept busy on average (CPU time over wall time), which tells a stage that
+//! leaves cores idle.
 
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -7,12 +10,16 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
+use crate::apps::stats::process_cpu_seconds;
+
 /// One stage of a command.
 pub struct Stage {
     name: &'static str,
     bar: ProgressBar,
     done: AtomicU64,
     start: Instant,
+    /// The process's CPU seconds when the stage started.
+    cpu_start: Option<f64>,
 }
 
 impl Stage {
@@ -46,6 +53,7 @@ impl Stage {
             bar,
             done: AtomicU64::new(0),
             start: Instant::now(),
+            cpu_start: process_cpu_seconds(),
         }
     }
 
@@ -60,11 +68,32 @@ impl Stage {
         self.start.elapsed().as_secs_f64()
     }
 
-    /// Ends the stage and prints `name  seconds  summary`; returns the time it took.
+    /// Ends the stage and prints `name  seconds  summary; CPU-s, threads busy`; returns
+    /// the time it took.
     pub fn finish(&self, summary: &str) -> Duration {
         let took = self.start.elapsed();
         self.bar.finish_and_clear();
-        say!("{:>8}  {:>7.2} s  {summary}", self.name, took.as_secs_f64());
+        let busy = self
+            .cpu_start
+            .zip(process_cpu_seconds())
+            .map_or(String::new(), |(start, now)| {
+                busy_threads(now - start, took.as_secs_f64())
+            });
+        say!(
+            "{:>8}  {:>7.2} s  {summary}{busy}",
+            self.name,
+            took.as_secs_f64()
+        );
         took
     }
+}
+
+/// "; 22.1 CPU-s, 1.9 of 2 threads busy": `cpu` seconds of CPU over `wall` seconds, and
+/// the threads of the pool that the parallel work runs on.
+pub fn busy_threads(cpu: f64, wall: f64) -> String {
+    format!(
+        "; {cpu:.1} CPU-s, {:.1} of {} threads busy",
+        cpu / wall.max(1e-9),
+        rayon::current_num_threads()
+    )
 }
