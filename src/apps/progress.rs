@@ -1,8 +1,8 @@
 //! Stage progress for long commands: a bar on a terminal (stderr), and one plain line
 //! per finished stage on stdout either way, so logs and pipes get the same summary.
 //! The line ends with the stage's CPU time and how many of the thread pool's threads
-//! that kept busy on average (CPU time over wall time), which tells a stage that
-//! leaves cores idle.
+//! it kept busy on average (CPU time over wall time): a stage that leaves cores idle
+//! shows.
 
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicU64, Ordering};

@@ -41,9 +41,9 @@ pub fn peak_memory_bytes() -> Option<u64> {
 }
 
 /// CPU time this process has used so far, user and system, in seconds, all threads
-/// together (`getrusage`; unix only).
+/// together (`getrusage`; Linux only, like [`peak_memory_bytes`]).
 pub fn process_cpu_seconds() -> Option<f64> {
-    #[cfg(unix)]
+    #[cfg(target_os = "linux")]
     {
         let mut usage = std::mem::MaybeUninit::<libc::rusage>::uninit();
         // SAFETY: getrusage writes the whole struct it is given, and reads nothing of ours.
@@ -55,7 +55,7 @@ pub fn process_cpu_seconds() -> Option<f64> {
         let seconds = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
         Some(seconds(usage.ru_utime) + seconds(usage.ru_stime))
     }
-    #[cfg(not(unix))]
+    #[cfg(not(target_os = "linux"))]
     None
 }
 
