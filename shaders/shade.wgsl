@@ -101,13 +101,15 @@ fn rim_normal(texel: vec2<i32>, mean_n: vec3<f32>) -> vec3<f32> {
         return mean_n;
     }
     let here = textureLoad(depth, texel, 0).x;
-    let last = vec2<i32>(textureDimensions(depth)) - 1;
     var borrowed = vec3<f32>(0.0);
     for (var k = 1; k < 5; k++) {
-        let there = clamp(texel + CROSS[k], vec2<i32>(0), last);
+        let there = texel + CROSS[k];
+        if !one_surface(here, side_depth(there, false)) {
+            continue;
+        }
         let w = textureLoad(color_sum, there, 0).w;
         let nz = textureLoad(normal_sum, there, 0).xyz / max(w, 1e-30);
-        if w > 0.0 && dot(nz, nz) >= CANCELLED * CANCELLED && one_surface(here, textureLoad(depth, there, 0).x) {
+        if w > 0.0 && dot(nz, nz) >= CANCELLED * CANCELLED {
             borrowed += normalize(nz);
         }
     }
