@@ -8,8 +8,7 @@ use rayon::prelude::*;
 
 use std::sync::Mutex;
 
-use crate::apps::progress::{Stage, busy_threads};
-use crate::apps::stats::{peak_memory_bytes, process_cpu_seconds};
+use crate::apps::progress::{Stage, total_line};
 use crate::apps::text::{count, walls};
 use crate::io::GeometryStats;
 use crate::io::PointAttributes;
@@ -161,14 +160,6 @@ pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
     } else {
         say!("errors: {emin:.3e} to {emax:.3e} model units (error scale {scale:.6e})");
     }
-    say!(
-        "total {total:.2} s, {:.2} M points/s{}{}",
-        rate(points as f64 / 1e6, total),
-        peak_memory_bytes().map_or(String::new(), |b| format!(
-            ", peak memory {:.2} GiB",
-            b as f64 / (1u64 << 30) as f64
-        )),
-        process_cpu_seconds().map_or(String::new(), |cpu| busy_threads(cpu, total))
-    );
+    say!("{}", total_line(total, points));
     Ok(())
 }

@@ -7,8 +7,7 @@ use std::path::Path;
 use std::sync::Mutex;
 use std::time::Instant;
 
-use crate::apps::progress::Stage;
-use crate::apps::stats::peak_memory_bytes;
+use crate::apps::progress::{Stage, total_line};
 use crate::apps::text::{count, walls};
 use crate::io::formats::ModelStream;
 use crate::io::heap;
@@ -122,7 +121,7 @@ pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Prints what the build made, dropped, and its total time, rate and peak memory.
+/// Prints what the build made, dropped, and its total time, rate, peak memory and CPU.
 pub fn summary(built: &Built, output: &Path, start: Instant) {
     let m = &built.meta;
     let total = start.elapsed().as_secs_f64();
@@ -143,12 +142,5 @@ pub fn summary(built: &Built, output: &Path, start: Instant) {
             count(built.outliers)
         );
     }
-    say!(
-        "total {total:.2} s, {:.2} M points/s{}",
-        m.leaf_count as f64 / 1e6 / total,
-        peak_memory_bytes().map_or(String::new(), |b| format!(
-            ", peak memory {:.2} GiB",
-            b as f64 / (1u64 << 30) as f64
-        ))
-    );
+    say!("{}", total_line(total, m.leaf_count));
 }

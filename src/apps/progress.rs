@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::apps::stats::process_cpu_seconds;
+use crate::apps::stats::{peak_memory_bytes, process_cpu_seconds};
 
 /// One stage of a command.
 pub struct Stage {
@@ -88,9 +88,23 @@ impl Stage {
     }
 }
 
+/// A build's last line: "total 18.03 s, 0.78 M points/s, peak memory 2.03 GiB; 32.5
+/// CPU-s, 1.8 of 2 threads busy" for `points` built in `total` seconds (the memory and
+/// CPU where the system tells them).
+pub fn total_line(total: f64, points: u64) -> String {
+    let peak = peak_memory_bytes().map_or(String::new(), |b| {
+        format!(", peak memory {:.2} GiB", b as f64 / (1u64 << 30) as f64)
+    });
+    let busy = process_cpu_seconds().map_or(String::new(), |cpu| busy_threads(cpu, total));
+    format!(
+        "total {total:.2} s, {:.2} M points/s{peak}{busy}",
+        points as f64 / 1e6 / total.max(1e-9)
+    )
+}
+
 /// "; 22.1 CPU-s, 1.9 of 2 threads busy": `cpu` seconds of CPU over `wall` seconds, and
 /// the threads of the pool that the parallel work runs on.
-pub fn busy_threads(cpu: f64, wall: f64) -> String {
+fn busy_threads(cpu: f64, wall: f64) -> String {
     format!(
         "; {cpu:.1} CPU-s, {:.1} of {} threads busy",
         cpu / wall.max(1e-9),
