@@ -9,6 +9,7 @@ mod bad_scenes;
 mod bench;
 mod cli_help;
 mod cloud_quality;
+mod cloud_rows;
 mod docs;
 mod file_quirks;
 mod hostile_inputs;
