@@ -55,10 +55,11 @@ fn ringed_cylinder() -> PolyMesh {
     }
 }
 
-/// Side-on, leaves only, at 512², on each raster path: the cloud covers what its mesh covers, and away from
-/// the outlines it matches the mesh to 30 dB (measured, lavapipe, 2026-12-02: holes
-/// 0.00 %, 38.8 dB away from the edges; circles through the 6th neighbour instead let
-/// the background and the far wall show between the rings: holes 3.82 %, 23.0 dB).
+/// Side-on, leaves only, at 512², on each raster path: the cloud covers what its mesh
+/// covers, and away from the outlines it matches the mesh to 30 dB (measured, lavapipe,
+/// 2026-12-02: holes 0.00 %, 38.8 dB away from the edges on both paths; circles through
+/// the 6th neighbour instead, drawn on the default path, let the background and the far
+/// wall show between the rings: holes 3.82 %, 23.0 dB).
 #[test]
 fn a_cloud_of_sparse_rings_is_drawn_closed() {
     let dir = common::temp_dir();
