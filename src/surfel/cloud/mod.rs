@@ -69,7 +69,7 @@ fn median_of_positive(values: impl ParallelIterator<Item = f32>) -> Option<f32> 
 }
 
 /// Normal, radius and ellipse from the neighbours of each point listed in `which`
-/// (distinct), searching among all `points` (unit-scaled by `scale` for the search),
+/// (ascending), searching among all `points` (unit-scaled by `scale` for the search),
 /// written into `surfels`. Non-zero `given` normals are kept, the estimated ones turned
 /// by `orientation` (on a quantised frame, smoothed first: `smoothed_disks`); a radius
 /// already set (from faces) is only grown. A boundary splat ends where its sampling
@@ -121,41 +121,35 @@ pub fn neighbour_disks(
         Vec::new()
     };
     drop(search);
-    // Worked out on every core a block at a time (a block's updates held, not all),
-    // then written.
-    let mut updates = Vec::with_capacity(UPDATE_BLOCK.min(which.len()));
-    for (b, (ids, block)) in which
-        .chunks(UPDATE_BLOCK)
-        .zip(disks.chunks(UPDATE_BLOCK))
-        .enumerate()
-    {
-        (ids.par_iter().zip(block).enumerate())
-            .map(|(j, (&i, disk))| {
-                let k = b * UPDATE_BLOCK + j;
-                let wall = walls
-                    .binary_search_by_key(&k, |(j, _)| *j)
-                    .ok()
-                    .map(|w| &walls[w].1);
-                let estimated = given_normal(i) == Vec3::ZERO;
-                let at = (points[i as usize] * scale, scale);
-                updated(
-                    &surfels[i as usize],
-                    disk,
-                    (at, wall),
-                    estimated.then_some(orientation),
-                )
-            })
-            .collect_into_vec(&mut updates);
-        for (&i, update) in ids.iter().zip(&updates) {
-            let s = &mut surfels[i as usize];
-            s.normal = update.normal;
-            if let Some((radius, shape, clipped)) = update.disk {
-                (s.radius, s.shape) = (radius, shape);
-                stats.clipped_boundaries += clipped as u64;
-            }
-            stats.capped_radii += update.capped as u64;
+    // Each listed surfel updated in place on every core: `which` ascends, so its
+    // pieces own disjoint parts of `surfels`.
+    debug_assert!(which.windows(2).all(|w| w[0] < w[1]), "which ascends");
+    let update = |k: usize, i: u32, s: &mut Surfel| -> [u64; 2] {
+        let wall = walls
+            .binary_search_by_key(&k, |(j, _)| *j)
+            .ok()
+            .map(|w| &walls[w].1);
+        let estimated = given_normal(i) == Vec3::ZERO;
+        let at = (points[i as usize] * scale, scale);
+        let u = updated(s, &disks[k], (at, wall), estimated.then_some(orientation));
+        s.normal = u.normal;
+        let mut clipped = false;
+        if let Some((radius, shape, clip)) = u.disk {
+            (s.radius, s.shape, clipped) = (radius, shape, clip);
         }
-    }
+        [clipped as u64, u.capped as u64]
+    };
+    let [clipped, capped] = pieces_of(surfels, which, UPDATE_PIECE)
+        .into_par_iter()
+        .map(|(first, ids, owned)| {
+            let base = ids[0] as usize;
+            (ids.iter().enumerate())
+                .map(|(j, &i)| update(first + j, i, &mut owned[i as usize - base]))
+                .fold([0, 0], |a, b| [a[0] + b[0], a[1] + b[1]])
+        })
+        .reduce(|| [0, 0], |a, b| [a[0] + b[0], a[1] + b[1]]);
+    stats.clipped_boundaries += clipped;
+    stats.capped_radii += capped;
     let missing: Vec<u32> = which
         .iter()
         .copied()
@@ -177,8 +171,29 @@ pub fn neighbour_disks(
     walls
 }
 
-/// Listed points updated per parallel block of [`neighbour_disks`].
-const UPDATE_BLOCK: usize = 1 << 16;
+/// Listed points updated per job of [`neighbour_disks`]. Written into in one pass on
+/// one thread, the Lucy-size cloud's updates took 0.24 s while the other core idled.
+const UPDATE_PIECE: usize = 1 << 12;
+
+/// `which` (ascending) in pieces of at most `size` entries, each with the place of its
+/// first entry in `which` and the part of `surfels` from its first listed surfel to
+/// its last (disjoint, as the entries ascend).
+fn pieces_of<'a>(
+    surfels: &'a mut [Surfel],
+    which: &'a [u32],
+    size: usize,
+) -> Vec<(usize, &'a [u32], &'a mut [Surfel])> {
+    let (mut rest, mut at) = (surfels, 0);
+    let mut pieces = Vec::with_capacity(which.len().div_ceil(size));
+    for (p, ids) in which.chunks(size).enumerate() {
+        let (first, last) = (ids[0] as usize, ids[ids.len() - 1] as usize);
+        let (_, tail) = std::mem::take(&mut rest).split_at_mut(first - at);
+        let (owned, tail) = tail.split_at_mut(last + 1 - first);
+        pieces.push((p * size, ids, owned));
+        (rest, at) = (tail, last + 1);
+    }
+    pieces
+}
 
 /// What a listed point's neighbourhood makes of its surfel: its normal, and where the
 /// covering is at least the radius it has, that radius, its packed shape and whether a
