@@ -7,9 +7,8 @@
 use crate::common;
 
 use spt::eval::metrics::compare;
-use spt::io::ply::{Encoding, FaceList, PolyMesh};
-use spt::render::{Camera, Mode, Settings};
-use spt::tree::scene::Scene;
+use spt::io::ply::{FaceList, PolyMesh};
+use spt::render::Camera;
 
 /// Samples around each ring of the cylinder (0.01 apart on its unit radius).
 const AROUND: usize = 628;
@@ -63,39 +62,14 @@ fn ringed_cylinder() -> PolyMesh {
 #[test]
 fn a_cloud_of_sparse_rings_is_drawn_closed() {
     let dir = common::temp_dir();
-    let mut cylinder = ringed_cylinder();
-    let mesh_path = dir.path().join("rings_mesh.ply");
-    common::write_standard(&mesh_path, &cylinder, Encoding::BinaryLittleEndian);
-    cylinder.faces = FaceList::default();
-    let cloud_path = dir.path().join("rings_cloud.ply");
-    common::write_standard(&cloud_path, &cylinder, Encoding::BinaryLittleEndian);
-    let (mesh, cloud) = (
-        Scene::open(&mesh_path).unwrap(),
-        Scene::open(&cloud_path).unwrap(),
-    );
-    let r = common::renderer();
+    let (mesh, cloud) = common::mesh_and_its_cloud(dir.path(), ringed_cylinder(), "rings");
     let fov = 45f64.to_radians();
     let distance = Camera::framing_distance(fov, 1.0) * 0.6;
     let camera = Camera::orbit(mesh.meta(), 0.0, 0.0, distance, fov);
-    for raster in common::rasters() {
-        let settings = Settings {
-            error_px: 0.0,
-            raster,
-            ..Settings::default()
-        };
-        let draw = |scene: &Scene, settings: &Settings| {
-            let uploaded = r.upload(scene);
-            let (image, _) = r
-                .render(scene, &uploaded, &camera, settings, 512, 512)
-                .unwrap();
-            image
-        };
-        let mesh_settings = Settings {
-            mode: Mode::Mesh,
-            ..settings
-        };
-        let c = compare(&draw(&cloud, &settings), &draw(&mesh, &mesh_settings));
-        let raster = raster.name();
+    for (raster, splats, triangles) in
+        common::cloud_and_mesh_frames((&cloud, &mesh), &camera, (512, 512))
+    {
+        let c = compare(&splats, &triangles);
         eprintln!(
             "{raster}: holes {:.2} %, PSNR {:.1} dB away from the edges ({:.0} % of the pixels), {:.1} dB over the union",
             c.hole_rate * 100.0,

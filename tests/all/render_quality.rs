@@ -5,7 +5,6 @@
 use crate::common;
 
 use spt::eval::metrics::{Comparison, compare};
-use spt::io::ply::{Encoding, FaceList};
 use spt::io::torus_knot::torus_knot;
 use spt::render::{Camera, Mode, Settings};
 use spt::tree::scene::Scene;
@@ -470,37 +469,12 @@ fn splats_crossing_the_near_plane_are_skipped_not_garbled() {
 #[test]
 fn an_unoriented_cloud_s_rims_show_no_dark_dots() {
     let dir = common::temp_dir();
-    let mut knot = torus_knot(2000, 400, false);
-    let mesh_path = dir.path().join("knot_mesh.ply");
-    common::write_standard(&mesh_path, &knot, Encoding::BinaryLittleEndian);
-    knot.faces = FaceList::default();
-    let cloud_path = dir.path().join("knot_cloud.ply");
-    common::write_standard(&cloud_path, &knot, Encoding::BinaryLittleEndian);
-    let (mesh, cloud) = (
-        Scene::open(&mesh_path).unwrap(),
-        Scene::open(&cloud_path).unwrap(),
-    );
-    let r = common::renderer();
-    let (camera, (width, height)) = framed_800x600(&mesh);
-    for raster in common::rasters() {
-        let settings = Settings {
-            error_px: 0.0,
-            raster,
-            ..Settings::default()
-        };
-        let draw = |scene: &Scene, settings: &Settings| {
-            let uploaded = r.upload(scene);
-            let (image, _) = r
-                .render(scene, &uploaded, &camera, settings, width, height)
-                .unwrap();
-            dark_dots(&image)
-        };
-        let mesh_settings = Settings {
-            mode: Mode::Mesh,
-            ..settings
-        };
-        let (dots, reference) = (draw(&cloud, &settings), draw(&mesh, &mesh_settings));
-        let raster = raster.name();
+    let knot = torus_knot(2000, 400, false);
+    let (mesh, cloud) = common::mesh_and_its_cloud(dir.path(), knot, "knot");
+    let (camera, size) = framed_800x600(&mesh);
+    for (raster, splats, triangles) in common::cloud_and_mesh_frames((&cloud, &mesh), &camera, size)
+    {
+        let (dots, reference) = (dark_dots(&splats), dark_dots(&triangles));
         eprintln!("{raster}: {dots} dark dots on the cloud, {reference} on the mesh");
         assert!(
             reference > 10,

@@ -85,6 +85,55 @@ pub fn write_standard(path: &Path, mesh: &PolyMesh, encoding: Encoding) {
     write_ply(path, mesh, &PlyLayout::standard(encoding, mesh)).expect("write PLY");
 }
 
+/// `mesh` written as a PLY, and its vertices alone as a cloud, in `dir` under names
+/// from `name`; both opened: (the mesh, the cloud).
+pub fn mesh_and_its_cloud(
+    dir: &Path,
+    mut mesh: PolyMesh,
+    name: &str,
+) -> (spt::tree::scene::Scene, spt::tree::scene::Scene) {
+    let mesh_path = dir.join(format!("{name}_mesh.ply"));
+    write_standard(&mesh_path, &mesh, Encoding::BinaryLittleEndian);
+    mesh.faces = FaceList::default();
+    let cloud_path = dir.join(format!("{name}_cloud.ply"));
+    write_standard(&cloud_path, &mesh, Encoding::BinaryLittleEndian);
+    let open = |path: &Path| spt::tree::scene::Scene::open(path).expect("open the model");
+    (open(&mesh_path), open(&cloud_path))
+}
+
+/// On each raster path, `cloud`'s leaves and `mesh`'s triangles drawn from `camera` at
+/// `width` × `height`: the path's name, the cloud's frame and the mesh's.
+pub fn cloud_and_mesh_frames(
+    (cloud, mesh): (&spt::tree::scene::Scene, &spt::tree::scene::Scene),
+    camera: &spt::render::Camera,
+    (width, height): (u32, u32),
+) -> Vec<(&'static str, spt::render::Image, spt::render::Image)> {
+    use spt::render::{Mode, Settings};
+    let r = renderer();
+    let draw = |scene: &spt::tree::scene::Scene, settings: &Settings| {
+        let uploaded = r.upload(scene);
+        let (image, _) =
+            (r.render(scene, &uploaded, camera, settings, width, height)).expect("render a frame");
+        image
+    };
+    rasters()
+        .into_iter()
+        .map(|raster| {
+            let settings = Settings {
+                error_px: 0.0,
+                raster,
+                ..Settings::default()
+            };
+            let mesh_settings = Settings {
+                mode: Mode::Mesh,
+                ..settings
+            };
+            let frames = (draw(cloud, &settings), draw(mesh, &mesh_settings));
+            (raster.name(), frames.0, frames.1)
+        })
+        .collect()
+}
+
 /// Writes `mesh` with double coordinates (for offset and scaled copies).
 pub fn write_double(path: &Path, mesh: &PolyMesh) {
     let mut layout = PlyLayout::standard(Encoding::BinaryLittleEndian, mesh);
