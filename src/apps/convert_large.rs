@@ -110,9 +110,15 @@ pub fn options(output: &Path, memory: u64) -> Options {
 /// ([`heap::keep_freed_memory`]): the jobs are planned to peak at half of it.
 const KEEP_FREED_QUARTERS: u64 = 3;
 
+/// Keeps the memory that a job frees for the next, within a budget of `memory` bytes
+/// ([`KEEP_FREED_QUARTERS`]). Call it before the jobs' threads first allocate.
+pub fn keep_freed_memory_within(memory: u64) {
+    heap::keep_freed_memory(memory / 4 * KEEP_FREED_QUARTERS);
+}
+
 pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
     let start = Instant::now();
-    heap::keep_freed_memory(memory / 4 * KEEP_FREED_QUARTERS);
+    keep_freed_memory_within(memory);
     let options = options(output, memory);
     let bars = Bars::default();
     let built = build_file(input, output, &options, &bars)?;

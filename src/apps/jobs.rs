@@ -8,15 +8,15 @@ use std::time::Instant;
 
 use clap::Subcommand;
 
-use crate::apps::convert_large::{Bars, options, summary};
+use crate::apps::convert_large::{Bars, keep_freed_memory_within, options, summary};
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::count;
 use crate::tree::out_of_core::checksums::Check;
-use crate::tree::out_of_core::in_lanes;
 use crate::tree::out_of_core::join::{Joined, join};
 use crate::tree::out_of_core::manifest::Manifest;
 use crate::tree::out_of_core::plan::{Planned, plan};
 use crate::tree::out_of_core::run_job::{Ran, run as run_job};
+use crate::tree::out_of_core::{Options, in_lanes};
 
 /// Exit status of `spt jobs join` when the parts must be built again: the manifest now
 /// holds the new build parameters; build every job again, then join.
@@ -101,6 +101,7 @@ fn run_plan(input: &Path, dir: &Path, memory: Option<u64>) -> anyhow::Result<()>
 
 fn run_build(dir: &Path, jobs: &[usize]) -> anyhow::Result<()> {
     let m = Manifest::read(dir)?;
+    keep_freed_memory_within(Options::budget_of(m.job_points));
     let all: Vec<usize> = (0..m.jobs.len()).collect();
     let named = if jobs.is_empty() { &all[..] } else { jobs };
     in_lanes(named, &|j| {

@@ -100,6 +100,12 @@ impl Options {
             temp_dir,
         }
     }
+
+    /// The budget that plans jobs of `job_points` points: [`Options::for_memory`]'s
+    /// inverse (above its floor).
+    pub fn budget_of(job_points: u64) -> u64 {
+        job_points * 2 * LANES as u64 * BYTES_PER_JOB_POINT
+    }
 }
 
 /// What a build did.
