@@ -20,7 +20,7 @@ use glam::{DVec2, Vec3};
 use rayon::prelude::*;
 
 use super::fill::{AtHull, fill};
-use super::{doubled_area, edge_key, same_area, xy};
+use super::{doubled_area, edge_key, same_area, swept, xy};
 use crate::io::parallel;
 
 /// One strip's share: its kept triangles, the border they leave (each edge wound as
@@ -84,9 +84,10 @@ fn cuts(positions: &[Vec3], strips: usize) -> Vec<f32> {
     cuts
 }
 
-/// The triangulation of the strip of `members` (ascending) between x = `lo` and `hi`
+/// The triangulation of the strip of `members` between x = `lo` and `hi`
 /// (the module doc); None where its samples make no triangle.
 fn strip(positions: &[Vec3], members: &[u32], (lo, hi): (f64, f64)) -> Option<Strip> {
+    let members = &swept(positions, members)[..];
     let at: Vec<_> = members
         .iter()
         .map(|&v| xy(&positions[v as usize]))
