@@ -48,6 +48,7 @@ mod read_ahead;
 pub mod record;
 pub mod run_job;
 pub(crate) mod spill;
+mod write_behind;
 
 use std::path::Path;
 

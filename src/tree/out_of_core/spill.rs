@@ -6,7 +6,7 @@
 //! ([`super::halo`]).
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 use arrayvec::ArrayVec;
@@ -14,6 +14,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, IVec3};
 
 use super::halo::Halo;
+use super::write_behind::{Writers, write_behind};
 use crate::io::format::PointBatch;
 use crate::io::formats::ModelStream;
 use crate::io::model::ModelError;
@@ -396,58 +397,48 @@ pub fn spill(
             .has_normals()
             .then(|| (names("own_normals"), names("halo_normals"))),
     };
-    let open = |paths: &[PathBuf]| writers(paths, buffer_bytes);
-    let mut own = open(&files.own)?;
-    let mut halo = open(&files.halo)?;
-    let (mut own_n, mut halo_n) = match &files.normals {
-        Some((o, h)) => (open(o)?, open(h)?),
-        None => (Vec::new(), Vec::new()),
-    };
+    let jobs = job_count;
+    let mut paths: Vec<PathBuf> = [&files.own[..], &files.halo[..]].concat();
+    if let Some((own, halo)) = &files.normals {
+        paths.extend(own.iter().chain(halo).cloned());
+    }
     let route = HaloRoute::new(table, reach);
-    let mut failed: Option<std::io::Error> = None;
     let mut around = Vec::new();
-    input.points_ahead(|b| {
-        for (i, p) in b.xyz.iter().enumerate() {
-            let p = DVec3::from(*p);
-            if !scan.keeps(p) {
-                continue;
-            }
-            let color = b
-                .color(i, scan.eight_bit)
-                .unwrap_or(crate::surfel::DEFAULT_COLOR);
-            let point = SpillPoint {
-                position: (p - origin).as_vec3().to_array(),
-                color,
-                attributes: b.attributes(i),
-            };
-            let located = grid.locate(p);
-            let job = table[Grid::index(located.0)];
-            let bytes = bytemuck::bytes_of(&point);
-            let normal = b.normals.get(i).map(bytemuck::bytes_of);
-            let write = |files: &mut [BufWriter<File>], normals: &mut [BufWriter<File>], j| {
-                let mut r = files[j as usize].write_all(bytes);
-                if let Some(n) = normal {
-                    r = r.and(normals[j as usize].write_all(n));
+    // Files: own 0..jobs, halo jobs..2 jobs, then their normals' the same way.
+    let fill = |w: &mut Writers| {
+        input.points_ahead(|b| {
+            for (i, p) in b.xyz.iter().enumerate() {
+                let p = DVec3::from(*p);
+                if !scan.keeps(p) {
+                    continue;
                 }
-                r
-            };
-            let mut result = write(&mut own, &mut own_n, job);
-            route.jobs(located, job, &mut around);
-            for &other in &around {
-                result = result.and(write(&mut halo, &mut halo_n, other));
+                let color = b
+                    .color(i, scan.eight_bit)
+                    .unwrap_or(crate::surfel::DEFAULT_COLOR);
+                let point = SpillPoint {
+                    position: (p - origin).as_vec3().to_array(),
+                    color,
+                    attributes: b.attributes(i),
+                };
+                let located = grid.locate(p);
+                let job = table[Grid::index(located.0)] as usize;
+                let normal = b.normals.get(i).map(bytemuck::bytes_of);
+                let mut write = |file: usize| {
+                    w.write(file, bytemuck::bytes_of(&point));
+                    if let Some(n) = normal {
+                        w.write(2 * jobs + file, n);
+                    }
+                };
+                write(job);
+                route.jobs(located, job as u32, &mut around);
+                for &other in &around {
+                    write(jobs + other as usize);
+                }
             }
-            if let Err(e) = result {
-                failed.get_or_insert(e);
-            }
-        }
-        progress(b.xyz.len() as u64);
-    })?;
-    if let Some(e) = failed {
-        return Err(spill_failed(dir, e));
-    }
-    for w in [own, halo, own_n, halo_n].iter_mut().flatten() {
-        w.flush().map_err(|e| spill_failed(dir, e))?;
-    }
+            progress(b.xyz.len() as u64);
+        })
+    };
+    write_behind(create_files(&paths)?, buffer_bytes, fill).map_err(|e| spill_failed(dir, e))??;
     Ok(files)
 }
 
@@ -464,13 +455,22 @@ pub fn job_paths(dir: &Path, jobs: usize, kind: &str) -> Vec<PathBuf> {
         .collect()
 }
 
-/// One buffered writer per path, each file created. An error names the file, and says
-/// what to do when too many files are open at once.
+/// One buffered writer per path, each file created ([`create_files`]).
 pub fn writers(paths: &[PathBuf], buffer: usize) -> anyhow::Result<Vec<BufWriter<File>>> {
+    let files = create_files(paths)?;
+    Ok(files
+        .into_iter()
+        .map(|f| BufWriter::with_capacity(buffer, f))
+        .collect())
+}
+
+/// The files at `paths`, created. An error names the file, and says what to do when
+/// too many files are open at once.
+pub fn create_files(paths: &[PathBuf]) -> anyhow::Result<Vec<File>> {
     paths
         .iter()
         .map(|p| {
-            let file = File::create(p).map_err(|e| {
+            File::create(p).map_err(|e| {
                 let hint = if e.raw_os_error() == Some(24) {
                     " (too many files open at once: raise `ulimit -n`, or give a larger \
                      --memory for fewer jobs)"
@@ -478,8 +478,7 @@ pub fn writers(paths: &[PathBuf], buffer: usize) -> anyhow::Result<Vec<BufWriter
                     ""
                 };
                 anyhow::anyhow!("{}: cannot create a spill file: {e}{hint}", p.display())
-            })?;
-            Ok(BufWriter::with_capacity(buffer, file))
+            })
         })
         .collect()
 }
