@@ -397,7 +397,6 @@ pub fn spill(
             .has_normals()
             .then(|| (names("own_normals"), names("halo_normals"))),
     };
-    let jobs = job_count;
     let mut paths: Vec<PathBuf> = [&files.own[..], &files.halo[..]].concat();
     if let Some((own, halo)) = &files.normals {
         paths.extend(own.iter().chain(halo).cloned());
@@ -426,13 +425,13 @@ pub fn spill(
                 let mut write = |file: usize| {
                     w.write(file, bytemuck::bytes_of(&point));
                     if let Some(n) = normal {
-                        w.write(2 * jobs + file, n);
+                        w.write(2 * job_count + file, n);
                     }
                 };
                 write(job);
                 route.jobs(located, job as u32, &mut around);
                 for &other in &around {
-                    write(jobs + other as usize);
+                    write(job_count + other as usize);
                 }
             }
             progress(b.xyz.len() as u64);
