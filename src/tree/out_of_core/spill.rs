@@ -403,7 +403,7 @@ pub fn spill(
     }
     let route = HaloRoute::new(table, reach);
     let mut around = Vec::new();
-    // Files: own 0..jobs, halo jobs..2 jobs, then their normals' the same way.
+    // The files in `paths`: own 0..J, halo J..2J, then their normals the same way (J = job_count).
     let fill = |w: &mut Writers| {
         input.points_ahead(|b| {
             for (i, p) in b.xyz.iter().enumerate() {
