@@ -8,6 +8,13 @@
 //! task: an item type whose default is all zero bits (numbers, tuples and arrays of
 //! them) is allocated without a pass of its own, its pages first written by the
 //! fillers.
+//!
+//! Items are grouped by a key in [`grouped`]: a counting sort in parallel over ranges
+//! of keys. Each range's groups are a contiguous piece of the rows' starts and of their
+//! values, so each task scans every item and counts, then places, only those of its own
+//! keys. The scans are sequential reads; the counts and placements, the random writes,
+//! are split between the tasks. On the Lucy-size mesh (14 M vertices, 84 M corners)
+//! the corners grouped by vertex on one thread took 0.54–0.68 s of the surfels stage.
 
 use rayon::prelude::*;
 
@@ -46,6 +53,78 @@ pub fn filtered<T: Copy + Default + Send + Sync>(
     concat(&pieces)
 }
 
+/// The most key ranges of [`grouped`] (one per thread up to this): few, since every
+/// range's task reads all the items.
+const MAX_RANGES: usize = 8;
+
+/// Items `0..items` grouped by `key` (below `keys`), as compressed rows: the values of
+/// the items of key g are `values[start[g]..start[g + 1]]`, in item order; `start` has
+/// `keys + 1` entries. See the module doc.
+pub fn grouped<T: Copy + Default + Send + Sync>(
+    (keys, items): (usize, usize),
+    key: impl Fn(usize) -> u32 + Sync,
+    value: impl Fn(usize) -> T + Sync,
+) -> (Vec<u32>, Vec<T>) {
+    assert!(items < u32::MAX as usize, "item counts fit u32");
+    let ranges = rayon::current_num_threads().clamp(1, MAX_RANGES);
+    let bounds: Vec<usize> = (0..=ranges).map(|r| r * keys / ranges).collect();
+    // Each row's length, then (a running sum) its end.
+    let mut start = vec![0u32; keys + 1];
+    split_at_bounds(&mut start[..keys], &bounds)
+        .into_par_iter()
+        .for_each(|(lo, counts)| {
+            for i in 0..items {
+                if let Some(count) = (key(i) as usize)
+                    .checked_sub(lo)
+                    .and_then(|g| counts.get_mut(g))
+                {
+                    *count += 1;
+                }
+            }
+        });
+    let mut total = 0;
+    for end in &mut start[..keys] {
+        total += *end;
+        *end = total;
+    }
+    start[keys] = total;
+    // The items, placed last to first, each move their row's end down one, which
+    // leaves it at the row's start. A range's rows span values[first..last].
+    let value_bounds: Vec<usize> = bounds
+        .iter()
+        .map(|&b| if b == 0 { 0 } else { start[b - 1] as usize })
+        .collect();
+    let mut values = vec![T::default(); total as usize];
+    let rows = split_at_bounds(&mut start[..keys], &bounds);
+    let slots = split_at_bounds(&mut values, &value_bounds);
+    rows.into_par_iter()
+        .zip(slots)
+        .for_each(|((lo, ends), (first, out))| {
+            for i in (0..items).rev() {
+                if let Some(end) = (key(i) as usize)
+                    .checked_sub(lo)
+                    .and_then(|g| ends.get_mut(g))
+                {
+                    *end -= 1;
+                    out[*end as usize - first] = value(i);
+                }
+            }
+        });
+    (start, values)
+}
+
+/// `values` cut at `bounds` (ascending, from 0 to `values.len()`): each piece with the
+/// index it starts at.
+fn split_at_bounds<'a, T>(mut values: &'a mut [T], bounds: &[usize]) -> Vec<(usize, &'a mut [T])> {
+    let mut pieces = Vec::with_capacity(bounds.len().saturating_sub(1));
+    for pair in bounds.windows(2) {
+        let (piece, rest) = values.split_at_mut(pair[1] - pair[0]);
+        pieces.push((pair[0], piece));
+        values = rest;
+    }
+    pieces
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -66,5 +145,27 @@ mod tests {
             .map(|(_, t)| *t)
             .collect();
         assert_eq!(filtered(&items, keep), serial);
+    }
+
+    #[test]
+    fn grouped_rows_hold_each_keys_items_in_order_over_any_ranges() {
+        let (keys, items) = (1000, 9000);
+        let key = |i: usize| ((i * 7 + i / 13) % 997) as u32;
+        let mut expected = vec![Vec::new(); keys];
+        for i in 0..items {
+            expected[key(i) as usize].push(10 * i as u64);
+        }
+        for threads in [1, 3, 8] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (start, values) = pool.install(|| grouped((keys, items), key, |i| 10 * i as u64));
+            assert_eq!(start.len(), keys + 1);
+            for (g, row) in expected.iter().enumerate() {
+                let got = &values[start[g] as usize..start[g + 1] as usize];
+                assert_eq!(got, row.as_slice(), "key {g}, {threads} ranges");
+            }
+        }
     }
 }

@@ -2,19 +2,9 @@
 //! `corners[start[v]..start[v + 1]]`, each 3 t + k for corner k of triangle t, in
 //! triangle order, so that a vertex gathers its terms in the order a pass over the
 //! triangles would add them ([`super::ring`]).
-//!
-//! A counting sort by vertex, in parallel over ranges of vertices: each range's rows
-//! are a contiguous piece of `start` and of `corners`, so each task scans every corner
-//! and counts, then places, only those of its own vertices. The scans are sequential
-//! reads; the counts and placements, the random writes, are split between the tasks.
-//! On the Lucy-size mesh (14 M vertices, 84 M corners) one pass on one thread took
-//! 0.54–0.68 s of the surfels stage.
+//! They are grouped by a counting sort on every core ([`parallel::grouped`]).
 
-use rayon::prelude::*;
-
-/// The most vertex ranges (one per thread up to this): few, since every range's task
-/// reads all the corners.
-const MAX_RANGES: usize = 8;
+use crate::io::parallel;
 
 /// Each vertex's corners of a triangle mesh (see the module doc).
 pub struct Rings {
@@ -72,57 +62,7 @@ impl Rings {
 /// `start` of length `vertex_count + 1`.
 fn corners_by_vertex(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
     let flat = triangles.as_flattened();
-    let ranges = rayon::current_num_threads().clamp(1, MAX_RANGES);
-    let bounds: Vec<usize> = (0..=ranges).map(|r| r * vertex_count / ranges).collect();
-    // Each row's length, then (a running sum) its end.
-    let mut start = vec![0u32; vertex_count + 1];
-    split_at_bounds(&mut start[..vertex_count], &bounds)
-        .into_par_iter()
-        .for_each(|(lo, counts)| {
-            for &v in flat {
-                if let Some(count) = (v as usize).checked_sub(lo).and_then(|i| counts.get_mut(i)) {
-                    *count += 1;
-                }
-            }
-        });
-    let mut total = 0;
-    for end in &mut start[..vertex_count] {
-        total += *end;
-        *end = total;
-    }
-    start[vertex_count] = total;
-    // The corners, placed last to first, each move their row's end down one, which
-    // leaves it at the row's start. A range's rows span corners[first..last].
-    let corner_bounds: Vec<usize> = bounds
-        .iter()
-        .map(|&b| if b == 0 { 0 } else { start[b - 1] as usize })
-        .collect();
-    let mut corners = vec![0u32; total as usize];
-    let rows = split_at_bounds(&mut start[..vertex_count], &bounds);
-    let slots = split_at_bounds(&mut corners, &corner_bounds);
-    rows.into_par_iter()
-        .zip(slots)
-        .for_each(|((lo, ends), (first, out))| {
-            for (c, &v) in flat.iter().enumerate().rev() {
-                if let Some(end) = (v as usize).checked_sub(lo).and_then(|i| ends.get_mut(i)) {
-                    *end -= 1;
-                    out[*end as usize - first] = c as u32;
-                }
-            }
-        });
-    (start, corners)
-}
-
-/// `values` cut at `bounds` (ascending, from 0 to `values.len()`): each piece with the
-/// index it starts at.
-fn split_at_bounds<'a, T>(mut values: &'a mut [T], bounds: &[usize]) -> Vec<(usize, &'a mut [T])> {
-    let mut pieces = Vec::with_capacity(bounds.len().saturating_sub(1));
-    for pair in bounds.windows(2) {
-        let (piece, rest) = values.split_at_mut(pair[1] - pair[0]);
-        pieces.push((pair[0], piece));
-        values = rest;
-    }
-    pieces
+    parallel::grouped((vertex_count, flat.len()), |c| flat[c], |c| c as u32)
 }
 
 #[cfg(test)]

@@ -51,7 +51,6 @@ use std::collections::HashMap;
 use glam::{DMat3, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::corners::Rings;
 use super::sets::Sets;
 use crate::io::delaunay::Unheld;
 use crate::io::parallel;
@@ -280,18 +279,28 @@ type Edge = (u32, u32);
 /// The edges of the samples' TIN (`triangles`, long ones dropped, over `vertex_count`
 /// samples), each once, lesser end first, in order; and those of its border (of one
 /// triangle only: its hull, and around the holes where it left long triangles out).
-/// Each vertex lists its greater neighbours from its own ring of corners, in parallel:
-/// an edge is a border edge when one triangle of the ring holds it.
+/// Each triangle's edges are grouped under their lesser ends ([`parallel::grouped`]):
+/// a vertex's row lists its greater neighbours, each once per triangle holding the
+/// edge, and it sorts its own row, in parallel: a border edge's end appears once.
 fn tin_edges(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<Edge>, Vec<Edge>) {
-    let rings = Rings::of(vertex_count, triangles);
+    let flat = triangles.as_flattened();
+    // Corner c's edge runs to the next corner of its triangle.
+    let ends = |c: usize| (flat[c], flat[c - c % 3 + (c + 1) % 3]);
+    let (start, greater) = parallel::grouped(
+        (vertex_count, flat.len()),
+        |c| ends(c).0.min(ends(c).1),
+        |c| ends(c).0.max(ends(c).1),
+    );
     let chunks: Vec<(Vec<Edge>, Vec<Edge>)> = (0..vertex_count)
         .into_par_iter()
         .chunks(1 << 12)
         .map(|vertices| {
-            let (mut all, mut border, mut ends) = (Vec::new(), Vec::new(), Vec::new());
+            let (mut all, mut border, mut row) = (Vec::new(), Vec::new(), Vec::new());
             for v in vertices {
-                let greater = rings.neighbour_runs(triangles, v, |w| w as usize > v, &mut ends);
-                for run in greater {
+                row.clear();
+                row.extend_from_slice(&greater[start[v] as usize..start[v + 1] as usize]);
+                row.sort_unstable();
+                for run in row.chunk_by(|a, b| a == b) {
                     all.push((v as u32, run[0]));
                     if run.len() == 1 {
                         border.push((v as u32, run[0]));

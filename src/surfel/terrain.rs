@@ -38,6 +38,7 @@ use rayon::prelude::*;
 
 use super::long_triangles::{self, Looks, Reach};
 use super::{Surfel, SurfelStats};
+use crate::io::parallel;
 use crate::io::triangulate::drop_long;
 
 /// Longest edge, in the tile's spacings, beyond which a TIN triangle gets a splat of
@@ -87,7 +88,7 @@ pub fn terrain_disks(
 ) -> Option<TinSplats> {
     let mut triangles = drop_long(points, &delaunay, |c, median| cover.covers(c, median));
     drop(delaunay);
-    in_canonical_order(&mut triangles);
+    in_canonical_order(&mut triangles, points.len());
     let spacing = median_horizontal_edge(points, &triangles).filter(|s| s.is_normal())?;
     triangles.par_iter_mut().for_each(|t| {
         let [a, b, c] = t.map(|v| points[v as usize]);
@@ -172,13 +173,22 @@ pub struct TinSplats {
 
 /// Turns each triangle to start at its least corner (its winding kept) and sorts them:
 /// the TIN's splats do not depend on the order a triangulation lists its triangles in
-/// ([`crate::io::delaunay`] makes them in more than one way).
-fn in_canonical_order(triangles: &mut [[u32; 3]]) {
+/// ([`crate::io::delaunay`] makes them in more than one way). The triangles are grouped
+/// by least corner (below `vertex_count`, [`parallel::grouped`]) and each group, of
+/// two on average, sorted alone: on a 2.5 M-sample job's 5 M triangles a comparison
+/// sort of them all took 0.24 s of one core.
+fn in_canonical_order(triangles: &mut Vec<[u32; 3]>, vertex_count: usize) {
     triangles.par_iter_mut().for_each(|t| {
         let least = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
         t.rotate_left(least);
     });
-    triangles.par_sort_unstable();
+    let grouped = parallel::grouped(
+        (vertex_count, triangles.len()),
+        |k| triangles[k][0],
+        |k| triangles[k],
+    );
+    *triangles = grouped.1;
+    (triangles.par_chunk_by_mut(|a, b| a[0] == b[0])).for_each(|group| group.sort_unstable());
 }
 
 /// The median horizontal length of `triangles`' edges; None when there are none. It is
