@@ -13,7 +13,7 @@ mod strips;
 mod twins;
 
 use delaunator::Point;
-use glam::{Vec2, Vec3};
+use glam::{DVec2, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::heap;
@@ -129,7 +129,11 @@ fn ends(key: u64) -> (u32, u32) {
 
 /// Twice the x–y area of triangle `t`, in f64.
 fn doubled_area(points: &[Vec3], t: &[u32; 3]) -> f64 {
-    let [a, b, c] = t.map(|v| points[v as usize].truncate().as_dvec2());
+    doubled_area_xy(t.map(|v| points[v as usize].truncate().as_dvec2()))
+}
+
+/// Twice the area of the triangle of corners `[a, b, c]`.
+fn doubled_area_xy([a, b, c]: [DVec2; 3]) -> f64 {
     (b - a).perp_dot(c - a).abs()
 }
 

@@ -20,7 +20,7 @@ use glam::{DVec2, Vec3};
 use rayon::prelude::*;
 
 use super::fill::{AtHull, fill};
-use super::{doubled_area, edge_key, same_area, swept, xy};
+use super::{doubled_area, doubled_area_xy, edge_key, same_area, swept, xy};
 use crate::io::parallel;
 
 /// One strip's share: its kept triangles, the border they leave (each edge wound as
@@ -72,14 +72,24 @@ pub fn in_strips(positions: &[Vec3], strips: usize) -> Option<Vec<[u32; 3]>> {
 }
 
 /// The x values that cut `positions` into `strips` of about equal counts, ascending,
-/// distinct, above the least x (no strip is empty).
+/// distinct, above the least x (no strip is empty): the x of ranks k n / `strips`
+/// (k = 1, 2, …), each selected among the xs above the last rank's.
 fn cuts(positions: &[Vec3], strips: usize) -> Vec<f32> {
     let mut xs: Vec<f32> = positions.par_iter().map(|p| p.x).collect();
-    xs.par_sort_unstable_by(f32::total_cmp);
-    let mut cuts: Vec<f32> = (1..strips)
-        .map(|k| xs[k * xs.len() / strips])
-        .filter(|&c| c > xs[0])
-        .collect();
+    let Some(&least) = xs.iter().min_by(|a, b| a.total_cmp(b)) else {
+        return Vec::new();
+    };
+    let (mut above, mut first) = (&mut xs[..], 0);
+    let mut cuts = Vec::with_capacity(strips);
+    for rank in (1..strips).map(|k| k * positions.len() / strips) {
+        if rank < first {
+            continue; // The last rank again (fewer samples than strips).
+        }
+        let (_, &mut cut, rest) = above.select_nth_unstable_by(rank - first, f32::total_cmp);
+        cuts.push(cut);
+        (above, first) = (rest, rank + 1);
+    }
+    cuts.retain(|&c| c > least);
     cuts.dedup();
     cuts
 }
@@ -93,14 +103,21 @@ fn strip(positions: &[Vec3], members: &[u32], (lo, hi): (f64, f64)) -> Option<St
         .map(|&v| xy(&positions[v as usize]))
         .collect();
     let dt = delaunator::triangulate(&at);
-    drop(at);
     if dt.triangles.is_empty() {
         return None;
     }
     let corner = |h: usize| members[dt.triangles[h]];
     let corners = |t: usize| [0, 1, 2].map(|k| corner(3 * t + k));
+    // A triangle's corners in x–y, read from delaunator's input (the strip's own
+    // samples, together in memory) rather than from all the positions.
+    let corners_xy = |t: usize| {
+        [0, 1, 2].map(|k| {
+            let p = &at[dt.triangles[3 * t + k]];
+            DVec2::new(p.x, p.y)
+        })
+    };
     let within = |t: usize| {
-        let [a, b, c] = corners(t).map(|v| positions[v as usize].truncate().as_dvec2());
+        let [a, b, c] = corners_xy(t);
         circumcircle(a, b, c).is_some_and(|(centre, r)| {
             let margin = 1e-6 * (r + centre.x.abs());
             centre.x - r > lo + margin && centre.x + r < hi - margin
@@ -115,7 +132,7 @@ fn strip(positions: &[Vec3], members: &[u32], (lo, hi): (f64, f64)) -> Option<St
             continue;
         }
         kept.push(corners(t));
-        kept_area += doubled_area(positions, &corners(t));
+        kept_area += doubled_area_xy(corners_xy(t));
         for h in 3 * t..3 * t + 3 {
             let across = dt.halfedges[h];
             if across == EMPTY || !kept_flags[across / 3] {
@@ -193,6 +210,28 @@ mod tests {
                     "{strips}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn the_cuts_are_the_sorted_xs_at_their_ranks() {
+        // Whole xs (many ties) and fewer samples than strips too.
+        for (n, strips) in [(6000, 16), (1000, 7), (5, 16)] {
+            let points: Vec<Vec3> = (scattered(n, 4).iter())
+                .map(|p| Vec3::new(p.x.round(), p.y, 0.0))
+                .collect();
+            let mut xs: Vec<f32> = points.iter().map(|p| p.x).collect();
+            xs.sort_by(f32::total_cmp);
+            let mut expected: Vec<f32> = (1..strips)
+                .map(|k| xs[k * n / strips])
+                .filter(|&c| c > xs[0])
+                .collect();
+            expected.dedup();
+            assert_eq!(
+                cuts(&points, strips),
+                expected,
+                "{n} samples, {strips} strips"
+            );
         }
     }
 
