@@ -145,8 +145,18 @@ pub fn short_or_kept(
             dx * dx + dy * dy
         })
     };
+    // Each triangle's longest square, NaN if any is (which no bound holds), kept
+    // beside the squares, whose order the median's selection scrambles.
+    let longest = |s: [f64; 3]| match s.iter().any(|x| x.is_nan()) {
+        true => f64::NAN,
+        false => s[0].max(s[1]).max(s[2]),
+    };
     let mut edges = vec![[0.0; 3]; triangles.len()];
-    (edges.par_iter_mut().zip(triangles)).for_each(|(lengths, t)| *lengths = squares(t));
+    let mut longest_square = vec![0.0; triangles.len()];
+    (edges.par_iter_mut().zip(&mut longest_square).zip(triangles)).for_each(|((e, l), t)| {
+        *e = squares(t);
+        *l = longest(*e);
+    });
     let flat = edges.as_flattened_mut();
     if flat.is_empty() {
         return Vec::new();
@@ -155,11 +165,10 @@ pub fn short_or_kept(
     let median = flat.select_nth_unstable_by(mid, f64::total_cmp).1.sqrt();
     drop(edges);
     let within = largest_square_within(TERRAIN_MAX_EDGE * median);
-    (triangles.par_iter())
-        .map(|t| {
-            let short = squares(t).iter().all(|&s| s <= within);
+    (triangles.par_iter().zip(longest_square))
+        .map(|(t, longest)| {
             let centroid = || t.iter().map(|&v| positions[v as usize]).sum::<Vec3>() / 3.0;
-            short || keep_long(centroid(), median)
+            longest <= within || keep_long(centroid(), median)
         })
         .collect()
 }
