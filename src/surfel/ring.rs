@@ -155,17 +155,14 @@ fn border_fan(
     corners: impl Iterator<Item = (u32, u32)> + Clone,
     direction: impl Fn(u32) -> DVec2,
 ) -> Option<Fan> {
-    let border_out: Vec<u32> = corners
-        .clone()
-        .map(|(next, _)| next)
-        .filter(|&w| !corners.clone().any(|(_, previous)| previous == w))
-        .collect();
-    let border_in: Vec<u32> = corners
-        .clone()
-        .map(|(_, previous)| previous)
-        .filter(|&w| !corners.clone().any(|(next, _)| next == w))
-        .collect();
-    let ([w_out], [w_in]) = (border_out.as_slice(), border_in.as_slice()) else {
+    // The one end of the first kind that no corner has as its second, if one only.
+    let lone = |first: fn((u32, u32)) -> u32, second: fn((u32, u32)) -> u32| {
+        let mut ends = corners.clone().map(first);
+        let lone = |w: &u32| !corners.clone().any(|c| second(c) == *w);
+        let found = ends.find(lone)?;
+        ends.all(|w| !lone(&w)).then_some(found)
+    };
+    let (Some(w_out), Some(w_in)) = (lone(|c| c.0, |c| c.1), lone(|c| c.1, |c| c.0)) else {
         return None;
     };
     let (mut angle, mut winding) = (0.0, 0.0);
@@ -174,7 +171,7 @@ fn border_fan(
         angle += d_out.angle_to(d_in);
         winding += d_out.perp_dot(d_in);
     }
-    let (a, b) = (direction(*w_out), direction(*w_in));
+    let (a, b) = (direction(w_out), direction(w_in));
     let (start, end, angle) = if winding < 0.0 {
         (b, a, -angle)
     } else {
