@@ -57,9 +57,9 @@ pub fn filtered<T: Copy + Default + Send + Sync>(
 /// range's task reads all the items.
 const MAX_RANGES: usize = 8;
 
-/// Items `0..items` grouped by `key` (below `keys`), as compressed rows: the values of
-/// the items of key g are `values[start[g]..start[g + 1]]`, in item order; `start` has
-/// `keys + 1` entries. See the module doc.
+/// Items `0..items` grouped by `key`, as compressed rows: the values of the items of
+/// key g are `values[start[g]..start[g + 1]]`, in item order; `start` has `keys + 1`
+/// entries, and an item whose key is not below `keys` is in no row. See the module doc.
 pub fn grouped<T: Copy + Default + Send + Sync>(
     (keys, items): (usize, usize),
     key: impl Fn(usize) -> u32 + Sync,
@@ -167,5 +167,10 @@ mod tests {
                 assert_eq!(got, row.as_slice(), "key {g}, {threads} ranges");
             }
         }
+        // Keys 3 and 4 are not below 3: those items are in no row.
+        assert_eq!(
+            grouped((3, 5), |i| i as u32, |i| i),
+            (vec![0, 1, 2, 3], vec![0, 1, 2])
+        );
     }
 }
