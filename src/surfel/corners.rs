@@ -38,21 +38,20 @@ impl Rings {
         })
     }
 
-    /// Vertex `v`'s neighbours that `keep` passes, as runs of equal ends of its
-    /// corners' edges in ascending order, sorted in `ends`: an edge (v, w) that one
-    /// triangle of the ring holds (a border edge) makes a run of one.
+    /// Vertex `v`'s neighbours, as runs of equal ends of its corners' edges in
+    /// ascending order, sorted in `ends`: an edge (v, w) that one triangle of the ring
+    /// holds (a border edge) makes a run of one.
     pub fn neighbour_runs<'e>(
         &self,
         triangles: &[[u32; 3]],
         v: usize,
-        keep: impl Fn(u32) -> bool,
         ends: &'e mut Vec<u32>,
     ) -> impl Iterator<Item = &'e [u32]> + 'e {
         ends.clear();
         let all = self
             .ring(triangles, v)
             .flat_map(|(_, next, previous)| [next, previous]);
-        ends.extend(all.filter(|&w| keep(w)));
+        ends.extend(all);
         ends.sort_unstable();
         ends.chunk_by(|a, b| a == b)
     }

@@ -335,7 +335,7 @@ pub fn clip_at_border(
         .into_par_iter()
         .with_min_len(1 << 12)
         .map_init(Vec::new, |ends, v| {
-            let mut runs = rings.neighbour_runs(triangles, v, |_| true, ends);
+            let mut runs = rings.neighbour_runs(triangles, v, ends);
             runs.any(|run| run.len() == 1)
         })
         .collect();
