@@ -46,6 +46,10 @@ pub trait PointStream: Send + Sync {
     fn up(&self) -> Option<UpAxis>;
     /// Calls `f` on every batch of points, in file order.
     fn points(&self, f: &mut dyn FnMut(&PointBatch)) -> Result<(), ModelError>;
+    /// Whether [`PointStream::points`] decodes on other threads, ahead of `f`.
+    fn decodes_ahead(&self) -> bool {
+        false
+    }
     /// Calls `f` on the positions of rows 0, `stride`, 2 `stride`, … in file order. By
     /// default from a pass over every point; a format whose records lie at known
     /// offsets reads only those.

@@ -84,8 +84,12 @@ impl ModelStream {
     /// As [`ModelStream::points`], with the file decoded on another thread up to
     /// [`BATCHES_AHEAD`] batches ahead of `f`, in batches of at most
     /// [`POINTS_AHEAD_BATCH`] points: for a pass whose own work per point weighs as
-    /// much as the decoding.
+    /// much as the decoding. A format that decodes ahead itself
+    /// ([`PointStream::decodes_ahead`]) is read as it is.
     pub fn points_ahead(&self, mut f: impl FnMut(&PointBatch)) -> Result<(), ModelError> {
+        if self.0.decodes_ahead() {
+            return self.points(f);
+        }
         use std::sync::mpsc::{channel, sync_channel};
         let (full, decoded) = sync_channel::<PointBatch>(BATCHES_AHEAD);
         let (used, recycled) = channel::<PointBatch>();

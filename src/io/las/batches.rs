@@ -23,6 +23,9 @@ pub struct LasBatches {
     data: PointData,
     per_batch: u64,
     read: u64,
+    /// The row the batches end before: the header's count, or a range's end
+    /// ([`LasBatches::seek_rows`]).
+    until: u64,
     expected: u64,
 }
 
@@ -40,6 +43,7 @@ impl LasBatches {
                 BATCH
             },
             read: 0,
+            until: header.number_of_points(),
             expected: header.number_of_points(),
             reader,
         })
@@ -117,13 +121,27 @@ impl LasBatches {
         let _ = (rows, stride);
     }
 
+    /// From now on, reads the rows of `rows` (their part below the header's count),
+    /// cut into batches as a pass from row 0 would cut them where `rows.start` is a
+    /// whole number of batches.
+    pub fn seek_rows(&mut self, rows: std::ops::Range<u64>) -> Result<(), LasError> {
+        let start = rows.start.min(self.expected);
+        if start < self.expected {
+            (self.reader.seek(start))
+                .map_err(|e| damaged(&self.path, self.expected, start, e.to_string()))?;
+        }
+        self.read = start;
+        self.until = rows.end.clamp(start, self.expected);
+        Ok(())
+    }
+
     /// Reads the next batch into `out` (cleared first); false once every point is read.
     pub fn next_batch(&mut self, out: &mut PointBatch) -> Result<bool, LasError> {
         out.clear();
-        if self.read >= self.expected {
+        if self.read >= self.until {
             return Ok(false);
         }
-        let want = self.per_batch.min(self.expected - self.read);
+        let want = self.per_batch.min(self.until - self.read);
         let n = fill_contained(&mut self.reader, want, &mut self.data)
             .map_err(|e| damaged(&self.path, self.expected, self.read, e))?;
         if n == 0 {

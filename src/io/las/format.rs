@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::in_order::{BLOCK, points_in_order};
 use super::{LasBatches, read_las};
 use crate::io::format::{Format, PointStream};
 use crate::io::format::{PointBatch, every_stride_th};
@@ -56,6 +57,21 @@ struct LasStream {
     compressed: bool,
 }
 
+impl LasStream {
+    /// The threads that decode a pass ([`points_in_order`]): one per thread of the
+    /// pool, at most [`MAX_DECODERS`], for an uncompressed file of more than a block;
+    /// None where one reader reads it (a LAZ file's chunks are decoded in parallel by
+    /// `laz` instead).
+    fn decoders(&self) -> Option<usize> {
+        let workers = rayon::current_num_threads().min(MAX_DECODERS);
+        (!self.compressed && workers > 1 && self.points > BLOCK).then_some(workers)
+    }
+}
+
+/// Most threads that decode a LAS file's pass: a pass's own work per point (spilling,
+/// counting) keeps up with about this many.
+const MAX_DECODERS: usize = 8;
+
 impl PointStream for LasStream {
     fn point_count(&self) -> u64 {
         self.points
@@ -78,12 +94,19 @@ impl PointStream for LasStream {
     }
 
     fn points(&self, f: &mut dyn FnMut(&PointBatch)) -> Result<(), ModelError> {
+        if let Some(workers) = self.decoders() {
+            return Ok(points_in_order(&self.path, (workers, BLOCK), f)?);
+        }
         let mut batch = PointBatch::default();
         let mut reader = LasBatches::open(&self.path)?;
         while reader.next_batch(&mut batch)? {
             f(&batch);
         }
         Ok(())
+    }
+
+    fn decodes_ahead(&self) -> bool {
+        self.decoders().is_some()
     }
 
     fn strided_positions(

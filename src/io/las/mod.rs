@@ -23,6 +23,7 @@ use serde::Serialize;
 mod batches;
 mod checks;
 mod format;
+mod in_order;
 mod point_wise;
 
 use super::geometry::{Geometry, GeometryStats, PointAttributes, assemble};
