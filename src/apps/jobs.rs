@@ -15,7 +15,7 @@ use crate::tree::out_of_core::checksums::Check;
 use crate::tree::out_of_core::join::{Joined, join};
 use crate::tree::out_of_core::manifest::Manifest;
 use crate::tree::out_of_core::plan::{Planned, plan};
-use crate::tree::out_of_core::run_job::{Ran, run as run_job};
+use crate::tree::out_of_core::run_job::{Ran, run_behind};
 use crate::tree::out_of_core::{Options, in_lanes};
 
 /// Exit status of `spt jobs join` when the parts must be built again: the manifest now
@@ -104,9 +104,9 @@ fn run_build(dir: &Path, jobs: &[usize]) -> anyhow::Result<()> {
     keep_freed_memory_within(Options::budget_of(m.job_points));
     let all: Vec<usize> = (0..m.jobs.len()).collect();
     let named = if jobs.is_empty() { &all[..] } else { jobs };
-    in_lanes(named, &|j| {
+    in_lanes(named, &|j, behind| {
         let start = Instant::now();
-        let (how, record) = match run_job(dir, &m, j, Check::Checksums)? {
+        let (how, record) = match run_behind(dir, &m, j, Check::Checksums, behind)? {
             Ran::Built(r) => ("built", r),
             Ran::Kept(r) => ("kept (already built)", r),
         };

@@ -1,7 +1,8 @@
 //! One job of an out-of-core build: its points and halo in, its subtree out. The job
 //! reads its spill files, makes the leaf surfels of its own points (their
 //! neighbourhoods see the halo: the points beyond its border), builds their tree with
-//! the model's error scale, cuts it into chunks, and writes the list to a part file.
+//! the model's error scale and cuts it into chunks: the list that [`Built::write`]
+//! writes to a part file.
 //! What the top tree and the final file need is kept in [`Part`]: the subtree's root,
 //! its sizes, its box, a sample of its intensities. Given its input points, a job
 //! depends on nothing else, so jobs can run anywhere.
@@ -121,10 +122,16 @@ fn read_normals(files: JobFiles, points: usize) -> anyhow::Result<Option<Vec<Vec
     Ok(Some(normals.into_iter().map(Vec3::from).collect()))
 }
 
-/// A built part and its file's entry (size, checksum).
-pub type Built = (Part, FileEntry);
+/// A built job: what the join needs of its part, the part file's entry (size,
+/// checksum), and the list whose sections the file holds, to be written
+/// ([`Built::write`]) before the record that names it.
+pub struct Built {
+    pub part: Part,
+    pub file: FileEntry,
+    list: SequentialList,
+}
 
-/// Builds the job of spill files `files` into `part`.
+/// Builds the job of spill files `files`, its part to be written at `part`.
 pub fn build(model: &Model, files: JobFiles, part: &Path) -> anyhow::Result<Built> {
     let (own, halo) = (files.own, files.halo);
     let own_points = read_spill(own)?;
@@ -153,7 +160,7 @@ pub fn build(model: &Model, files: JobFiles, part: &Path) -> anyhow::Result<Buil
     build_leaves(model, leaves, intensities, part)
 }
 
-/// Builds the tree of a job's leaf surfels into `part`.
+/// Builds the tree of a job's leaf surfels, its part to be written at `part`.
 pub fn build_leaves(
     model: &Model,
     mut leaves: LeafSurfels,
@@ -167,8 +174,7 @@ pub fn build_leaves(
     let hierarchy = build_hierarchy(&leaves, &Silent);
     let set = build_records_scaled(leaves, hierarchy, model.error_scale, &Silent);
     let list = sort_list_chunked(set, model.chunk_nodes);
-    let file = write_part(&list, &intensities, part)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", part.display()))?;
+    let file = part_entry(&list, &intensities, part);
     let part = Part {
         path: part.to_owned(),
         root: (
@@ -194,38 +200,48 @@ pub fn build_leaves(
         intensities,
         disk_extent,
     };
-    Ok((part, file))
+    Ok(Built { part, file, list })
 }
 
-/// Writes the part file atomically; returns its entry (size, xxh3).
-fn write_part(
-    list: &SequentialList,
-    intensities: &[PointAttributes],
-    path: &Path,
-) -> std::io::Result<FileEntry> {
-    let sections: [&[u8]; 6] = [
+/// The part file's sections: the list's nodes, parents, shapes, attributes and
+/// chunks, then the intensity sample.
+fn sections<'a>(list: &'a SequentialList, intensities: &'a [PointAttributes]) -> [&'a [u8]; 6] {
+    [
         bytemuck::cast_slice(&list.nodes),
         bytemuck::cast_slice(&list.parents),
         bytemuck::cast_slice(&list.shapes),
         bytemuck::cast_slice(&list.attributes),
         bytemuck::cast_slice::<Chunk, u8>(&list.chunks),
         bytemuck::cast_slice(intensities),
-    ];
+    ]
+}
+
+/// The entry (size, xxh3) of the part file at `path` that holds `list`'s sections.
+fn part_entry(list: &SequentialList, intensities: &[PointAttributes], path: &Path) -> FileEntry {
     let mut hash = Xxh3::new();
     let mut bytes = 0;
-    write_atomically(path, |w| {
-        for s in sections {
-            w.write_all(s)?;
-            hash.update(s);
-            bytes += s.len() as u64;
-        }
-        Ok(())
-    })?;
+    for s in sections(list, intensities) {
+        hash.update(s);
+        bytes += s.len() as u64;
+    }
     let name = path.file_name().unwrap_or_default().to_string_lossy();
-    Ok(FileEntry {
+    FileEntry {
         role: "part".to_owned(),
         name: name.into_owned(),
         bytes,
         xxh3: format!("{:016x}", hash.digest()),
-    })
+    }
+}
+
+impl Built {
+    /// Writes the part file at its path, atomically.
+    pub fn write(&self) -> anyhow::Result<()> {
+        write_atomically(&self.part.path, |w| {
+            for s in sections(&self.list, &self.part.intensities) {
+                w.write_all(s)?;
+            }
+            Ok(())
+        })?;
+        Ok(())
+    }
 }

@@ -39,6 +39,7 @@ pub mod checksums;
 pub(crate) mod halo;
 pub(crate) mod job;
 pub mod join;
+mod lanes;
 pub mod manifest;
 pub(crate) mod mesh_job;
 pub(crate) mod mesh_spill;
@@ -56,6 +57,7 @@ use crate::io::heap;
 use crate::tree::TreeMeta;
 use checksums::Check;
 use join::Joined;
+pub use lanes::{Behind, in_lanes};
 use manifest::Manifest;
 
 /// Bytes of memory a job takes per point at its peak (its surfels, k-d tree, nodes and
@@ -73,7 +75,8 @@ pub const SCALE_SLACK: f32 = 64.0;
 
 /// Jobs that [`build_file`] builds at once, and that [`Options::for_memory`] sizes the
 /// jobs to fit the budget together. A job's serial stretches (its triangulations'
-/// merges, its file's read and write) leave cores idle that a second job fills: on
+/// merges, its files' reads) leave cores idle that a second job fills (its part is
+/// written behind it, [`lanes`]): on
 /// 2 cores one job at a time kept 1.5 of them busy. Three at a time took as long (12
 /// of the 200 M-point tile's jobs, alternated twice: 50.4 and 50.6 s against 50.5 and
 /// 50.7 s, peak 2.50–2.69 against 1.84–1.89 GiB; 2 AMD EPYC cores, 2026-12-03). Fixed,
@@ -164,42 +167,10 @@ pub fn build_file(
 /// memory each frees given back as [`heap::give_back_freed_memory`] decides.
 fn run_jobs(dir: &Path, manifest: &Manifest, progress: &dyn Progress) -> anyhow::Result<()> {
     let all: Vec<usize> = (0..manifest.jobs.len()).collect();
-    in_lanes(&all, &|j| {
-        run_job::run(dir, manifest, j, Check::Sizes)?;
+    in_lanes(&all, &|j, behind| {
+        run_job::run_behind(dir, manifest, j, Check::Sizes, behind)?;
         heap::give_back_freed_memory();
         progress.advance(manifest.jobs[j].points);
         Ok(())
     })
-}
-
-/// Runs `work` on each of `jobs`, [`LANES`] at a time: each lane takes the next job
-/// not yet taken. The jobs' parallel work shares the one thread pool; a lane's serial
-/// work runs on its own thread. The first error stops the lanes from taking more jobs
-/// and is returned.
-pub fn in_lanes(
-    jobs: &[usize],
-    work: &(dyn Fn(usize) -> anyhow::Result<()> + Sync),
-) -> anyhow::Result<()> {
-    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-    let (next, failed) = (AtomicUsize::new(0), AtomicBool::new(false));
-    let lane = || -> anyhow::Result<()> {
-        while !failed.load(Ordering::Relaxed) {
-            let Some(&j) = jobs.get(next.fetch_add(1, Ordering::Relaxed)) else {
-                return Ok(());
-            };
-            if let Err(e) = work(j) {
-                failed.store(true, Ordering::Relaxed);
-                return Err(e);
-            }
-        }
-        Ok(())
-    };
-    let results: Vec<anyhow::Result<()>> = std::thread::scope(|scope| {
-        let lanes: Vec<_> = (0..LANES).map(|_| scope.spawn(lane)).collect();
-        lanes
-            .into_iter()
-            .map(|l| l.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
-            .collect()
-    });
-    results.into_iter().collect()
 }

@@ -266,7 +266,7 @@ impl Spilling<'_> {
         let jobs: Vec<usize> = (0..terms.len()).collect();
         self.progress.stage("vote", self.scan.count);
         let (model, boxes, progress) = (self.model, self.jobs, self.progress);
-        in_lanes(&jobs, &|j| {
+        in_lanes(&jobs, &|j, _| {
             let job = (&*files.own[j], &*files.halo[j], &*files.triangles[j]);
             let _ = terms[j].set(mesh_job::flux(model, job, c)?);
             progress.advance(boxes[j].points);

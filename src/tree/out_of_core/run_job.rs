@@ -8,6 +8,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
+use super::Behind;
 use super::checksums::{self, Check};
 use super::job::{self, Model};
 use super::manifest::Manifest;
@@ -39,8 +40,23 @@ pub fn done(
 }
 
 /// Runs job `j` of the plan in `dir` (its manifest `manifest`), its input files and a
-/// part already there checked by `check`.
+/// part already there checked by `check`; returns once its part and record are written.
 pub fn run(dir: &Path, manifest: &Manifest, j: usize, check: Check) -> anyhow::Result<Ran> {
+    let mut behind = Behind::default();
+    let ran = run_behind(dir, manifest, j, check, &mut behind)?;
+    behind.finish()?;
+    Ok(ran)
+}
+
+/// [`run`], the part file and then its record written `behind` the lane: the record
+/// returned names a part that is whole once `behind` has finished.
+pub fn run_behind(
+    dir: &Path,
+    manifest: &Manifest,
+    j: usize,
+    check: Check,
+    behind: &mut Behind,
+) -> anyhow::Result<Ran> {
     let jobs = manifest.jobs.len();
     let Some(entry) = manifest.jobs.get(j) else {
         anyhow::bail!(
@@ -70,7 +86,7 @@ pub fn run(dir: &Path, manifest: &Manifest, j: usize, check: Check) -> anyhow::R
         file("own").ok_or_else(|| missing("own"))?,
         file("halo").ok_or_else(|| missing("halo"))?,
     );
-    let ((part, file_entry), vote) = if manifest.input.mesh {
+    let (built, vote) = if manifest.input.mesh {
         let triangles = file("tri").ok_or_else(|| missing("tri"))?;
         let c = DVec3::from(manifest.input.vote_centre);
         let (built, vote) = mesh_job::build(
@@ -97,10 +113,14 @@ pub fn run(dir: &Path, manifest: &Manifest, j: usize, check: Check) -> anyhow::R
         job: j,
         plan: manifest.id(),
         built_with: manifest.build,
-        file: file_entry,
-        part,
+        file: built.file.clone(),
+        part: built.part.clone(),
         vote,
     };
-    record.write(dir)?;
+    let (dir, written) = (dir.to_owned(), record.clone());
+    behind.start(move || {
+        built.write()?;
+        written.write(&dir)
+    })?;
     Ok(Ran::Built(record))
 }
