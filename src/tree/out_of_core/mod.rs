@@ -76,10 +76,11 @@ pub const SCALE_SLACK: f32 = 64.0;
 /// Jobs that [`build_file`] builds at once, and that [`Options::for_memory`] sizes the
 /// jobs to fit the budget together. A job's serial stretches (its triangulations'
 /// merges, its files' reads) leave cores idle that a second job fills (its part is
-/// written behind it, [`lanes`]): on 2 cores one job at a time kept 1.5 of them busy. Three at a time took as long (12
-/// of the 200 M-point tile's jobs, alternated twice: 50.4 and 50.6 s against 50.5 and
-/// 50.7 s, peak 2.50–2.69 against 1.84–1.89 GiB; 2 AMD EPYC cores, 2026-12-03). Fixed,
-/// not taken from the core count, so that every machine plans the same jobs.
+/// written behind it, [`lanes`]): on 2 cores one job at a time kept 1.5 of them busy.
+/// Three at a time took as long (12 of the 200 M-point tile's jobs, alternated twice:
+/// 50.4 and 50.6 s against 50.5 and 50.7 s, peak 2.50–2.69 against 1.84–1.89 GiB; 2 AMD
+/// EPYC cores, 2026-12-03). Fixed, not taken from the core count, so that every machine
+/// plans the same jobs.
 pub const LANES: usize = 2;
 
 /// How an out-of-core build runs.
