@@ -24,7 +24,7 @@ fn sum_at(c: u32, p: u32) -> f32 {
     return (f32(carries[i]) * 4294967296.0 + f32(sums[i])) / FIXED_ONE;
 }
 
-@compute @workgroup_size(RESOLVE_TILE, RESOLVE_TILE)
+@compute @workgroup_size(PIXEL_TILE, PIXEL_TILE)
 fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     let size = vec2<u32>(frame.viewport);
     if id.x >= size.x || id.y >= size.y {

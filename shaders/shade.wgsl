@@ -6,7 +6,9 @@
 // movable light); background where no splat contributed, unless the pixel is a gap
 // between two pixels of one surface, and a surface's front where only its hidden side
 // shows through a slit in it (`fill_between`). Writes an sRGB target and the mask of
-// the pixels that show a surface.
+// the pixels that show a surface: as a full-screen triangle through the raster
+// pipeline (`fs_shade`), or one compute thread per pixel (`cs_shade`, after the compute
+// rasterizer, so that no pass of its frames goes through the raster pipeline).
 
 @group(1) @binding(0) var color_sum: texture_2d<f32>;
 @group(1) @binding(1) var normal_sum: texture_2d<f32>;
@@ -15,6 +17,10 @@
 // The depth of the nearest surface at the pixel centre (reversed Z; 0: none), read as
 // a float texture (GLSL cannot load texels of a depth texture).
 @group(1) @binding(3) var depth: texture_2d<f32>;
+// `cs_shade`'s targets: the output's bytes (sRGB-encoded here, as the raster pipeline
+// encodes what `fs_shade` writes) and the covered mask.
+@group(2) @binding(0) var shaded_out: texture_storage_2d<rgba8unorm, write>;
+@group(2) @binding(1) var covered_out: texture_storage_2d<r32uint, write>;
 
 // A pixel's G-buffer sums: colour·w and w, normal·w and view distance·w.
 struct Sums {
@@ -22,16 +28,47 @@ struct Sums {
     nz: vec4<f32>,
 }
 
-// Pass 3's targets: the shaded colour, and 1 where the pixel shows a surface, 0 where
-// it shows the background (what image metrics read back as the covered pixels).
+// A shaded pixel: its linear colour, and 1 where it shows a surface, 0 where it shows
+// the background (what image metrics read back as the covered pixels).
+struct Pixel {
+    color: vec3<f32>,
+    covered: u32,
+}
+
+// `fs_shade`'s targets: the linear colour (the sRGB target encodes it) and the mask.
 struct Shaded {
     @location(0) color: vec4<f32>,
-    @location(1) covered: f32,
+    @location(1) covered: u32,
 }
 
 @fragment
 fn fs_shade(@builtin(position) frag: vec4<f32>) -> Shaded {
-    let texel = vec2<i32>(frag.xy);
+    let pixel = shade_pixel(vec2<i32>(frag.xy));
+    return Shaded(vec4<f32>(pixel.color, 1.0), pixel.covered);
+}
+
+@compute @workgroup_size(PIXEL_TILE, PIXEL_TILE)
+fn cs_shade(@builtin(global_invocation_id) id: vec3<u32>) {
+    if any(id.xy >= vec2<u32>(frame.viewport)) {
+        return;
+    }
+    let texel = vec2<i32>(id.xy);
+    let pixel = shade_pixel(texel);
+    textureStore(shaded_out, texel, vec4<f32>(srgb_encode(pixel.color), 1.0));
+    textureStore(covered_out, texel, vec4<u32>(pixel.covered, 0u, 0u, 0u));
+}
+
+// The sRGB encoding of a linear colour, clamped to [0, 1] (IEC 61966-2-1): 12.92 c up
+// to 0.0031308, 1.055 c^(1/2.4) − 0.055 above.
+fn srgb_encode(linear: vec3<f32>) -> vec3<f32> {
+    let c = clamp(linear, vec3<f32>(0.0), vec3<f32>(1.0));
+    let curve = 1.055 * pow(c, vec3<f32>(1.0 / 2.4)) - 0.055;
+    return select(curve, 12.92 * c, c <= vec3<f32>(0.0031308));
+}
+
+// The pixel at `texel`, whose centre is texel + 0.5.
+fn shade_pixel(texel: vec2<i32>) -> Pixel {
+    let centre = vec2<f32>(texel) + 0.5;
     var sums = Sums(textureLoad(color_sum, texel, 0), textureLoad(normal_sum, texel, 0));
     let marked = textureLoad(coverage, texel, 0);
     let samples = ceil(marked);
@@ -51,11 +88,11 @@ fn fs_shade(@builtin(position) frag: vec4<f32>) -> Shaded {
         covered = true;
     }
     if sums.c.w <= 0.0 {
-        return Shaded(vec4<f32>(frame.background.rgb, 1.0), 0.0);
+        return Pixel(frame.background.rgb, 0u);
     }
     let inside = surrounded(depth, texel);
     let alpha = select(coverage_alpha(samples, inside), 1.0, filled);
-    return Shaded(vec4<f32>(shade(frag.xy, texel, sums, alpha, inside), 1.0), f32(covered));
+    return Pixel(shade(centre, texel, sums, alpha, inside), u32(covered));
 }
 
 // The colour of a pixel whose G-buffer sums are `sums`, blended over the background

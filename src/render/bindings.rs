@@ -151,15 +151,26 @@ pub mod resolve {
     pub const ALL: &[Slot] = &[super::FRAME, COLOR_OUT, NORMAL_OUT, COVERAGE_OUT, DEPTH_OUT];
 }
 
-/// Group 1 of pass 3 (`shaders/shade.wgsl`): the G-buffer.
+/// Groups 1 and 2 of pass 3 (`shaders/shade.wgsl`): the G-buffer, and the targets
+/// that its compute version writes as storage textures.
 pub mod shade {
     use super::{Slot, slot};
     pub const COLOR_SUM: Slot = slot(1, 0, "color_sum");
     pub const NORMAL_SUM: Slot = slot(1, 1, "normal_sum");
     pub const COVERAGE: Slot = slot(1, 2, "coverage");
     pub const DEPTH: Slot = slot(1, 3, "depth");
+    pub const SHADED_OUT: Slot = slot(2, 0, "shaded_out");
+    pub const COVERED_OUT: Slot = slot(2, 1, "covered_out");
     #[cfg(test)]
-    pub const ALL: &[Slot] = &[super::FRAME, COLOR_SUM, NORMAL_SUM, COVERAGE, DEPTH];
+    pub const ALL: &[Slot] = &[
+        super::FRAME,
+        COLOR_SUM,
+        NORMAL_SUM,
+        COVERAGE,
+        DEPTH,
+        SHADED_OUT,
+        COVERED_OUT,
+    ];
 }
 
 /// The viewer's presentation pass (`shaders/present.wgsl`): the finished frame.

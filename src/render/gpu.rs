@@ -5,7 +5,7 @@
 use anyhow::{Context, bail};
 
 use super::gbuffer::{COVERAGE, GBUFFER};
-use super::targets::{OUTPUT, OUTPUT_GAMMA};
+use super::targets::{COVERED, OUTPUT, OUTPUT_GAMMA};
 
 /// Where the backend choice comes from when none is given.
 pub const BACKEND_ENV: &str = "SPT_BACKEND";
@@ -29,6 +29,9 @@ pub struct Gpu {
     /// Compute shaders can write the G-buffer's formats as storage textures: the splat
     /// passes can be drawn in compute ([`super::Raster::Compute`]).
     pub compute_raster: bool,
+    /// And pass 3 after them, writing the output through its [`OUTPUT_GAMMA`] view and
+    /// the covered mask as storage textures (where views can be reinterpreted).
+    pub compute_shading: bool,
 }
 
 /// Parses a backend name: vulkan, gl, metal, dx12, or `all` (any).
@@ -107,13 +110,15 @@ impl Gpu {
         let downlevel = adapter.get_downlevel_capabilities().flags;
         let view_formats = downlevel.contains(wgpu::DownlevelFlags::VIEW_FORMATS);
         let read_only_depth = downlevel.contains(wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL);
+        let storage = |formats: &[wgpu::TextureFormat]| {
+            formats.iter().all(|f| {
+                let usages = adapter.get_texture_format_features(*f).allowed_usages;
+                usages.contains(wgpu::TextureUsages::STORAGE_BINDING)
+            })
+        };
         let compute_raster = downlevel.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
-            && [GBUFFER, COVERAGE, wgpu::TextureFormat::R32Float]
-                .into_iter()
-                .all(|f| {
-                    let usages = adapter.get_texture_format_features(f).allowed_usages;
-                    usages.contains(wgpu::TextureUsages::STORAGE_BINDING)
-                });
+            && storage(&[GBUFFER, COVERAGE, wgpu::TextureFormat::R32Float]);
+        let compute_shading = compute_raster && view_formats && storage(&[OUTPUT_GAMMA, COVERED]);
         Ok(Gpu {
             instance,
             adapter,
@@ -124,6 +129,7 @@ impl Gpu {
             view_formats,
             read_only_depth,
             compute_raster,
+            compute_shading,
         })
     }
 

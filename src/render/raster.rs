@@ -30,7 +30,7 @@ use super::gpu_scene::Share;
 use super::placement::Placement;
 use super::settings::Mode;
 use super::shaders::{
-    ColorSource, QuadReach, RASTER_WORKGROUP, RESOLVE_TILE, RasterPass, SplatClass, module,
+    ColorSource, PIXEL_TILE, QuadReach, RASTER_WORKGROUP, RasterPass, SplatClass, module,
 };
 use super::targets::{FrameTargets, stamp};
 use crate::io::geometry::PointAttributes;
@@ -64,7 +64,10 @@ pub(super) struct ComputeRaster {
 }
 
 /// A compute-stage entry of `slot`: a write-only storage texture of `format`.
-fn storage_texture(slot: Slot, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
+pub(super) fn storage_texture(
+    slot: Slot,
+    format: wgpu::TextureFormat,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding: slot.binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -288,7 +291,7 @@ impl ComputeRaster {
         pass.set_bind_group(1, &accumulation.resolve_bind, &[]);
         pass.set_bind_group(2, &accumulation.bind, &[]);
         let (w, h) = targets.size;
-        pass.dispatch_workgroups(w.div_ceil(RESOLVE_TILE), h.div_ceil(RESOLVE_TILE), 1);
+        pass.dispatch_workgroups(w.div_ceil(PIXEL_TILE), h.div_ceil(PIXEL_TILE), 1);
     }
 
     /// The per-pixel buffers of a `size` frame drawing into `gbuffer`.

@@ -99,12 +99,12 @@ pub(super) fn unpad_rgba8(data: &[u8], width: u32, height: u32) -> Vec<u8> {
         .collect()
 }
 
-/// Which pixels of a padded R8Unorm copy of a mask are set.
+/// Which pixels of a padded R32Uint copy of a mask are set (not 0).
 pub(super) fn mask(data: &[u8], width: u32, height: u32) -> Vec<bool> {
-    let row = padded_row(width, 1) as usize;
+    let row = padded_row(width, 4) as usize;
     (0..height as usize)
-        .flat_map(|y| &data[y * row..y * row + width as usize])
-        .map(|v| *v > 127)
+        .flat_map(|y| data[y * row..y * row + width as usize * 4].chunks_exact(4))
+        .map(|v| v != [0; 4])
         .collect()
 }
 

@@ -17,7 +17,6 @@
 
 use rayon::prelude::*;
 
-use super::accumulation::Accumulation;
 use super::camera::Camera;
 use super::counters::read_counters_now;
 use super::cull::CullPass;
@@ -33,7 +32,7 @@ use super::readback;
 use super::settings::{Culling, Mode, PrefixCut, Raster, Settings};
 use super::shading::ShadingPass;
 use super::splats::SplatPasses;
-use super::targets::{FrameTargets, check_size, stamp};
+use super::targets::{ComputeBinds, FrameTargets, check_size, stamp};
 use super::upload;
 use crate::tree::report::{Report, Silent, Step};
 use crate::tree::scene::Scene;
@@ -242,10 +241,12 @@ impl Renderer {
             self.far_pass().encode(encoder, &targets.frame_bind, far);
         }
         if rasterized {
-            let (accumulation, gbuffer) = self.accumulation(targets);
+            let binds = self.compute_binds(targets);
+            let (accumulation, outputs) = (&binds.accumulation, binds.outputs.as_ref());
             self.raster
                 .encode(encoder, targets, accumulation, shares, settings.mode);
-            self.shading.encode(encoder, targets, gbuffer);
+            self.shading
+                .encode(encoder, targets, &binds.gbuffer, outputs);
         } else {
             self.encode_hardware(encoder, targets, shares, settings, mesh);
         }
@@ -312,21 +313,19 @@ impl Renderer {
         fits.map(|()| true)
     }
 
-    /// `targets`' compute rasterizer buffers and pass 3's bind group of what they
-    /// resolve into, made at the first call.
-    fn accumulation<'t>(
-        &self,
-        targets: &'t FrameTargets,
-    ) -> (&'t Accumulation, &'t wgpu::BindGroup) {
-        let (accumulation, bind) = targets.accumulation.get_or_init(|| {
+    /// What `targets`' frames drawn in compute bind ([`ComputeBinds`]), made at the
+    /// first call.
+    fn compute_binds<'t>(&self, targets: &'t FrameTargets) -> &'t ComputeBinds {
+        targets.compute.get_or_init(|| {
             let g = &targets.gbuffer;
             let accumulation = self.raster.accumulation(g, targets.size);
-            let bind = self
-                .shading
-                .bind(&self.gpu.device, g, &accumulation.depth_view);
-            (accumulation, bind)
-        });
-        (accumulation, bind)
+            let device = &self.gpu.device;
+            ComputeBinds {
+                gbuffer: self.shading.bind(device, g, &accumulation.depth_view),
+                outputs: self.shading.bind_outputs(targets),
+                accumulation,
+            }
+        })
     }
 
     /// The splat passes (or the mesh) through the raster pipeline, between the
@@ -358,7 +357,8 @@ impl Renderer {
                 .splats
                 .encode(encoder, targets, shares, settings.mode, compute),
         }
-        self.shading.encode(encoder, targets, &targets.gbuffer_bind);
+        self.shading
+            .encode(encoder, targets, &targets.gbuffer_bind, None);
     }
 
     /// Records a frame with nothing in it: the output cleared to `background` (sRGB).
@@ -499,7 +499,7 @@ impl Renderer {
         let device = &self.gpu.device;
         let g = &targets.gbuffer;
         let out_buffer = readback::copy_texture(device, &mut encoder, &targets.output, 4);
-        let covered_buffer = readback::copy_texture(device, &mut encoder, &targets.covered, 1);
+        let covered_buffer = readback::copy_texture(device, &mut encoder, &targets.covered, 4);
         let weight_buffer = readback::copy_texture(device, &mut encoder, &g.color_sum, 8);
         let normal_buffer = readback::copy_texture(device, &mut encoder, &g.normal_sum, 8);
         let counters = read_counters_now(&self.gpu, encoder, targets, gpu_scenes, frame)?;

@@ -28,8 +28,9 @@ pub const FAR_WORKGROUP: u32 = 64;
 /// `maxComputeWorkgroupsPerDimension`): the GPU's own dispatches (cull.wgsl) stay
 /// within it.
 pub const MAX_GROUPS_X: u32 = 65535;
-/// The resolve's workgroups are tiles of this many pixels a side.
-pub const RESOLVE_TILE: u32 = 8;
+/// The per-pixel compute passes (the resolve, shading) run in workgroups of tiles of
+/// this many pixels a side.
+pub const PIXEL_TILE: u32 = 8;
 /// Channels of the fixed-point sums (`SUM_*` in accumulate.wgsl).
 pub const SUM_CHANNELS: u32 = 8;
 /// Which pass a raster pipeline runs (WGSL override `RASTER_PASS`; its values are given
@@ -119,7 +120,7 @@ pub fn constants_wgsl() -> String {
         "// Generated from Rust (src/render/shaders.rs): constants shared with the CPU.\n\
          const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\n\
          const RASTER_WORKGROUP: u32 = {RASTER_WORKGROUP}u;\n\
-         const RESOLVE_TILE: u32 = {RESOLVE_TILE}u;\n\
+         const PIXEL_TILE: u32 = {PIXEL_TILE}u;\n\
          const SUM_CHANNELS: u32 = {SUM_CHANNELS}u;\n\
          const WEDGE_MARGIN: f32 = {WEDGE_MARGIN:?};\n\
          const WEDGE_ANGLE_BITS: u32 = {WEDGE_ANGLE_BITS}u;\n\

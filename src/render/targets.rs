@@ -11,8 +11,9 @@ use super::gbuffer::{GBuffer, target};
 
 /// The shaded output: written linear, stored sRGB-encoded.
 pub const OUTPUT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
-/// Whether a pixel of the output shows a surface (1) or the background (0).
-pub(super) const COVERED: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+/// Whether a pixel of the output shows a surface (1) or the background (0): an integer
+/// format that compute shaders can also write (R8Unorm is no storage format).
+pub(super) const COVERED: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// The same bytes seen without sRGB decoding (overlays, presentation).
 pub const OUTPUT_GAMMA: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
@@ -39,8 +40,11 @@ pub struct FrameTargets {
     pub(super) gbuffer: GBuffer,
     /// The shaded frame: RGBA8, sRGB-encoded. Can also be viewed as plain `Rgba8Unorm`
     /// ([`FrameTargets::overlay_view`]) to draw an overlay in gamma space or to copy the
-    /// bytes as they are.
+    /// bytes as they are. Where pass 3 can run in compute ([`Gpu::compute_shading`]) it
+    /// is made `Rgba8Unorm`, which compute shaders can write, and viewed as [`OUTPUT`]
+    /// to render into.
     pub output: wgpu::Texture,
+    /// The output as [`OUTPUT`], for the passes that render into it.
     pub(super) output_view: wgpu::TextureView,
     /// Pass 3's mask of the pixels that show a surface ([`COVERED`]), read back with
     /// the output.
@@ -53,15 +57,24 @@ pub struct FrameTargets {
     pub(super) depth_bind: wgpu::BindGroup,
     /// The frame's timestamps ([`stamp`]) and their resolve buffer.
     pub(super) queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
-    /// The compute rasterizer's buffers and pass 3's bind group of what its resolve
-    /// writes, made for the first frame drawn in compute.
-    pub(super) accumulation: OnceLock<(Accumulation, wgpu::BindGroup)>,
+    /// What frames drawn in compute bind, made for the first of them.
+    pub(super) compute: OnceLock<ComputeBinds>,
+}
+
+/// The compute rasterizer's buffers, pass 3's bind group of what their resolve writes,
+/// and, where pass 3 runs in compute, that of its storage targets (the output and the
+/// covered mask).
+pub(super) struct ComputeBinds {
+    pub accumulation: Accumulation,
+    pub gbuffer: wgpu::BindGroup,
+    pub outputs: Option<wgpu::BindGroup>,
 }
 
 impl FrameTargets {
     /// Targets of `size` around `gbuffer` (of the same size) and its bind groups for
     /// shading and for pass 2 (its depth); the frame uniform bound as `frame_layout`
-    /// says; with timestamp queries and the output's gamma view where `gpu` has them.
+    /// says; with timestamp queries, the output's gamma view and storage targets for
+    /// pass 3 where `gpu` has them.
     pub(super) fn new(
         gpu: &Gpu,
         size: (u32, u32),
@@ -69,6 +82,15 @@ impl FrameTargets {
         (gbuffer, [gbuffer_bind, depth_bind]): (GBuffer, [wgpu::BindGroup; 2]),
     ) -> FrameTargets {
         let device = &gpu.device;
+        let (storage, format, view_formats): (_, _, &[_]) = match gpu {
+            g if g.compute_shading => (
+                wgpu::TextureUsages::STORAGE_BINDING,
+                OUTPUT_GAMMA,
+                &[OUTPUT],
+            ),
+            g if g.view_formats => (wgpu::TextureUsages::empty(), OUTPUT, &[OUTPUT_GAMMA]),
+            _ => (wgpu::TextureUsages::empty(), OUTPUT, &[]),
+        };
         let output = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("output"),
             size: wgpu::Extent3d {
@@ -79,17 +101,15 @@ impl FrameTargets {
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: OUTPUT,
+            format,
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::COPY_SRC
-                | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: if gpu.view_formats {
-                &[OUTPUT_GAMMA]
-            } else {
-                &[]
-            },
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | storage,
+            view_formats,
         });
-        let read_back = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+        let read_back =
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC | storage;
         let covered = target(device, size, COVERED, "covered", read_back);
         let frame_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame"),
@@ -121,7 +141,7 @@ impl FrameTargets {
         });
         FrameTargets {
             size,
-            output_view: output.create_view(&Default::default()),
+            output_view: view_as(&output, OUTPUT),
             output,
             covered_view: covered.create_view(&Default::default()),
             covered,
@@ -131,7 +151,7 @@ impl FrameTargets {
             gbuffer_bind,
             depth_bind,
             queries,
-            accumulation: OnceLock::new(),
+            compute: OnceLock::new(),
         }
     }
 
@@ -175,11 +195,22 @@ impl FrameTargets {
     /// moves the bytes unchanged) where the adapter can reinterpret views, else
     /// [`OUTPUT`] itself ([`super::Gpu::overlay_format`]).
     pub fn overlay_view(&self, format: wgpu::TextureFormat) -> wgpu::TextureView {
-        self.output.create_view(&wgpu::TextureViewDescriptor {
-            format: Some(format),
-            ..Default::default()
-        })
+        view_as(&self.output, format)
     }
+}
+
+/// `texture` seen as `format`, with the texture's usages that the format allows (an
+/// sRGB view is no storage binding).
+fn view_as(texture: &wgpu::Texture, format: wgpu::TextureFormat) -> wgpu::TextureView {
+    let mut usage = texture.usage();
+    if format.is_srgb() {
+        usage.remove(wgpu::TextureUsages::STORAGE_BINDING);
+    }
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        format: Some(format),
+        usage: Some(usage),
+        ..Default::default()
+    })
 }
 
 /// Checks that a `width`×`height` frame fits the adapter's limits (texture side, and a

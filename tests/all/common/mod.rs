@@ -30,6 +30,19 @@ pub fn renderer() -> &'static spt::render::Renderer {
     })
 }
 
+/// A renderer on the shared renderer's kind of adapter whose pass 3 is always the
+/// full-screen fragment pass (`Gpu::compute_shading` off), so that frames drawn in
+/// compute are shaded and sRGB-encoded as those of the raster pipeline are.
+pub fn fragment_shading_renderer() -> &'static spt::render::Renderer {
+    static R: std::sync::OnceLock<spt::render::Renderer> = std::sync::OnceLock::new();
+    R.get_or_init(|| {
+        renderer();
+        let mut gpu = spt::render::Gpu::new(None).expect("the shared renderer's adapter");
+        gpu.compute_shading = false;
+        spt::render::Renderer::new(gpu)
+    })
+}
+
 /// The ways of drawing the splats that the shared renderer's adapter has: both, or
 /// the raster pipeline alone where compute shaders cannot write the G-buffer.
 pub fn rasters() -> Vec<spt::render::Raster> {
