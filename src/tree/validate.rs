@@ -10,9 +10,12 @@
 //! * [`check_structure`]: the list as a tree: one root, first, with e_parent = +∞ and
 //!   δ = 0; each node's e_parent a bit copy of its parent's e and its level one more;
 //!   δ ≥ the distance to the parent; each chunk sorted by e_parent, descending.
-//! * [`check_chunks`]: the chunks follow each other from 0 and cover the list, each
-//!   non-empty, and each node's centre lies in its chunk's box and its radius is at most
-//!   the chunk's largest (what culling chunks by the frustum relies on).
+//! * [`check_chunk_table`]: the chunks follow each other from 0 and cover the list,
+//!   each non-empty, with a finite box, largest radius and least error (≥ 0).
+//! * [`check_chunks`]: that, and each node's centre lies in its chunk's box, its radius
+//!   is at most the chunk's largest (what culling chunks by the frustum relies on), and
+//!   its error and level are at least the chunk's least (what skipping a chunk too
+//!   coarse for the frame relies on).
 
 use rayon::prelude::*;
 
@@ -103,7 +106,8 @@ pub fn check_nodes(meta: &TreeMeta, nodes: &[NodeRecord], parents: &[u32]) -> Re
 }
 
 /// The chunk table on its own: non-empty chunks that follow each other and cover the
-/// `node_count` nodes of the list (what opening a file to stream it checks).
+/// `node_count` nodes of the list, each with a finite box (not inverted), largest
+/// radius and least error, both ≥ 0 (what opening a file to stream it checks).
 pub fn check_chunk_table(chunks: &[Chunk], node_count: u64) -> Result<(), String> {
     let mut at = 0u64;
     for (c, chunk) in chunks.iter().enumerate() {
@@ -112,6 +116,9 @@ pub fn check_chunk_table(chunks: &[Chunk], node_count: u64) -> Result<(), String
                 "chunk {c} starts at {} with {} nodes; expected a non-empty chunk at {at}",
                 chunk.start, chunk.count
             ));
+        }
+        if let Some(what) = chunk_bounds_problem(chunk) {
+            return Err(format!("chunk {c}: {what}"));
         }
         at += chunk.count as u64;
         if at > node_count {
@@ -126,22 +133,42 @@ pub fn check_chunk_table(chunks: &[Chunk], node_count: u64) -> Result<(), String
     Ok(())
 }
 
+/// What is wrong with a chunk's box, largest radius or least error on their own.
+fn chunk_bounds_problem(chunk: &Chunk) -> Option<String> {
+    let (lo, hi) = (chunk.centre_min, chunk.centre_max);
+    if !(0..3).all(|k| lo[k].is_finite() && hi[k].is_finite() && lo[k] <= hi[k]) {
+        return Some(format!("box {lo:?} … {hi:?} is not a finite box"));
+    }
+    let (r, e) = (chunk.radius_max, chunk.error_min);
+    if !(r.is_finite() && r >= 0.0 && e.is_finite() && e >= 0.0) {
+        return Some(format!(
+            "largest radius {r} or least error {e} is not finite and ≥ 0"
+        ));
+    }
+    None
+}
+
 /// The chunk table against the nodes (module doc): [`check_chunk_table`], and every
-/// node within its chunk's box and largest radius.
+/// node within its chunk's box and largest radius, at or above its least error and
+/// level.
 pub fn check_chunks(nodes: &[NodeRecord], chunks: &[Chunk]) -> Result<(), String> {
     check_chunk_table(chunks, nodes.len() as u64)?;
     for (c, chunk) in chunks.iter().enumerate() {
         let (lo, hi) = (chunk.centre_min, chunk.centre_max);
         let inside = |r: &NodeRecord| {
             let p = r.position();
-            (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]) && r.radius() <= chunk.radius_max
+            (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k])
+                && r.radius() <= chunk.radius_max
+                && half_value(r.error) >= chunk.error_min
+                && u32::from(r.level) >= chunk.level
         };
         if let Some(i) = nodes[chunk.range()]
             .par_iter()
             .position_first(|r| !inside(r))
         {
             return Err(format!(
-                "node {}: outside the box or above the largest radius of its chunk {c}",
+                "node {}: outside the box of its chunk {c}, or above its largest radius, or \
+                 below its least error or level",
                 chunk.start as usize + i
             ));
         }

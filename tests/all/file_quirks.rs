@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use crate::common;
-use crate::common::las_files::{point_wise, sample};
+use crate::common::las_files::{point_wise, sample, sample_of_format};
 use spt::io::formats::read_model;
 
 const HEADER: &str = "ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\n\
@@ -122,12 +122,15 @@ fn vertices_without_z_lie_in_the_plane_z_0() {
 
 #[test]
 fn a_point_wise_laz_reads_as_its_chunked_twin() {
+    // LAS 1.2's point format 3, and LAS 1.4's 6, whose points come in layers.
     let dir = common::temp_dir();
-    let laz = sample(3000, true);
-    let (chunked, single) = (dir.path().join("chunked.laz"), dir.path().join("pw.laz"));
-    std::fs::write(&chunked, &laz).unwrap();
-    std::fs::write(&single, point_wise(&laz)).unwrap();
-    let (a, b) = (read_model(&chunked).unwrap(), read_model(&single).unwrap());
-    assert_eq!(b.geometry.positions.len(), 3000);
-    assert_eq!(a.geometry, b.geometry);
+    for format in [3, 6] {
+        let laz = sample_of_format(3000, format, true);
+        let (chunked, single) = (dir.path().join("chunked.laz"), dir.path().join("pw.laz"));
+        std::fs::write(&chunked, &laz).unwrap();
+        std::fs::write(&single, point_wise(&laz)).unwrap();
+        let (a, b) = (read_model(&chunked).unwrap(), read_model(&single).unwrap());
+        assert_eq!(b.geometry.positions.len(), 3000, "format {format}");
+        assert_eq!(a.geometry, b.geometry, "format {format}");
+    }
 }

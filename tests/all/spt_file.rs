@@ -125,6 +125,30 @@ fn damaged_files_get_clear_errors() {
     );
 }
 
+#[test]
+fn chunks_that_misstate_their_least_error_are_refused() {
+    // The prefix search skips a chunk whose least error is above what the frame draws
+    // at its distance: one stated above a node's own error (or NaN) would hide nodes.
+    let list = default_list();
+    let last = list.chunks.len() - 1;
+    let least = list.chunks[last].error_min;
+    for (name, error_min) in [
+        ("nan_error.spt", f32::NAN),
+        ("high_error.spt", least * 2.0 + 1.0),
+    ] {
+        let mut bad = list.clone();
+        bad.chunks[last].error_min = error_min;
+        let mut bytes = Vec::new();
+        write_to(&mut bytes, &bad).unwrap();
+        expect(
+            &bytes,
+            name,
+            |e| matches!(e, SptError::Invalid { .. }),
+            "least error",
+        );
+    }
+}
+
 /// A writer that fails after `left` bytes, like a full disk.
 struct FailAfter<'a> {
     inner: &'a mut dyn Write,

@@ -1,6 +1,7 @@
 //! LAS and LAZ in: a small file written by the `las` crate reads back with its
 //! points, colours and counts; damaged copies (truncated LAS and LAZ, a point count of
-//! 10⁹ in a small file, a VLR counted but missing, a zero scale factor, a file that only starts with `LASF`) are
+//! 10⁹ in a small file, a point-wise LAZ whose layers claim gigabytes, a VLR counted
+//! but missing, a zero scale factor, a file that only starts with `LASF`) are
 //! refused with an error that names the file and the problem, `spt info` exits 1 on
 //! them without panicking, and no allocation exceeds 8 MiB meanwhile (a 10⁹-point
 //! header would ask for tens of GB). Alone in its binary: the allocation counter sees
@@ -8,7 +9,9 @@
 
 use crate::common;
 
-use crate::common::las_files::{POINT_COUNT_AT, VLR_COUNT_AT, X_SCALE_AT, sample};
+use crate::common::las_files::{
+    POINT_COUNT_AT, VLR_COUNT_AT, X_SCALE_AT, point_wise, sample, sample_of_format,
+};
 use spt::io::las::read_las;
 
 #[test]
@@ -108,6 +111,17 @@ fn damaged() -> Vec<Damaged> {
             name: "vlr_count.las",
             bytes: patch(las.clone(), VLR_COUNT_AT, &1u32.to_le_bytes()),
             expect: &["1 VLR", "only 0 lie before the point data"],
+        },
+        Damaged {
+            // Point-wise, its LAS 1.4 points still come in layers, whose sizes follow
+            // the first point (30 bytes) and the point count: one stated at 3.9 GB.
+            name: "point_wise_layers.laz",
+            bytes: {
+                let b = point_wise(&sample_of_format(3000, 6, true));
+                let data = u32::from_le_bytes(b[96..100].try_into().unwrap()) as usize;
+                patch(b, data + 34, &0xe800_0000u32.to_le_bytes())
+            },
+            expect: &["layers hold", "damaged"],
         },
         Damaged {
             name: "only_magic.las",

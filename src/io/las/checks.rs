@@ -166,8 +166,15 @@ pub(super) fn check_laz(file: &mut File, header: &las::Header) -> Result<LazLayo
             laz_vlr.items_size()
         ));
     }
+    let data = header_offset_to_points(file)?;
+    let len = file.metadata().map_err(|e| e.to_string())?.len();
     // The VLR's first field is its compressor (`from_buffer` refused unknown ones).
     if vlr.data[..2] == [POINT_WISE, 0] {
+        // No chunk table: the decoder reads the points from the point data on as one
+        // chunk, whose layers (LAS 1.4 items) must fit in the file.
+        if header.number_of_points() > 0 {
+            check_layers(file, &laz_vlr, [(data, len.saturating_sub(data))], record)?;
+        }
         return Ok(LazLayout::PointWise);
     }
     let chunk = u64::from(laz_vlr.chunk_size());
@@ -176,8 +183,6 @@ pub(super) fn check_laz(file: &mut File, header: &las::Header) -> Result<LazLayo
             "LAZ chunks of {chunk} points are larger than any writer makes"
         ));
     }
-    let data = header_offset_to_points(file)?;
-    let len = file.metadata().map_err(|e| e.to_string())?.len();
     check_chunk_table(file, len, data)?;
     file.seek(SeekFrom::Start(data))
         .map_err(|e| e.to_string())?;
@@ -199,7 +204,13 @@ pub(super) fn check_laz(file: &mut File, header: &las::Header) -> Result<LazLayo
     if !laz_vlr.uses_variable_size_chunks() {
         points = (table.as_ref().len() as u64).saturating_mul(chunk);
     }
-    check_layers(file, data, &laz_vlr, &table, record)?;
+    // The chunks follow the 8-byte chunk table offset, one after the other.
+    let chunks = table.as_ref().iter().scan(data + 8, |at, entry| {
+        let start = *at;
+        *at = at.saturating_add(entry.byte_count);
+        Some((start, entry.byte_count))
+    });
+    check_layers(file, &laz_vlr, chunks, record)?;
     let announced = header.number_of_points();
     if announced > points {
         return Err(format!(
@@ -264,19 +275,17 @@ fn layer_count(vlr: &laz::LazVlr) -> Option<u64> {
 
 /// In a layered LAZ, each chunk's layers must fit in the chunk: the decoder allocates
 /// each layer at the size the chunk states (a u32, up to 4 GiB), before reading it.
+/// `chunks`: each chunk's first byte and byte count.
 fn check_layers(
     file: &mut File,
-    data: u64,
     vlr: &laz::LazVlr,
-    table: &laz::laszip::ChunkTable,
+    chunks: impl IntoIterator<Item = (u64, u64)>,
     record: u64,
 ) -> Result<(), String> {
     let Some(layers) = layer_count(vlr) else {
         return Ok(());
     };
-    // The chunks follow the 8-byte chunk table offset, one after the other.
-    let mut at = data + 8;
-    for (k, entry) in table.as_ref().iter().enumerate() {
+    for (k, (at, byte_count)) in chunks.into_iter().enumerate() {
         let sizes_at = at + record + 4;
         let sizes = bytes_at(file, sizes_at, 4 * layers as usize);
         let stated: u64 = sizes.map_or(u64::MAX, |b| {
@@ -284,13 +293,12 @@ fn check_layers(
                 .map(|w| u64::from(u32::from_le_bytes(w.try_into().unwrap_or_default())))
                 .sum()
         });
-        let room = entry.byte_count.saturating_sub(record + 4 + 4 * layers);
+        let room = byte_count.saturating_sub(record + 4 + 4 * layers);
         if stated > room {
             return Err(format!(
                 "LAZ chunk {k} says its layers hold {stated} bytes; it has {room}: it is damaged"
             ));
         }
-        at = at.saturating_add(entry.byte_count);
     }
     Ok(())
 }
