@@ -160,7 +160,19 @@ fn replay(path: &Path) -> i32 {
     let result = execute(kind, path);
     let took = start.elapsed();
     match result {
-        Ok(Outcome::Accepted { .. }) => println!("accepted in {took:?}"),
+        Ok(Outcome::Accepted { samples }) => {
+            println!("accepted in {took:?}");
+            // As the run does with every 16th accepted input.
+            if let Some(samples) =
+                samples.filter(|_| matches!(kind, Kind::Ply | Kind::Las | Kind::Laz))
+            {
+                if let Outcome::Violation(why) = target::out_of_core(path, samples) {
+                    println!("invariant violated: {why}");
+                    return 1;
+                }
+                println!("built out of core alike");
+            }
+        }
         Ok(Outcome::Refused) => println!("refused in {took:?}"),
         Ok(Outcome::Violation(why)) => {
             println!("invariant violated: {why}");
@@ -230,7 +242,7 @@ fn main() {
             Ok(Outcome::Accepted { samples })
                 if matches!(seed.kind, Kind::Ply | Kind::Las | Kind::Laz) =>
             {
-                Some(samples)
+                samples
             }
             _ => None,
         };

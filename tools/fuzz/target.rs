@@ -12,7 +12,8 @@
 //! Every 16th accepted PLY, LAS or LAZ input is also built out of core in jobs of 64
 //! points ([`out_of_core`]): it must build, validate, and hold a leaf for every sample
 //! the in-memory build holds one for (a terrain's walls, found by each job among its
-//! own samples and halo, may differ near a job's border).
+//! own samples and halo, may differ near a job's border; a sensor frame, whose pixel
+//! grid the jobs do not see, is not compared).
 //!
 //! A refusal (an error) is a fine outcome; a violated invariant is not.
 //!
@@ -38,9 +39,12 @@ use crate::seeds::Kind;
 
 /// How a run ended, when it did not panic.
 pub enum Outcome {
-    /// With the tree's leaves that are samples, not walls (0 for an `.spt` input).
+    /// With the tree's leaves that are samples, not walls, which the out-of-core build
+    /// must match; `None` where it need not: an `.spt` input, or a sensor frame, whose
+    /// pixel grid only the file's row order shows (out of core, its points are those
+    /// of any cloud).
     Accepted {
-        samples: u64,
+        samples: Option<u64>,
     },
     Refused,
     Violation(String),
@@ -90,6 +94,7 @@ fn build(geometry: &Geometry, path: &Path) -> Result<Outcome, Outcome> {
     let leaves = leaf_surfels(geometry);
     leaves.check().map_err(violation("surfels"))?;
     let walls = leaves.stats.added_splats();
+    let frame = leaves.stats.pixel_grid.is_some();
     let list = build_sequential_list(leaves);
     check_meta(&list.meta).map_err(violation("tree meta"))?;
     check_nodes(&list.meta, &list.nodes, &list.parents).map_err(violation("tree nodes"))?;
@@ -99,7 +104,7 @@ fn build(geometry: &Geometry, path: &Path) -> Result<Outcome, Outcome> {
     select(&list)?;
     round_trip(&list, path)?;
     Ok(Outcome::Accepted {
-        samples: list.meta.leaf_count - walls,
+        samples: (!frame).then_some(list.meta.leaf_count - walls),
     })
 }
 
@@ -155,7 +160,7 @@ fn spt(path: &Path) -> Result<Outcome, Outcome> {
     check_chunks(&list.nodes, &list.chunks).map_err(violation("chunks"))?;
     select(&list)?;
     round_trip(&list, path)?;
-    Ok(Outcome::Accepted { samples: 0 })
+    Ok(Outcome::Accepted { samples: None })
 }
 
 /// Runs the input stored at `path`.
@@ -175,7 +180,7 @@ pub fn run(kind: Kind, path: &Path) -> Outcome {
 fn scene(path: &Path) -> Result<Outcome, Outcome> {
     let scene = read_scene(path).map_err(|_| Outcome::Refused)?;
     check_instances(&scene.instances, scene.models.len())?;
-    Ok(Outcome::Accepted { samples: 0 })
+    Ok(Outcome::Accepted { samples: None })
 }
 
 /// An instance file, for a scene of two models: as [`scene`].
@@ -183,7 +188,7 @@ fn instances(path: &Path) -> Result<Outcome, Outcome> {
     let mut out = Vec::new();
     read_instances(path, 2, &mut out).map_err(|_| Outcome::Refused)?;
     check_instances(&out, 2)?;
-    Ok(Outcome::Accepted { samples: 0 })
+    Ok(Outcome::Accepted { samples: None })
 }
 
 fn check_instances(instances: &[Instance], models: usize) -> Result<(), Outcome> {
@@ -230,7 +235,9 @@ pub fn out_of_core(path: &Path, samples: u64) -> Outcome {
                 f.meta.leaf_count
             ))
         }
-        Ok(_) => Outcome::Accepted { samples },
+        Ok(_) => Outcome::Accepted {
+            samples: Some(samples),
+        },
     };
     let _ = std::fs::remove_dir_all(&dir);
     outcome
