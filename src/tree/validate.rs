@@ -150,30 +150,36 @@ fn chunk_bounds_problem(chunk: &Chunk) -> Option<String> {
 
 /// The chunk table against the nodes (module doc): [`check_chunk_table`], and every
 /// node within its chunk's box and largest radius, at or above its least error and
-/// level.
+/// level. The chunks are checked in parallel, each one's nodes in turn (a parallel
+/// search within each of the Lucy-size model's 9,305 chunks took 0.54 s, this 0.02 s).
 pub fn check_chunks(nodes: &[NodeRecord], chunks: &[Chunk]) -> Result<(), String> {
     check_chunk_table(chunks, nodes.len() as u64)?;
-    for (c, chunk) in chunks.iter().enumerate() {
-        let (lo, hi) = (chunk.centre_min, chunk.centre_max);
-        let inside = |r: &NodeRecord| {
-            let p = r.position();
-            (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k])
-                && r.radius() <= chunk.radius_max
-                && half_value(r.error) >= chunk.error_min
-                && u32::from(r.level) >= chunk.level
-        };
-        if let Some(i) = nodes[chunk.range()]
-            .par_iter()
-            .position_first(|r| !inside(r))
-        {
-            return Err(format!(
-                "node {}: outside the box of its chunk {c}, or above its largest radius, or \
-                 below its least error or level",
-                chunk.start as usize + i
-            ));
-        }
+    let first_outside = chunks.par_iter().enumerate().find_map_first(|(c, chunk)| {
+        let range = chunk.range();
+        let start = range.start;
+        nodes[range]
+            .iter()
+            .position(|r| !within(chunk, r))
+            .map(|i| (c, start + i))
+    });
+    match first_outside {
+        None => Ok(()),
+        Some((c, i)) => Err(format!(
+            "node {i}: outside the box of its chunk {c}, or above its largest radius, or \
+             below its least error or level"
+        )),
     }
-    Ok(())
+}
+
+/// Whether node `r` lies within `chunk`'s box and largest radius, at or above its least
+/// error and level.
+fn within(chunk: &Chunk, r: &NodeRecord) -> bool {
+    let (lo, hi) = (chunk.centre_min, chunk.centre_max);
+    let p = r.position();
+    (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k])
+        && r.radius() <= chunk.radius_max
+        && half_value(r.error) >= chunk.error_min
+        && u32::from(r.level) >= chunk.level
 }
 
 /// The list as a tree (module doc). Assumes [`check_nodes`] and [`check_chunks`] passed.
