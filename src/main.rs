@@ -107,6 +107,9 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // The LAZ decoder's threads get deep stacks (spt::io::las::DECODER_STACK); the
+    // pool is not made yet, so this cannot fail.
+    let _ = spt::io::las::use_decoder_stacks();
     // The LAZ decoder's panics on damaged files become errors that name the file
     // (spt::io::las); only other panics are reported as panics.
     let report = std::panic::take_hook();

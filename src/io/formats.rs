@@ -94,7 +94,10 @@ impl ModelStream {
         let (full, decoded) = sync_channel::<PointBatch>(BATCHES_AHEAD);
         let (used, recycled) = channel::<PointBatch>();
         std::thread::scope(|scope| {
-            let decoder = scope.spawn(move || {
+            // The LAZ decoder's deep stack (`las::DECODER_STACK`); without a thread, the
+            // caller's decodes.
+            let decoder = std::thread::Builder::new().stack_size(crate::io::las::DECODER_STACK);
+            let spawned = decoder.spawn_scoped(scope, move || {
                 self.0.points(&mut |b| {
                     for start in (0..b.xyz.len()).step_by(POINTS_AHEAD_BATCH) {
                         let mut copy = recycled.try_recv().unwrap_or_default();
@@ -104,6 +107,9 @@ impl ModelStream {
                     }
                 })
             });
+            let Ok(decoder) = spawned else {
+                return self.points(&mut f);
+            };
             for batch in decoded {
                 f(&batch);
                 let _ = used.send(batch);

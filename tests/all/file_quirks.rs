@@ -134,3 +134,20 @@ fn a_point_wise_laz_reads_as_its_chunked_twin() {
         assert_eq!(a.geometry, b.geometry, "format {format}");
     }
 }
+
+#[test]
+fn a_laz_whose_gps_times_switch_sequence_again_and_again_reads_without_aborting() {
+    // A 1.4 kB LAS 1.4 LAZ file that the fuzzer made from one the `las` crate wrote
+    // (tests/fixtures/): its damaged GPS-time stream switches time sequence about
+    // 36,000 times in a row, and the `laz` decoder goes a call deeper for each, past a
+    // thread's default stack. It reads, with its 70 points, on spt's decoder stacks.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/laz_gps_switches.laz");
+    let (code, stdout, stderr) = common::run_spt(&["info".as_ref(), path.as_os_str()]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l.starts_with("points") && l.ends_with(" 70")),
+        "{stdout}"
+    );
+}

@@ -188,6 +188,8 @@ fn replay(path: &Path) -> i32 {
 
 fn main() {
     let args = Args::parse();
+    // As the spt binary does: the LAZ decoder's threads get deep stacks.
+    let _ = spt::io::las::use_decoder_stacks();
     // Panics of the inputs are expected and reported; any other is printed as usual.
     let default_hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {

@@ -196,6 +196,8 @@ impl Loading {
         let (report, owned_path) = (progress.clone(), path.to_path_buf());
         let spawned = std::thread::Builder::new()
             .name("loader".into())
+            // A point-wise LAZ file is decoded on this thread (las::DECODER_STACK).
+            .stack_size(crate::io::las::DECODER_STACK)
             .spawn(move || {
                 let deliver = |message: anyhow::Result<Loaded>| {
                     let delivered = send.send(message).is_ok();

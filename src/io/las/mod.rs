@@ -271,6 +271,24 @@ fn fill_contained(reader: &mut Reader, n: u64, batch: &mut PointData) -> Result<
     }
 }
 
+/// Stack of each thread that may decode LAZ points: 256 MiB, reserved, and touched
+/// only as deep as a call goes. The `laz` crate's GPS-time decoder calls itself once
+/// for each switch of time sequence it decodes: a valid stream switches at most once a
+/// point, but a damaged one can switch tens of thousands of times in a row, 64 bytes of
+/// stack each (a 1.4 kB LAZ file that the fuzzer made went about 36,000 calls deep,
+/// past a thread's default 2 MiB, and aborted the process). The depth is bounded by
+/// the stream's length, not by this stack: a file crafted for it can still go deeper.
+pub const DECODER_STACK: usize = 256 << 20;
+
+/// Makes rayon's global pool, where the `laz` crate decodes a chunked file's chunks,
+/// with threads of [`DECODER_STACK`]; an error when the pool was already made. For a
+/// program's start (the `spt` binary, the fuzzer).
+pub fn use_decoder_stacks() -> Result<(), rayon::ThreadPoolBuildError> {
+    rayon::ThreadPoolBuilder::new()
+        .stack_size(DECODER_STACK)
+        .build_global()
+}
+
 /// Whether a panic at `file` (a source path) comes from the LAZ decoder, whose panics
 /// [`read_las`] turns into errors: the binary's panic hook stays quiet about those.
 pub fn is_decoder_panic(file: &str) -> bool {
