@@ -288,6 +288,19 @@ fn stray_and_unstorable_points_are_dropped_or_kept_as_the_whole_file_reader_does
 }
 
 #[test]
+fn points_near_the_largest_double_build_in_jobs() {
+    // Two points at 1.4 × 10³⁰⁸ (a LAZ tile's offset, rewritten by the fuzzer): their
+    // coordinates' sum overflows, and the plan's mean, which its manifest stores, must
+    // stay finite.
+    let positions = vec![[1.4e308, 5e6, 100.0], [1.4e308, 5e6 + 0.5, 100.5]];
+    let dir = common::temp_dir();
+    let input = write_cloud(dir.path(), "far.ply", positions);
+    let (built, list) = build_in_jobs(&input, 64, dir.path());
+    assert_eq!(built.dropped, 0);
+    assert_eq!(list.meta.leaf_count, in_memory_list(&input).meta.leaf_count);
+}
+
+#[test]
 fn a_model_whose_disks_dwarf_its_points_box_gets_their_error_scale() {
     let positions = common::disks_dwarf_their_box();
     let dir = common::temp_dir();

@@ -44,7 +44,7 @@ pub struct Scan {
     /// Bounding box of the kept points that are not outliers: the model's size, and
     /// what the counting grid spans (outliers fall in its edge cells).
     pub core: Bounds,
-    /// The mean of the kept points.
+    /// The mean of the kept points (the middle of their box where their sum overflows).
     pub mean: DVec3,
     /// Points dropped: not finite, or further than the rest can be stored from.
     pub dropped: u64,
@@ -104,6 +104,11 @@ impl Scan {
         self.count = count;
         self.dropped = rows - count;
         self.mean = sum / count.max(1) as f64;
+        if !self.mean.is_finite() {
+            // Coordinates near f64's range overflow their sum: the box's middle.
+            let (min, max) = (DVec3::from(bounds.min), DVec3::from(bounds.max));
+            self.mean = min * 0.5 + max * 0.5;
+        }
         self.bounds = bounds;
         // The sample comes from kept points, so the core is empty only for a file
         // that changed between the passes.
