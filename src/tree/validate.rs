@@ -27,6 +27,11 @@ fn finite3_f64(v: &[f64; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
+/// Whether `lo` … `hi` is a finite box, not inverted.
+fn finite_box(lo: [f32; 3], hi: [f32; 3]) -> bool {
+    (0..3).all(|k| lo[k].is_finite() && hi[k].is_finite() && lo[k] <= hi[k])
+}
+
 /// The header fields of a list.
 pub fn check_meta(meta: &TreeMeta) -> Result<(), String> {
     let b = &meta.bounds;
@@ -40,7 +45,7 @@ pub fn check_meta(meta: &TreeMeta) -> Result<(), String> {
         ));
     }
     let (lo, hi) = (meta.centre_min, meta.centre_max);
-    if !(0..3).all(|k| lo[k].is_finite() && hi[k].is_finite() && lo[k] <= hi[k]) {
+    if !finite_box(lo, hi) {
         return Err(format!(
             "node-centre box {lo:?} … {hi:?} is not a finite box"
         ));
@@ -136,7 +141,7 @@ pub fn check_chunk_table(chunks: &[Chunk], node_count: u64) -> Result<(), String
 /// What is wrong with a chunk's box, largest radius or least error on their own.
 fn chunk_bounds_problem(chunk: &Chunk) -> Option<String> {
     let (lo, hi) = (chunk.centre_min, chunk.centre_max);
-    if !(0..3).all(|k| lo[k].is_finite() && hi[k].is_finite() && lo[k] <= hi[k]) {
+    if !finite_box(lo, hi) {
         return Some(format!("box {lo:?} … {hi:?} is not a finite box"));
     }
     let (r, e) = (chunk.radius_max, chunk.error_min);

@@ -163,9 +163,7 @@ fn replay(path: &Path) -> i32 {
         Ok(Outcome::Accepted { samples }) => {
             println!("accepted in {took:?}");
             // As the run does with every 16th accepted input.
-            if let Some(samples) =
-                samples.filter(|_| matches!(kind, Kind::Ply | Kind::Las | Kind::Laz))
-            {
+            if let Some(samples) = samples {
                 if let Outcome::Violation(why) = target::out_of_core(path, samples) {
                     println!("invariant violated: {why}");
                     return 1;
@@ -241,11 +239,7 @@ fn main() {
         let n = tally.executions;
         let note = |what: &str| format!("{what} (mutant of {}, {} bytes)", seed.name, bytes.len());
         let samples = match result {
-            Ok(Outcome::Accepted { samples })
-                if matches!(seed.kind, Kind::Ply | Kind::Las | Kind::Laz) =>
-            {
-                samples
-            }
+            Ok(Outcome::Accepted { samples }) => samples,
             _ => None,
         };
         match result {

@@ -40,9 +40,9 @@ use crate::seeds::Kind;
 /// How a run ended, when it did not panic.
 pub enum Outcome {
     /// With the tree's leaves that are samples, not walls, which the out-of-core build
-    /// must match; `None` where it need not: an `.spt` input, or a sensor frame, whose
-    /// pixel grid only the file's row order shows (out of core, its points are those
-    /// of any cloud).
+    /// must match; `None` where it need not: an input that is no model file (`.spt`,
+    /// scene, instances), or a sensor frame, whose pixel grid only the file's row order
+    /// shows (out of core, its points are those of any cloud).
     Accepted {
         samples: Option<u64>,
     },

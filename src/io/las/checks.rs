@@ -188,11 +188,7 @@ pub(super) fn check_laz(file: &mut File, header: &las::Header) -> Result<LazLayo
         .map_err(|e| e.to_string())?;
     let table = laz::laszip::ChunkTable::read_from(BufReader::new(&mut *file), &laz_vlr)
         .map_err(|e| format!("the LAZ chunk table cannot be read: {e}"))?;
-    let room = file
-        .metadata()
-        .map_err(|e| e.to_string())?
-        .len()
-        .saturating_sub(data);
+    let room = len.saturating_sub(data);
     let (mut bytes, mut largest, mut points) = (0u64, 0u64, 0u64);
     for entry in &table {
         bytes = bytes.saturating_add(entry.byte_count);
