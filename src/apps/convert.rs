@@ -40,7 +40,7 @@ impl Report for Steps {
     fn step(&self, step: Step, total: u64) {
         let (name, unit) = match step {
             Step::Read => ("load", ""),
-            Step::Surfels => ("surfels", ""),
+            Step::Surfels => ("surfels", "samples"),
             Step::Hierarchy => ("tree", "leaves"),
             Step::Errors => ("errors", "nodes"),
             Step::Sort => ("sort", ""),

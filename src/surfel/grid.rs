@@ -25,6 +25,7 @@ use rayon::prelude::*;
 
 use super::isolated;
 use super::long_triangles::{self, Reach};
+use super::progress::Progress;
 use super::{Surfel, SurfelStats};
 
 use crate::io::Geometry;
@@ -110,6 +111,7 @@ pub fn frame_disks(
     given: Option<&[Vec3]>,
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
+    progress: Progress,
 ) -> (Vec<u32>, Vec<Surfel>) {
     let points = &g.positions;
     let is_long = is_long_in(points, sensor, mesh.pitch);
@@ -122,6 +124,7 @@ pub fn frame_disks(
         given,
         (surfels, all),
         stats,
+        progress,
     );
     let redundant = isolated::redundant(points, scale, &split.isolated, surfels);
     stats.redundant_vertices = redundant.len() as u64;

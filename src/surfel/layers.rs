@@ -18,6 +18,7 @@ use rayon::prelude::*;
 
 use super::cloud;
 use super::free_roofs::{self, Standing};
+use super::progress::Progress;
 use super::terrain::{self, Cover, TinSplats};
 use super::{Surfel, SurfelStats};
 use crate::io::Geometry;
@@ -150,13 +151,15 @@ impl Layers {
 /// The TIN's surfels of the samples `which` (of which the first `own` are the model's
 /// own) among themselves, into `surfels` (one per sample of `g`), from their `delaunay`
 /// triangulation (made here where None), keeping the long triangles under `cover`;
-/// their long triangles' splats and spacing. None where they make no triangle.
+/// their long triangles' splats and spacing. None where they make no triangle. The
+/// shaped samples are told to `progress`.
 pub fn tin_among(
     (g, scale): (&Geometry, f32),
     (which, own): (&[u32], usize),
     (delaunay, cover): (Option<Vec<[u32; 3]>>, &Cover),
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
+    progress: Progress,
 ) -> Option<TinSplats> {
     let given = g.normals.as_deref().map(|n| pick(n, which));
     let colors = g.colors.as_deref().map(|c| pick(c, which));
@@ -166,7 +169,7 @@ pub fn tin_among(
     let positions: Vec<Vec3> = pick(&g.positions, which);
     let delaunay = delaunay.unwrap_or_else(|| delaunay_xy(&positions));
     let at = (&positions[..], delaunay, scale);
-    let tin = terrain::terrain_disks(at, (own, cover), look, &mut picked, stats)?;
+    let tin = terrain::terrain_disks(at, (own, cover), look, &mut picked, stats, progress)?;
     for (k, &i) in which.iter().enumerate() {
         surfels[i as usize] = picked[k];
     }

@@ -27,6 +27,7 @@ use super::clip::Clip;
 use super::corners::Rings;
 use super::field::{fit_color_field, fit_field, unit_rgb};
 use super::mesh::face_disks;
+use super::progress::Progress;
 use super::ring::{clip_at_border, ring_shapes};
 use super::shape::{Fit, MIN_RATIO, Shape, tangent_frame};
 use super::triangle::{RADIUS_MARGIN, triangle_terms};
@@ -44,7 +45,7 @@ pub const LONG_PITCHES: f32 = 3.0;
 /// Fills `surfels` (one per point; `given` normals kept; only the first `kept` get
 /// ellipses and clips, [`ring_shapes`]) and returns the isolated
 /// vertices (ascending), the long triangles and the vertex normals that
-/// [`splats`] interpolates over them.
+/// [`splats`] interpolates over them. The shaped vertices are told to `progress`.
 pub fn disks(
     (points, scale): (&[Vec3], f32),
     triangles: &[[u32; 3]],
@@ -52,6 +53,7 @@ pub fn disks(
     given: Option<&[Vec3]>,
     (surfels, kept): (&mut [Surfel], usize),
     stats: &mut SurfelStats,
+    progress: Progress,
 ) -> Split {
     let isolated = face_disks(points, scale, triangles, given, surfels, stats);
     let (short, long): (Vec<[u32; 3]>, Vec<[u32; 3]>) =
@@ -64,7 +66,14 @@ pub fn disks(
     // The vertices keep their own colours, without fields: fitted over a ring cut at a
     // step's edge, a field ran on across the step in saturated specks.
     let rings = Rings::of(points.len(), &short);
-    let normals = ring_shapes(points, scale, (&short, &rings), (surfels, kept), false);
+    let normals = ring_shapes(
+        points,
+        scale,
+        (&short, &rings),
+        (surfels, kept),
+        false,
+        progress,
+    );
     for (v, s) in surfels.iter_mut().enumerate() {
         if !in_short[v] && s.radius > 0.0 {
             s.radius = s.radius.min(lone_radius(s.position));

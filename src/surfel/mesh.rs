@@ -18,6 +18,7 @@ use glam::{DVec3, Vec3};
 use super::cloud::neighbour_disks;
 use super::covering::RadiusRule;
 use super::outward::{Sides, Vote, orient_pieces};
+use super::progress::Progress;
 use super::triangle::{RADIUS_MARGIN, triangle_terms};
 use super::{Surfel, SurfelStats};
 use crate::io::geometry::unit_vector;
@@ -127,7 +128,7 @@ pub struct MeshDisks {
 /// Normals and radii of the vertices of a mesh, written into `surfels` (one per
 /// vertex), then their ellipses and shading fields. `scale` is the model's unit scale
 /// ([`super::unit_scale`]); `given` the file's normals, `colored` whether it has
-/// colours (the surfels' on entry).
+/// colours (the surfels' on entry). The shaped vertices are told to `progress`.
 pub fn vertex_disks(
     points: &[Vec3],
     scale: f32,
@@ -135,6 +136,7 @@ pub fn vertex_disks(
     (given, colored, outward): (Option<&[Vec3]>, bool, Outward),
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
+    progress: Progress,
 ) -> MeshDisks {
     let isolated = face_disks(points, scale, triangles, given, surfels, stats);
     let mut vote = None;
@@ -153,8 +155,8 @@ pub fn vertex_disks(
     };
     let rings = super::corners::Rings::of(points.len(), triangles);
     let all = surfels.len();
-    let normals =
-        super::ring::ring_shapes(points, scale, (triangles, &rings), (surfels, all), colored);
+    let at = (triangles, &rings);
+    let normals = super::ring::ring_shapes(points, scale, at, (surfels, all), colored, progress);
     let redundant = super::isolated::redundant(points, scale, &isolated, surfels);
     stats.redundant_vertices = redundant.len() as u64;
     MeshDisks {
@@ -240,7 +242,11 @@ pub fn face_disks(
         points,
         scale,
         &from_neighbours,
-        (RadiusRule::Ranked, super::cloud::Orientation::Unknown),
+        (
+            RadiusRule::Ranked,
+            super::cloud::Orientation::Unknown,
+            Progress::NONE,
+        ),
         given,
         surfels,
         stats,

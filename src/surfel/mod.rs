@@ -23,6 +23,7 @@ pub(crate) mod mesh;
 pub mod octahedral;
 pub mod outward;
 pub(crate) mod pca;
+pub mod progress;
 pub(crate) mod ring;
 pub(crate) mod sets;
 pub mod shape;
@@ -39,6 +40,7 @@ use serde::Serialize;
 use crate::io::delaunay::delaunay_xy;
 use crate::io::{Geometry, PointAttributes};
 use layers::Layer;
+use progress::{Fitted, Progress};
 use shape::SplatShape;
 
 /// One integer that orders (squared distance, index) pairs, for the neighbour searches'
@@ -262,6 +264,13 @@ pub fn leaf_surfels(g: &Geometry) -> LeafSurfels {
     leaf_surfels_of(g, g.positions.len())
 }
 
+/// [`leaf_surfels`], telling `progress` how many samples have their surfel: the counts
+/// add up to the model's samples, most of them told as the fits go (the rest when
+/// done; [`progress`]).
+pub fn leaf_surfels_with_progress(g: &Geometry, progress: Progress) -> LeafSurfels {
+    leaf_surfels_among(g, g.positions.len(), Outward::Vote, progress).0
+}
+
 pub use cloud::NormalsTurned;
 pub use mesh::Outward;
 
@@ -270,7 +279,7 @@ pub use mesh::Outward;
 /// points around it (its halo, [`crate::tree::out_of_core`]). The halo's own surfels
 /// are not kept; a terrain's walls follow the own ones ([`walls`]).
 pub fn leaf_surfels_of(g: &Geometry, own: usize) -> LeafSurfels {
-    leaf_surfels_among(g, own, Outward::Vote).0
+    leaf_surfels_among(g, own, Outward::Vote, Progress::NONE).0
 }
 
 /// The leaf surfels of the first `own` vertices of a piece of a mesh, whose one-rings
@@ -286,7 +295,7 @@ pub fn mesh_surfels_of(
     (turn, mean): (bool, DVec3),
 ) -> (LeafSurfels, outward::Vote) {
     let outward = Outward::Piece { turn, own, mean };
-    let (mut leaves, vote) = leaf_surfels_among(g, own, outward);
+    let (mut leaves, vote) = leaf_surfels_among(g, own, outward, Progress::NONE);
     leaves.vertex_normals = Vec::new();
     leaves.redundant.retain(|&v| (v as usize) < own);
     (leaves, vote.unwrap_or_default())
@@ -339,13 +348,14 @@ fn initial_surfels(g: &Geometry) -> Vec<Surfel> {
 /// A terrain's splats from its TIN ([`terrain::terrain_disks`]), its layers apart
 /// ([`layers`]); None for any other model, for a terrain whose ground makes no
 /// triangle, and for one whose file gives every normal (kept as given, by the cloud's
-/// rules).
+/// rules). Each layer's shaped samples are told to `progress`.
 fn terrain_path(
     g: &Geometry,
     (own, scale): (usize, f32),
     orientation: cloud::Orientation,
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
+    progress: Progress,
 ) -> Option<Vec<Surfel>> {
     if !g.triangles.is_empty() || orientation != cloud::Orientation::Up {
         return None;
@@ -366,7 +376,8 @@ fn terrain_path(
         let look = (given, (g.colors.as_deref(), g.attributes.as_deref()));
         let all = (own, &terrain::Cover::none());
         let at = (&g.positions[..], delaunay, scale);
-        return terrain::terrain_disks(at, all, look, surfels, stats).map(|tin| tin.splats);
+        let tin = terrain::terrain_disks(at, all, look, surfels, stats, progress);
+        return tin.map(|tin| tin.splats);
     }
     // The ground first, under the cover of the decks and the vegetation.
     let (decks, decks_own) = layers.get(Layer::Deck);
@@ -375,7 +386,14 @@ fn terrain_path(
     let cover = terrain::Cover::of(over.map(|&i| g.positions[i as usize]));
     let ground_tin = (Some(first.ground(g, &labels, ground_layer.0)), &cover);
     drop(labels);
-    let ground = layers::tin_among((g, scale), ground_layer, ground_tin, surfels, stats)?;
+    let ground = layers::tin_among(
+        (g, scale),
+        ground_layer,
+        ground_tin,
+        surfels,
+        stats,
+        progress,
+    )?;
     let mut splats = ground.splats;
     if decks_own > 0 {
         let none = terrain::Cover::none();
@@ -385,6 +403,7 @@ fn terrain_path(
             (None, &none),
             surfels,
             stats,
+            progress,
         ) {
             Some(deck) => {
                 stats.decks = decks_own as u64;
@@ -400,17 +419,92 @@ fn terrain_path(
     }
     let plants_own = plants.iter().filter(|&&i| (i as usize) < own).count();
     let scales = (&g.positions[..], scale, ground.spacing);
-    vegetation::plant_disks(scales, (&plants, plants_own), given, surfels, stats);
+    vegetation::plant_disks(
+        scales,
+        (&plants, plants_own),
+        given,
+        surfels,
+        stats,
+        progress,
+    );
     stats.triangle_splats = splats.len() as u64;
     Some(splats)
 }
 
-/// The leaf surfels, and a mesh piece's terms of the orientation vote.
+/// What a path makes besides the surfels.
+struct Made {
+    /// Whether its normals are estimated and turned by the cloud's orientation (not a
+    /// mesh's, oriented by its vote).
+    estimated: bool,
+    /// A terrain's walls and the splats of a frame's or a terrain's long triangles.
+    walls: Vec<Surfel>,
+    /// The isolated vertices that are redundant, ascending.
+    redundant: Vec<u32>,
+    /// A mesh's vertex normals.
+    vertex_normals: Vec<Vec3>,
+    /// A mesh piece's terms of the orientation vote.
+    vote: Option<outward::Vote>,
+}
+
+impl Made {
+    /// A cloud's path's, with its `walls`.
+    fn cloud(walls: Vec<Surfel>) -> Made {
+        Made {
+            estimated: true,
+            walls,
+            redundant: Vec::new(),
+            vertex_normals: Vec::new(),
+            vote: None,
+        }
+    }
+}
+
+/// A sensor frame's splats from its pixel grid ([`grid::frame_disks`]): for a whole
+/// model (not a job's piece) seen from a sensor, whose samples lie on a grid; None for
+/// any other. The shaped samples are told to `progress`.
+fn frame_path(
+    g: &Geometry,
+    ((own, scale), orientation): ((usize, f32), cloud::Orientation),
+    surfels: &mut [Surfel],
+    stats: &mut SurfelStats,
+    progress: Progress,
+) -> Option<Made> {
+    let cloud::Orientation::Toward(sensor) = orientation else {
+        return None;
+    };
+    if own != g.positions.len() {
+        return None;
+    }
+    let mesh = match g.triangles.is_empty() {
+        true => grid::frame_triangles(g, sensor),
+        false => grid::meshed_frame(g, sensor),
+    }?;
+    let given = g.normals.as_deref();
+    let at = (&mesh, sensor, scale);
+    let (redundant, walls) = grid::frame_disks(g, at, given, surfels, stats, progress);
+    stats.pixel_grid = Some(mesh.grid);
+    let vertex_normals = match g.triangles.is_empty() {
+        true => Vec::new(),
+        false => grid::vertex_normals(&g.positions, &mesh.triangles, given),
+    };
+    Some(Made {
+        redundant,
+        vertex_normals,
+        ..Made::cloud(walls)
+    })
+}
+
+/// The leaf surfels of the first `own` samples, and a mesh piece's terms of the
+/// orientation vote; `own` told to `progress` in all.
 fn leaf_surfels_among(
     g: &Geometry,
     own: usize,
     outward: Outward,
+    progress: Progress,
 ) -> (LeafSurfels, Option<outward::Vote>) {
+    let fitted = Fitted::new(own, progress);
+    let tick = |n: u64| fitted.tick(n);
+    let progress = Progress::to(&tick);
     let scale = model_scale(g);
     let given = g.normals.as_deref();
     let mut stats = SurfelStats {
@@ -420,70 +514,20 @@ fn leaf_surfels_among(
         ..SurfelStats::default()
     };
     let mut surfels = initial_surfels(g);
-    let (mut redundant, mut vertex_normals, mut vote) = (Vec::new(), Vec::new(), None);
-    let (mut normals_turned, mut walls) = (NormalsTurned::No, Vec::new());
     let orientation = cloud::Orientation::of(&g.core, &g.bounds, g.origin);
-    let frame = match orientation {
-        cloud::Orientation::Toward(sensor) if own == g.positions.len() => {
-            if g.triangles.is_empty() {
-                grid::frame_triangles(g, sensor)
-            } else {
-                grid::meshed_frame(g, sensor)
-            }
-        }
-        _ => None,
+    let how = ((own, scale), orientation, outward);
+    let made = made_by_path(g, how, &mut surfels, &mut stats, progress);
+    // A cloud's normals are oriented where the file gives every one; its estimated ones
+    // were turned by the orientation. A mesh's follow its pieces' vote.
+    let oriented = !made.estimated || (given.is_some() && stats.given_normals == own as u64);
+    let normals_turned = match oriented {
+        true => NormalsTurned::No,
+        false => NormalsTurned::of(orientation),
     };
-    let oriented = if let (Some(mesh), cloud::Orientation::Toward(sensor)) = (&frame, orientation) {
-        (redundant, walls) =
-            grid::frame_disks(g, (mesh, sensor, scale), given, &mut surfels, &mut stats);
-        stats.pixel_grid = Some(mesh.grid);
-        if !g.triangles.is_empty() {
-            vertex_normals = grid::vertex_normals(&g.positions, &mesh.triangles, given);
-        }
-        let oriented = given.is_some() && stats.given_normals == own as u64;
-        if !oriented {
-            normals_turned = NormalsTurned::of(orientation);
-        }
-        oriented
-    } else if let Some(found) = terrain_path(g, (own, scale), orientation, &mut surfels, &mut stats)
-    {
-        walls = found;
-        let oriented = given.is_some() && stats.given_normals == own as u64;
-        if !oriented {
-            normals_turned = NormalsTurned::of(orientation);
-        }
-        oriented
-    } else if g.triangles.is_empty() {
-        let all: Vec<u32> = (0..own as u32).collect();
-        walls = cloud::neighbour_disks(
-            &g.positions,
-            scale,
-            &all,
-            (covering::RadiusRule::Surrounding, orientation),
-            given,
-            &mut surfels,
-            &mut stats,
-        );
-        let oriented = given.is_some() && stats.given_normals == own as u64;
-        if !oriented {
-            normals_turned = NormalsTurned::of(orientation);
-        }
-        oriented
-    } else {
-        let disks = mesh::vertex_disks(
-            &g.positions,
-            scale,
-            &g.triangles,
-            (given, g.colors.is_some(), outward),
-            &mut surfels,
-            &mut stats,
-        );
-        (redundant, vertex_normals, vote) = (disks.redundant, disks.normals, disks.vote);
-        true
-    };
+    fitted.finish();
     // The halo's surfels go; a terrain's walls under the own samples' edges join them.
     surfels.truncate(own);
-    surfels.extend(walls);
+    surfels.extend(made.walls);
     let leaves = LeafSurfels {
         surfels,
         origin: g.origin,
@@ -493,8 +537,42 @@ fn leaf_surfels_among(
         two_sided: stats.sides.two_sided,
         normals_turned,
         stats,
-        redundant,
-        vertex_normals,
+        redundant: made.redundant,
+        vertex_normals: made.vertex_normals,
     };
-    (leaves, vote)
+    (leaves, made.vote)
+}
+
+/// The surfels of the first `own` samples by the first path that takes the model: a
+/// sensor frame's grid, a terrain's TIN, a cloud's neighbourhoods, a mesh's rings.
+fn made_by_path(
+    g: &Geometry,
+    (at, orientation, outward): ((usize, f32), cloud::Orientation, Outward),
+    surfels: &mut [Surfel],
+    stats: &mut SurfelStats,
+    progress: Progress,
+) -> Made {
+    let ((own, scale), given) = (at, g.normals.as_deref());
+    if let Some(frame) = frame_path(g, (at, orientation), surfels, stats, progress) {
+        return frame;
+    }
+    if let Some(walls) = terrain_path(g, at, orientation, surfels, stats, progress) {
+        return Made::cloud(walls);
+    }
+    if g.triangles.is_empty() {
+        let all: Vec<u32> = (0..own as u32).collect();
+        let how = (covering::RadiusRule::Surrounding, orientation, progress);
+        let walls = cloud::neighbour_disks(&g.positions, scale, &all, how, given, surfels, stats);
+        return Made::cloud(walls);
+    }
+    let look = (given, g.colors.is_some(), outward);
+    let (points, triangles) = (&g.positions, &g.triangles);
+    let disks = mesh::vertex_disks(points, scale, triangles, look, surfels, stats, progress);
+    Made {
+        estimated: false,
+        walls: Vec::new(),
+        redundant: disks.redundant,
+        vertex_normals: disks.normals,
+        vote: disks.vote,
+    }
 }

@@ -32,6 +32,7 @@ use rayon::prelude::*;
 use super::Surfel;
 use super::corners::Rings;
 use super::field::{fit_color_field, fit_field, unit_rgb};
+use super::progress::Progress;
 use super::shape::{Clip, Fit, MIN_RATIO, Shape, SplatShape, rotate_gradient, tangent_frame};
 use super::triangle::{RADIUS_MARGIN, triangle_terms};
 
@@ -208,13 +209,15 @@ fn covering_radius(frame: &RingFrame, (shape, minor): (&Shape, DVec3), corners: 
 /// positions and normals to their neighbours' rings. Each vertex gathers over its own
 /// corners (`rings`, of `triangles`), in parallel, and everything it needs is its own:
 /// one pass, with no per-vertex temporaries (on the Lucy-size model they were 1.7 GB
-/// of fresh pages to fault in).
+/// of fresh pages to fault in). The shaped vertices are told to `progress`, a block
+/// of [`SHAPE_BLOCK`] at a time.
 pub fn ring_shapes(
     points: &[Vec3],
     scale: f32,
     (triangles, rings): (&[[u32; 3]], &Rings),
     (surfels, kept): (&mut [Surfel], usize),
     colored: bool,
+    progress: Progress,
 ) -> Vec<Vec3> {
     let s = scale as f64;
     let p = |i: u32| points[i as usize].as_dvec3() * s;
@@ -226,42 +229,44 @@ pub fn ring_shapes(
         Vec::new()
     };
     let ring = |v: usize| rings.ring(triangles, v);
-    surfels[..kept]
-        .par_iter_mut()
-        .enumerate()
-        .with_min_len(1 << 12)
-        .for_each(
-            |(v, surfel)| match vertex_shape(&p, &n, v as u32, || ring(v)) {
-                Some((r, shape)) => {
-                    let at = |w: u32| (p(w), n(w));
-                    let corners = ring(v).map(|(_, next, previous)| (next, previous));
-                    let (normal, shape) =
-                        fit_field(at(v as u32), (r, &shape), (at(v as u32), at), corners)
-                            .unwrap_or((n(v as u32), shape));
-                    let mut shape = shape;
-                    if colored {
-                        let at = |w: u32| (p(w), colors[w as usize]);
-                        let triangles = ring(v)
-                            .map(|(_, next, previous)| [at(v as u32), at(next), at(previous)]);
-                        if let Some((c0, field)) =
-                            fit_color_field((p(v as u32), normal), (r, &shape), triangles)
-                        {
-                            let [r, g, b] = (c0 * 255.0)
-                                .to_array()
-                                .map(|x| x.round().clamp(0.0, 255.0) as u8);
-                            surfel.color = [r, g, b, surfel.color[3]];
-                            shape.color = field;
-                        }
-                    }
-                    surfel.radius = (r / s) as f32;
-                    surfel.normal = normal.as_vec3();
-                    surfel.shape = shape.pack();
+    let shape = |v: usize, surfel: &mut Surfel| match vertex_shape(&p, &n, v as u32, || ring(v)) {
+        Some((r, shape)) => {
+            let at = |w: u32| (p(w), n(w));
+            let corners = ring(v).map(|(_, next, previous)| (next, previous));
+            let (normal, shape) = fit_field(at(v as u32), (r, &shape), (at(v as u32), at), corners)
+                .unwrap_or((n(v as u32), shape));
+            let mut shape = shape;
+            if colored {
+                let at = |w: u32| (p(w), colors[w as usize]);
+                let triangles =
+                    ring(v).map(|(_, next, previous)| [at(v as u32), at(next), at(previous)]);
+                if let Some((c0, field)) =
+                    fit_color_field((p(v as u32), normal), (r, &shape), triangles)
+                {
+                    let [r, g, b] = (c0 * 255.0)
+                        .to_array()
+                        .map(|x| x.round().clamp(0.0, 255.0) as u8);
+                    surfel.color = [r, g, b, surfel.color[3]];
+                    shape.color = field;
                 }
-                None => surfel.shape = SplatShape::circle(surfel.normal),
-            },
-        );
+            }
+            surfel.radius = (r / s) as f32;
+            surfel.normal = normal.as_vec3();
+            surfel.shape = shape.pack();
+        }
+        None => surfel.shape = SplatShape::circle(surfel.normal),
+    };
+    (surfels[..kept].par_chunks_mut(SHAPE_BLOCK).enumerate()).for_each(|(b, block)| {
+        for (j, surfel) in block.iter_mut().enumerate() {
+            shape(b * SHAPE_BLOCK + j, surfel);
+        }
+        progress.done(block.len());
+    });
     normals
 }
+
+/// Vertices shaped in one job of [`ring_shapes`].
+const SHAPE_BLOCK: usize = 1 << 12;
 
 /// Vertex v's one-ring ellipse (see the module doc): its major semi-axis (unit-scaled)
 /// and its shape, gradient scaled by it and clip set; None where the ring spans no
@@ -433,6 +438,7 @@ mod tests {
                 (&triangles, &rings),
                 (&mut surfels, kept),
                 false,
+                Progress::NONE,
             );
             clip_at_border(&points, (&triangles, &rings), (&mut surfels, kept));
             surfels
@@ -466,7 +472,14 @@ mod tests {
             .collect();
         let rings = Rings::of(points.len(), triangles);
         let all = surfels.len();
-        ring_shapes(points, 1.0, (triangles, &rings), (&mut surfels, all), false);
+        ring_shapes(
+            points,
+            1.0,
+            (triangles, &rings),
+            (&mut surfels, all),
+            false,
+            Progress::NONE,
+        );
         for (i, s) in surfels.iter().enumerate() {
             let (x, y) = ((i % 4) as f64, (i / 4) as f64);
             let border = x == 0.0 || x == 3.0 || y == 0.0 || y == 3.0;

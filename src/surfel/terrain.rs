@@ -37,6 +37,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use super::long_triangles::{self, Looks, Reach};
+use super::progress::Progress;
 use super::{Surfel, SurfelStats};
 use crate::io::parallel;
 use crate::io::triangulate::drop_long;
@@ -85,6 +86,7 @@ pub fn terrain_disks(
     (given, looks): (Option<&[Vec3]>, Looks),
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
+    progress: Progress,
 ) -> Option<TinSplats> {
     let mut triangles = drop_long(points, &delaunay, |c, median| cover.covers(c, median));
     drop(delaunay);
@@ -105,6 +107,7 @@ pub fn terrain_disks(
         given,
         (surfels, own),
         stats,
+        progress,
     );
     drop(triangles);
     let isolated = twins(points, &split.isolated, surfels);
@@ -267,6 +270,7 @@ mod tests {
             (None, (None, None)),
             &mut surfels,
             &mut stats,
+            Progress::NONE,
         )
         .unwrap();
         surfels
@@ -276,7 +280,11 @@ mod tests {
     fn cloud_surfels(points: &[Vec3], scale: f32) -> Vec<Surfel> {
         let mut surfels: Vec<Surfel> = points.iter().map(|&p| Surfel::unsized_at(p)).collect();
         let all: Vec<u32> = (0..points.len() as u32).collect();
-        let rule = (RadiusRule::Surrounding, Orientation::Unknown);
+        let rule = (
+            RadiusRule::Surrounding,
+            Orientation::Unknown,
+            Progress::NONE,
+        );
         let mut stats = SurfelStats::default();
         neighbour_disks(points, scale, &all, rule, None, &mut surfels, &mut stats);
         surfels

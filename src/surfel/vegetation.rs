@@ -12,6 +12,7 @@ use glam::Vec3;
 use super::cloud::{self, Orientation};
 use super::covering::RadiusRule;
 use super::layers::pick;
+use super::progress::Progress;
 use super::{Surfel, SurfelStats};
 
 /// Largest radius of a vegetation splat, in the tile's spacings s (the median edge of
@@ -32,12 +33,13 @@ pub fn plant_disks(
     given: Option<&[Vec3]>,
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
+    progress: Progress,
 ) {
     let positions = pick(points, plants);
     let given = given.map(|g| pick(g, plants));
     let mut own_surfels = pick(surfels, plants);
     let which: Vec<u32> = (0..own as u32).collect();
-    let rule = (RadiusRule::Surrounding, Orientation::Unknown);
+    let rule = (RadiusRule::Surrounding, Orientation::Unknown, progress);
     let walls = cloud::neighbour_disks(
         &positions,
         scale,

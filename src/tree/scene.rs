@@ -18,8 +18,9 @@ use super::{NodeRecord, OrderedSet, SequentialList, TreeMeta, build_list, build_
 use crate::io::formats::read_model;
 use crate::io::model::Model;
 use crate::io::{Geometry, PointAttributes};
+use crate::surfel::progress::Progress;
 use crate::surfel::shape::SplatShape;
-use crate::surfel::{DEFAULT_COLOR, LeafSurfels, leaf_surfels};
+use crate::surfel::{DEFAULT_COLOR, LeafSurfels, leaf_surfels_with_progress};
 
 /// The mesh a model came from, for the reference pass: per-vertex position (relative to
 /// the same origin as the tree), unit normal (the leaf surfel's) and colour.
@@ -176,10 +177,11 @@ fn read_step(path: &Path, report: &dyn Report) -> anyhow::Result<Model> {
     Ok(model)
 }
 
-/// The surfels step: the leaf surfels of `geometry`.
+/// The surfels step: the leaf surfels of `geometry`, its samples told as they are done.
 fn surfels_step(geometry: &Geometry, report: &dyn Report) -> LeafSurfels {
-    report.step(Step::Surfels, 0);
-    let leaves = leaf_surfels(geometry);
+    report.step(Step::Surfels, geometry.positions.len() as u64);
+    let done = |n: u64| report.advance(n);
+    let leaves = leaf_surfels_with_progress(geometry, Progress::to(&done));
     report.finished(Finished::Surfels(&leaves));
     leaves
 }

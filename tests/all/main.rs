@@ -30,6 +30,7 @@ mod render_streaming;
 mod shared_data;
 mod spt_file;
 mod surfel_hard_cases;
+mod surfel_progress;
 mod surfel_properties;
 mod tree_hard_cases;
 mod tree_properties;

@@ -35,6 +35,7 @@ use rayon::prelude::*;
 
 use super::covering::{Covering, MAX_NEIGHBOURS, RadiusRule, covering};
 use super::pca::plane_normal;
+use super::progress::Progress;
 use super::shape::{Clip, Shape, SplatShape};
 use super::{Surfel, SurfelStats};
 use super::{footprint, walls};
@@ -76,11 +77,12 @@ fn median_of_positive(values: impl ParallelIterator<Item = f32>) -> Option<f32> 
 /// does ([`boundary_clip`]), a terrain's edge sample where its wall stands
 /// ([`walls`]). Afterwards every listed surfel whose radius is still 0 gets
 /// [`fallback_radius`]. Returns a terrain's wall surfels (none for any other cloud).
+/// The neighbourhoods' fits are told to `progress`.
 pub fn neighbour_disks(
     points: &[Vec3],
     scale: f32,
     which: &[u32],
-    (rule, orientation): (RadiusRule, Orientation),
+    (rule, orientation, progress): (RadiusRule, Orientation, Progress),
     given: Option<&[Vec3]>,
     surfels: &mut [Surfel],
     stats: &mut SurfelStats,
@@ -94,7 +96,7 @@ pub fn neighbour_disks(
         &search,
         (points, scale),
         which,
-        (rule, orientation),
+        (rule, orientation, progress),
         &given_normal,
         stats,
     );
@@ -239,14 +241,15 @@ fn disks(
     search: &Search,
     (points, scale): (&[Vec3], f32),
     which: &[u32],
-    (rule, orientation): (RadiusRule, Orientation),
+    (rule, orientation, progress): (RadiusRule, Orientation, Progress),
     given_normal: &(dyn Fn(u32) -> Vec3 + Sync),
     stats: &mut SurfelStats,
 ) -> Vec<(Vec3, Covering)> {
     if search.is_empty() {
         vec![(Vec3::Z, covering(Vec3::ZERO, Vec3::Z, &[], rule)); which.len()]
     } else if let Some(steps) = Steps::of(search, scale, orientation) {
-        let disks = smoothed_disks(search, (points, scale), which, (rule, steps), given_normal);
+        let how = (rule, steps, progress);
+        let disks = smoothed_disks(search, (points, scale), which, how, given_normal);
         stats.step_treads += disks.iter().filter(|d| d.0 != d.1).count() as u64;
         disks
             .into_iter()
@@ -261,7 +264,7 @@ fn disks(
             let p = points[i as usize] * scale;
             (normal, covering(p, normal, &near, rule))
         };
-        search.map_neighbourhoods(which, &|&i| points[i as usize] * scale, &disk)
+        search.map_neighbourhoods(which, &|&i| points[i as usize] * scale, &disk, progress)
     }
 }
 
@@ -274,10 +277,12 @@ pub fn scattered(points: &[Vec3], scale: f32) -> Vec<bool> {
         return vec![false; points.len()];
     }
     let distinct: Vec<u32> = (0..search.coords.len() as u32).collect();
-    let neighbourhoods: Vec<ArrayVec<u32, K>> =
-        search.map_neighbourhoods(&distinct, &|&i| search.point(i), &|_, found| {
-            found.iter().copied().collect()
-        });
+    let neighbourhoods: Vec<ArrayVec<u32, K>> = search.map_neighbourhoods(
+        &distinct,
+        &|&i| search.point(i),
+        &|_, found| found.iter().copied().collect(),
+        Progress::NONE,
+    );
     let seeds: Vec<bool> = (neighbourhoods.par_iter().enumerate())
         .map(|(i, found)| {
             let p = search.point(i as u32);
@@ -378,7 +383,8 @@ fn sensor_pitch(
         let nearest = found.get(1)?;
         Some((points[i as usize] * scale, search.point(*nearest)))
     };
-    let pairs = search.map_neighbourhoods(&sample, &|&i| points[i as usize] * scale, &pair);
+    let at = |&i: &u32| points[i as usize] * scale;
+    let pairs = search.map_neighbourhoods(&sample, &at, &pair, Progress::NONE);
     footprint::angular_pitch(sensor, pairs.into_iter().flatten())
 }
 
@@ -514,7 +520,7 @@ mod tests {
     fn surfels_of(points: &[Vec3], scale: f32, orientation: Orientation) -> Vec<Surfel> {
         let mut surfels: Vec<Surfel> = points.iter().map(|&p| Surfel::unsized_at(p)).collect();
         let all: Vec<u32> = (0..points.len() as u32).collect();
-        let rule = (RadiusRule::Surrounding, orientation);
+        let rule = (RadiusRule::Surrounding, orientation, Progress::NONE);
         let mut stats = SurfelStats::default();
         neighbour_disks(points, scale, &all, rule, None, &mut surfels, &mut stats);
         surfels

@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 use super::K;
 use super::cells::Cells;
+use crate::surfel::progress::Progress;
 
 /// The distinct positions of a cloud, unit-scaled and sorted by cell, and the grid
 /// its neighbourhoods are searched in.
@@ -65,7 +66,8 @@ impl Search {
     }
 
     /// `f` of each of `queries` and its neighbourhood (nearest first), in the queries'
-    /// order: written in place, block by block ([`query_block`]). Collecting the
+    /// order: written in place, block by block ([`query_block`]), each block's queries
+    /// told to `progress` when done. Collecting the
     /// blocks' results instead copies them once more: on the Lucy-size cloud, peak
     /// memory 0.25 GiB higher.
     pub fn map_neighbourhoods<Q: Sync, T: Send + Default>(
@@ -73,6 +75,7 @@ impl Search {
         queries: &[Q],
         position: &(dyn Fn(&Q) -> Vec3 + Sync),
         f: &(dyn Fn(&Q, &[u32]) -> T + Sync),
+        progress: Progress,
     ) -> Vec<T> {
         let mut out: Vec<T> = Vec::with_capacity(queries.len());
         out.par_extend((0..queries.len()).into_par_iter().map(|_| T::default()));
@@ -90,6 +93,7 @@ impl Search {
                 for ((slot, q), found) in slots.iter_mut().zip(block).zip(found) {
                     *slot = f(q, &found);
                 }
+                progress.done(block.len());
             });
         out
     }
@@ -151,9 +155,12 @@ mod tests {
             .map(|i| points[i * 1237 % points.len()])
             .collect();
         for queries in [&points, &shuffled] {
-            let found = search.map_neighbourhoods(queries, &|p| *p, &|p, found| {
-                (*p, ArrayVec::<u32, K>::try_from(found).unwrap())
-            });
+            let found = search.map_neighbourhoods(
+                queries,
+                &|p| *p,
+                &|p, found| (*p, ArrayVec::<u32, K>::try_from(found).unwrap()),
+                Progress::NONE,
+            );
             for (p, found) in &found {
                 let all = tree
                     .query(&p.to_array())

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use super::super::covering::{Covering, RadiusRule, covering};
 use super::super::levels;
 use super::super::pca::plane_normal;
+use super::super::progress::Progress;
 use super::search::Search;
 use super::{K, Orientation};
 
@@ -65,20 +66,22 @@ impl Steps {
 /// The same mean of all fits (turned toward the sensor) raised the frame's FLIP (0.2983
 /// → 0.3299) and opened holes (up to 2.8 % on a view). Each sample's neighbourhood is
 /// kept between the fits and the means (K indices, 100 bytes a sample) rather than
-/// searched twice.
+/// searched twice. The searched samples are told to `progress`.
 pub(super) fn smoothed_disks(
     search: &Search,
     (points, scale): (&[Vec3], f32),
     which: &[u32],
-    (rule, steps): (RadiusRule, Steps),
+    (rule, steps, progress): (RadiusRule, Steps, Progress),
     given_normal: &(dyn Fn(u32) -> Vec3 + Sync),
 ) -> Vec<(Vec3, Vec3, Covering)> {
     // Every sample's neighbourhood, halo included, in the samples' own order (whose
     // blocks fall in few cells); its nearest is its own position.
-    let neighbourhoods: Vec<ArrayVec<u32, K>> =
-        search.map_neighbourhoods(points, &|p| *p * scale, &|_, found| {
-            found.iter().copied().collect()
-        });
+    let neighbourhoods: Vec<ArrayVec<u32, K>> = search.map_neighbourhoods(
+        points,
+        &|p| *p * scale,
+        &|_, found| found.iter().copied().collect(),
+        progress,
+    );
     let near = |i: usize| neighbourhoods[i].iter().map(|&f| search.point(f));
     let fitted = fitted_normals(&search.coords, &neighbourhoods, steps);
     which
