@@ -18,7 +18,7 @@ use glam::{DVec3, Vec3};
 use super::cloud::neighbour_disks;
 use super::covering::RadiusRule;
 use super::outward::{Sides, Vote, orient_pieces};
-use super::progress::Progress;
+use super::progress::{Progress, Stages};
 use super::triangle::{RADIUS_MARGIN, triangle_terms};
 use super::{Surfel, SurfelStats};
 use crate::io::geometry::unit_vector;
@@ -138,7 +138,9 @@ pub fn vertex_disks(
     stats: &mut SurfelStats,
     progress: Progress,
 ) -> MeshDisks {
+    let stages = Stages::new(surfels.len(), 100, progress);
     let isolated = face_disks(points, scale, triangles, given, surfels, stats);
+    stages.ended(WEIGHTS.faces);
     let mut vote = None;
     stats.sides = match outward {
         Outward::Vote => orient_pieces(points, triangles, surfels),
@@ -153,9 +155,12 @@ pub fn vertex_disks(
             }
         }
     };
+    stages.ended(WEIGHTS.orient);
     let rings = super::corners::Rings::of(points.len(), triangles);
-    let all = surfels.len();
-    let at = (triangles, &rings);
+    stages.ended(WEIGHTS.rings);
+    let (all, at) = (surfels.len(), (triangles, &rings));
+    let share = stages.share(WEIGHTS.shapes);
+    let progress = Progress::to(&share);
     let normals = super::ring::ring_shapes(points, scale, at, (surfels, all), colored, progress);
     let redundant = super::isolated::redundant(points, scale, &isolated, surfels);
     stats.redundant_vertices = redundant.len() as u64;
@@ -165,6 +170,25 @@ pub fn vertex_disks(
         vote,
     }
 }
+
+/// Each stage's share of a mesh's surfels time, in percent, for its progress: on a
+/// mesh of 3.07 M vertices and 6.14 M triangles (`gen_model --segments 3000 --sides
+/// 1024`, 2 cores, Intel, 2026-12-04) the face normals took 0.19 s, the orientation 0.14
+/// s, the rings 0.08 s and the rings' shapes 1.28 s.
+pub(crate) struct Weights {
+    pub faces: u32,
+    pub orient: u32,
+    pub rings: u32,
+    pub shapes: u32,
+}
+
+/// See [`Weights`]; they add up to 100.
+pub(crate) const WEIGHTS: Weights = Weights {
+    faces: 11,
+    orient: 8,
+    rings: 5,
+    shapes: 76,
+};
 
 /// Normals and radii of the vertices of a mesh from their faces (and from their
 /// neighbours for those without usable faces), not yet oriented; returns the isolated

@@ -24,6 +24,8 @@ pub mod octahedral;
 pub mod outward;
 pub(crate) mod pca;
 pub mod progress;
+#[cfg(test)]
+mod progress_tests;
 pub(crate) mod ring;
 pub(crate) mod sets;
 pub mod shape;
@@ -40,7 +42,7 @@ use serde::Serialize;
 use crate::io::delaunay::delaunay_xy;
 use crate::io::{Geometry, PointAttributes};
 use layers::Layer;
-use progress::{Fitted, Progress};
+use progress::{Fitted, Progress, Stages};
 use shape::SplatShape;
 
 /// One integer that orders (squared distance, index) pairs, for the neighbour searches'
@@ -348,7 +350,7 @@ fn initial_surfels(g: &Geometry) -> Vec<Surfel> {
 /// A terrain's splats from its TIN ([`terrain::terrain_disks`]), its layers apart
 /// ([`layers`]); None for any other model, for a terrain whose ground makes no
 /// triangle, and for one whose file gives every normal (kept as given, by the cloud's
-/// rules). Each layer's shaped samples are told to `progress`.
+/// rules). Its stages are told to `progress` ([`layers::Weights`]).
 fn terrain_path(
     g: &Geometry,
     (own, scale): (usize, f32),
@@ -364,7 +366,8 @@ fn terrain_path(
     if given.is_some_and(|n| n.iter().all(|v| *v != Vec3::ZERO)) {
         return None;
     }
-    let (labels, first) = layers::labels(g, own, scale);
+    let stages = Stages::new(own, layers::WEIGHTS.running(g, own), progress);
+    let (labels, first) = layers::labels(g, own, scale, &stages);
     let layers = layers::Layers::of(&labels, own);
     let ground_layer = layers.get(Layer::Ground);
     if layers.all_ground() {
@@ -373,6 +376,9 @@ fn terrain_path(
             true => first.ground(g, &labels, ground_layer.0),
             false => delaunay_xy(&g.positions),
         };
+        stages.ended(layers::WEIGHTS.ground_tin);
+        let share = stages.share(layers::WEIGHTS.layers);
+        let progress = Progress::to(&share);
         let look = (given, (g.colors.as_deref(), g.attributes.as_deref()));
         let all = (own, &terrain::Cover::none());
         let at = (&g.positions[..], delaunay, scale);
@@ -386,6 +392,9 @@ fn terrain_path(
     let cover = terrain::Cover::of(over.map(|&i| g.positions[i as usize]));
     let ground_tin = (Some(first.ground(g, &labels, ground_layer.0)), &cover);
     drop(labels);
+    stages.ended(layers::WEIGHTS.ground_tin);
+    let share = stages.share(layers::WEIGHTS.layers);
+    let progress = Progress::to(&share);
     let ground = layers::tin_among(
         (g, scale),
         ground_layer,
@@ -503,8 +512,7 @@ fn leaf_surfels_among(
     progress: Progress,
 ) -> (LeafSurfels, Option<outward::Vote>) {
     let fitted = Fitted::new(own, progress);
-    let tick = |n: u64| fitted.tick(n);
-    let progress = Progress::to(&tick);
+    let progress = Progress::to(&fitted);
     let scale = model_scale(g);
     let given = g.normals.as_deref();
     let mut stats = SurfelStats {

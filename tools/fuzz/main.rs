@@ -57,7 +57,9 @@ const OUT_OF_CORE_EVERY: u64 = 16;
 const OUT_OF_CORE_TABLES: usize = 64 * 64 * 64 * 12;
 
 #[derive(Parser)]
-#[command(about = "Mutation fuzzer for spt's PLY and .spt readers")]
+#[command(
+    about = "Mutation fuzzer for spt's readers: PLY, LAS, LAZ, .spt, scene and instance files"
+)]
 struct Args {
     /// How long to run, in seconds.
     #[arg(long, default_value_t = 60.0)]
@@ -71,7 +73,8 @@ struct Args {
     /// An input that takes longer than this (seconds) counts as a failure.
     #[arg(long, default_value_t = 2.0)]
     slow: f64,
-    /// Run one saved input (a .ply or .spt file) instead, and print what happens.
+    /// Run one saved input (any file the fuzzer saved under --out) instead, and print
+    /// what happens.
     #[arg(long)]
     replay: Option<PathBuf>,
 }
