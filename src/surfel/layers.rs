@@ -18,7 +18,7 @@ use rayon::prelude::*;
 
 use super::cloud;
 use super::free_roofs::{self, Standing};
-use super::progress::{Progress, Stages};
+use super::progress::{Listener, Progress, Stages};
 use super::terrain::{self, Cover, TinSplats};
 use super::{Surfel, SurfelStats};
 use crate::io::Geometry;
@@ -63,8 +63,8 @@ pub fn labels(g: &Geometry, own: usize, scale: f32, stages: &Stages) -> (Vec<Lay
         .filter(|&i| labels[i as usize] == Layer::Ground)
         .collect();
     let positions = pick(&g.positions, &ground);
-    let delaunay = delaunay_xy(&positions);
-    stages.ended(WEIGHTS.first_tin);
+    let share = stages.share(WEIGHTS.first_tin);
+    let delaunay = delaunay::delaunay_xy_telling(&positions, &|n| share.heard(n as u64));
     let ground_own = ground.partition_point(|&i| (i as usize) < own);
     let standing = free_roofs::free_standing(&positions, &delaunay, ground_own);
     stages.ended(WEIGHTS.free_standing);

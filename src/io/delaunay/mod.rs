@@ -33,12 +33,26 @@ pub const MAX_STRIPS: usize = 16;
 /// delaunator winds them, long triangles kept; of the samples that share an x–y the
 /// least is held. In [`strips`] where there are many.
 pub fn delaunay_xy(positions: &[Vec3]) -> Vec<[u32; 3]> {
+    delaunay_xy_telling(positions, &|_| {})
+}
+
+/// [`delaunay_xy`], telling `triangulated` how many more samples are triangulated as
+/// each strip is (all of them at once where there is one), for a progress bar: the
+/// counts add up to the samples, or to fewer where the strips do not tell the
+/// triangulation and the set is triangulated whole.
+pub fn delaunay_xy_telling(
+    positions: &[Vec3],
+    triangulated: &(dyn Fn(usize) + Sync),
+) -> Vec<[u32; 3]> {
     let strips = positions.len().div_ceil(STRIP_SAMPLES).min(MAX_STRIPS);
     let mut triangles = match strips {
-        0..=1 => None,
-        _ => strips::in_strips(positions, strips),
-    }
-    .unwrap_or_else(|| whole(positions));
+        0..=1 => {
+            let whole = whole(positions);
+            triangulated(positions.len());
+            whole
+        }
+        _ => strips::in_strips(positions, strips, triangulated).unwrap_or_else(|| whole(positions)),
+    };
     if strips > 1 {
         // glibc keeps what a thread frees in that thread's arena, where the threads
         // that build the rest cannot reuse it: on the generated city's 2 M samples, in

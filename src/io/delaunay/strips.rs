@@ -34,8 +34,13 @@ struct Strip {
 }
 
 /// The Delaunay triangulation of `positions` in x–y from `strips` strips (the module
-/// doc); None where it cannot be told from them.
-pub fn in_strips(positions: &[Vec3], strips: usize) -> Option<Vec<[u32; 3]>> {
+/// doc); None where it cannot be told from them. Each strip's samples are told to
+/// `triangulated` once it is triangulated.
+pub fn in_strips(
+    positions: &[Vec3],
+    strips: usize,
+    triangulated: &(dyn Fn(usize) + Sync),
+) -> Option<Vec<[u32; 3]>> {
     let cuts = cuts(positions, strips);
     let mut members: Vec<Vec<u32>> = vec![Vec::new(); cuts.len() + 1];
     for (v, p) in positions.iter().enumerate() {
@@ -48,7 +53,11 @@ pub fn in_strips(positions: &[Vec3], strips: usize) -> Option<Vec<[u32; 3]>> {
         (lo, cuts.get(s).map_or(f64::INFINITY, |&c| c as f64))
     };
     let parts: Option<Vec<Strip>> = (members.par_iter().enumerate())
-        .map(|(s, members)| strip(positions, members, range(s)))
+        .map(|(s, members)| {
+            let strip = strip(positions, members, range(s));
+            triangulated(members.len());
+            strip
+        })
         .collect();
     let parts = parts?;
     drop(members);
@@ -203,7 +212,8 @@ mod tests {
         for seed in 1..3 {
             let points = scattered(6000, seed);
             for strips in [2, 5, 16] {
-                let triangles = in_strips(&points, strips).expect("no ties in random samples");
+                let triangles =
+                    in_strips(&points, strips, &|_| {}).expect("no ties in random samples");
                 assert_eq!(
                     canonical(&triangles),
                     canonical(&whole(&points)),
@@ -241,7 +251,7 @@ mod tests {
         let points: Vec<Vec3> = (0..400)
             .map(|k| Vec3::new((k / 100) as f32, (k % 100) as f32, 0.0))
             .collect();
-        assert!(in_strips(&points, 4).is_none());
+        assert!(in_strips(&points, 4, &|_| {}).is_none());
     }
 
     #[test]
