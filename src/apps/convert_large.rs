@@ -53,18 +53,34 @@ pub struct Bars {
 impl Bars {
     /// Ends the current stage's bar with its time and points/s.
     pub fn finish(&self) {
-        if let Some((stage, total)) = self
+        self.finish_saying(&|total, seconds| match total {
+            0 => String::new(),
+            _ => format!("{:.2} M points/s", total as f64 / 1e6 / seconds.max(1e-9)),
+        });
+    }
+
+    /// Ends the last stage, the write of `output`, with the file's size and rate.
+    pub fn finish_written(&self, output: &Path) {
+        let bytes = std::fs::metadata(output).map_or(0, |m| m.len()) as f64;
+        self.finish_saying(&|_, seconds| {
+            let rate = bytes / 1e6 / seconds.max(1e-9);
+            format!(
+                "{} ({:.1} MB, {rate:.0} MB/s)",
+                output.display(),
+                bytes / 1e6
+            )
+        });
+    }
+
+    /// Ends the current stage's bar with `summary` of its total points and seconds.
+    fn finish_saying(&self, summary: &dyn Fn(u64, f64) -> String) {
+        let current = self
             .current
             .lock()
             .unwrap_or_else(|e| e.into_inner())
-            .take()
-        {
-            let rate = total as f64 / 1e6 / stage.seconds().max(1e-9);
-            stage.finish(&if total > 0 {
-                format!("{rate:.2} M points/s")
-            } else {
-                String::new()
-            });
+            .take();
+        if let Some((stage, total)) = current {
+            stage.finish(&summary(total, stage.seconds()));
         }
     }
 }
@@ -74,6 +90,10 @@ impl Progress for Bars {
         self.finish();
         let stage = Stage::start(name, total, "points");
         *self.current.lock().unwrap_or_else(|e| e.into_inner()) = Some((stage, total));
+    }
+
+    fn rebuild(&self, reason: &str) {
+        self.finish_saying(&|_, _| format!("not written: {reason}; the jobs are built again"));
     }
 
     fn advance(&self, points: u64) {
@@ -122,7 +142,7 @@ pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
     let options = options(output, memory);
     let bars = Bars::default();
     let built = build_file(input, output, &options, &bars)?;
-    bars.finish();
+    bars.finish_written(output);
     summary(&built, output, start);
     Ok(())
 }

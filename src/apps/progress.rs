@@ -68,8 +68,8 @@ impl Stage {
         self.start.elapsed().as_secs_f64()
     }
 
-    /// Ends the stage and prints `name  seconds  summary; CPU-s, threads busy`; returns
-    /// the time it took.
+    /// Ends the stage and prints `name  seconds  summary; CPU-s, threads busy` (without
+    /// the "; " where the summary is empty); returns the time it took.
     pub fn finish(&self, summary: &str) -> Duration {
         let took = self.start.elapsed();
         self.bar.finish_and_clear();
@@ -79,6 +79,10 @@ impl Stage {
             .map_or(String::new(), |(start, now)| {
                 busy_threads(now - start, took.as_secs_f64())
             });
+        let busy = match summary.is_empty() {
+            true => busy.trim_start_matches("; "),
+            false => &busy,
+        };
         say!(
             "{:>8}  {:>7.2} s  {summary}{busy}",
             self.name,

@@ -208,6 +208,21 @@ fn the_commands_ask_for_the_parts_again_when_the_join_needs_another_error_scale(
     let one = d.join("one.spt");
     let convert = Path::new("convert");
     let ooc = Path::new("--out-of-core");
-    assert_eq!(spt(&[convert, &input, &one, ooc]).0, Some(0));
+    let (status, said, err) = spt(&[convert, &input, &one, ooc]);
+    assert_eq!(status, Some(0), "{err}");
     assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&one).unwrap());
+    // Each stage's line, the write's with the file, its size and rate; none with an
+    // empty summary before its CPU time.
+    let said = format!("{said}{err}");
+    let mut writes = said.lines().filter(|l| l.trim_start().starts_with("write"));
+    // This model's parts need another error scale: the first join writes nothing.
+    let first = writes.next().unwrap_or_default();
+    assert!(first.contains("not written: the leaves need"), "{said}");
+    let write = writes.next();
+    let written = format!("{} (", one.display());
+    assert!(
+        write.is_some_and(|l| l.contains(&written) && l.contains(" MB/s)")),
+        "{said}"
+    );
+    assert!(!said.contains("s  ;"), "{said}");
 }

@@ -137,6 +137,9 @@ pub struct Built {
 pub trait Progress: Sync {
     fn stage(&self, name: &'static str, total: u64);
     fn advance(&self, points: u64);
+    /// The join wrote nothing: the jobs are built again, for `reason`
+    /// ([`join::Joined::Rebuild`]).
+    fn rebuild(&self, _reason: &str) {}
 }
 
 /// Builds the `.spt` file of the model `input` (a LAS, LAZ or PLY cloud, or a PLY
@@ -157,8 +160,9 @@ pub fn build_file(
         progress.stage("build", manifest.input.points);
         run_jobs(dir.path(), &manifest, progress)?;
         progress.stage("write", 0);
-        if let Joined::Written(built) = join::join(dir.path(), output, Check::Sizes)? {
-            return Ok(built);
+        match join::join(dir.path(), output, Check::Sizes)? {
+            Joined::Written(built) => return Ok(built),
+            Joined::Rebuild(reason) => progress.rebuild(&reason),
         }
     }
 }
