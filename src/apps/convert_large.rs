@@ -92,6 +92,13 @@ impl Progress for Bars {
         *self.current.lock().unwrap_or_else(|e| e.into_inner()) = Some((stage, total));
     }
 
+    fn writing(&self, bytes: u64) {
+        let current = self.current.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((stage, _)) = current.as_ref() {
+            stage.measure(bytes, "bytes");
+        }
+    }
+
     fn rebuild(&self, reason: &str) {
         self.finish_saying(&|_, _| format!("not written: {reason}; the jobs are built again"));
     }

@@ -16,7 +16,7 @@ use crate::tree::out_of_core::join::{Joined, join};
 use crate::tree::out_of_core::manifest::Manifest;
 use crate::tree::out_of_core::plan::{Planned, plan};
 use crate::tree::out_of_core::run_job::{Ran, run_behind};
-use crate::tree::out_of_core::{Options, in_lanes};
+use crate::tree::out_of_core::{Options, Progress, in_lanes};
 
 /// Exit status of `spt jobs join` when the parts must be built again: the manifest now
 /// holds the new build parameters; build every job again, then join.
@@ -127,9 +127,16 @@ fn run_build(dir: &Path, jobs: &[usize]) -> anyhow::Result<()> {
 
 fn run_join(dir: &Path, output: &Path, clean: bool) -> anyhow::Result<()> {
     let start = Instant::now();
-    match join(dir, output, Check::Checksums)? {
-        Joined::Rebuild(reason) => Err(RebuildNeeded(reason).into()),
+    let bars = Bars::default();
+    bars.stage("write", 0);
+    let joined = join(dir, output, Check::Checksums, &bars)?;
+    match joined {
+        Joined::Rebuild(reason) => {
+            bars.finish();
+            Err(RebuildNeeded(reason).into())
+        }
         Joined::Written(built) => {
+            bars.finish_written(output);
             summary(&built, output, start);
             if clean {
                 remove_job_files(dir)?;

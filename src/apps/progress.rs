@@ -32,14 +32,7 @@ impl Stage {
         };
         let bar = if total > 0 {
             let bar = ProgressBar::with_draw_target(Some(total), target);
-            let template = format!(
-                "{{prefix:>8}} [{{bar:40}}] {{human_pos}}/{{human_len}} {unit} {{elapsed}} ETA {{eta}}"
-            );
-            bar.set_style(
-                ProgressStyle::with_template(&template)
-                    .unwrap()
-                    .progress_chars("=> "),
-            );
+            bar.set_style(bar_style(unit));
             bar
         } else {
             let bar = ProgressBar::with_draw_target(None, target);
@@ -55,6 +48,16 @@ impl Stage {
             start: Instant::now(),
             cpu_start: process_cpu_seconds(),
         }
+    }
+
+    /// From now on, a bar of `total` units of work (a spinner until then), none done
+    /// yet; the stage keeps its start.
+    pub fn measure(&self, total: u64, unit: &'static str) {
+        self.bar.disable_steady_tick();
+        self.done.store(0, Ordering::Relaxed);
+        self.bar.set_style(bar_style(unit));
+        self.bar.set_length(total);
+        self.bar.set_position(0);
     }
 
     /// Adds `n` units of work done (callable from any thread).
@@ -90,6 +93,16 @@ impl Stage {
         );
         took
     }
+}
+
+/// A bar's look: `name [====>    ] done/total unit elapsed ETA left`.
+fn bar_style(unit: &str) -> ProgressStyle {
+    let template = format!(
+        "{{prefix:>8}} [{{bar:40}}] {{human_pos}}/{{human_len}} {unit} {{elapsed}} ETA {{eta}}"
+    );
+    ProgressStyle::with_template(&template)
+        .unwrap()
+        .progress_chars("=> ")
 }
 
 /// A build's last line: "total 18.03 s, 0.78 M points/s, peak memory 2.03 GiB; 32.5

@@ -5,6 +5,7 @@
 //! that needs another error scale asks for the parts again (exit 3).
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::common;
 
@@ -43,9 +44,35 @@ fn planned(dir: &Path) -> (PathBuf, PathBuf, Manifest) {
     (input, jobs, m)
 }
 
+/// Hears the join's write: the size it announces and the bytes it counts after.
+#[derive(Default)]
+struct Written {
+    announced: AtomicU64,
+    counted: AtomicU64,
+}
+
+impl Progress for Written {
+    fn stage(&self, _: &'static str, _: u64) {}
+    fn advance(&self, n: u64) {
+        self.counted.fetch_add(n, Ordering::Relaxed);
+    }
+    fn writing(&self, bytes: u64) {
+        self.announced.store(bytes, Ordering::Relaxed);
+        self.counted.store(0, Ordering::Relaxed);
+    }
+}
+
+/// The file the join writes; it tells its size first and then every byte.
 fn joined(jobs: &Path, output: &Path) -> Vec<u8> {
-    match join(jobs, output, Check::Checksums).unwrap() {
-        Joined::Written(_) => std::fs::read(output).unwrap(),
+    let written = Written::default();
+    match join(jobs, output, Check::Checksums, &written).unwrap() {
+        Joined::Written(_) => {
+            let file = std::fs::read(output).unwrap();
+            let size = file.len() as u64;
+            assert_eq!(written.announced.load(Ordering::Relaxed), size);
+            assert_eq!(written.counted.load(Ordering::Relaxed), size);
+            file
+        }
         Joined::Rebuild(why) => panic!("asked for the parts again: {why}"),
     }
 }
@@ -94,7 +121,7 @@ fn a_truncated_part_is_refused_by_the_join_and_built_again() {
     let part = jobs.join("job2.part");
     let bytes = std::fs::read(&part).unwrap();
     std::fs::write(&part, &bytes[..bytes.len() / 2]).unwrap();
-    let refused = join(&jobs, &output, Check::Checksums)
+    let refused = join(&jobs, &output, Check::Checksums, &Quiet)
         .unwrap_err()
         .to_string();
     assert!(

@@ -13,6 +13,7 @@
 
 use glam::Vec3;
 
+use super::Progress;
 use super::job::{Model, Part};
 use super::order::Layout;
 use super::read_ahead::{PartFile, Span, read_buffer, stream};
@@ -23,7 +24,7 @@ use crate::surfel::shape::SplatShape;
 use crate::tree::chunks::Chunk;
 use crate::tree::hierarchy::{Hierarchy, Internal};
 use crate::tree::select::BlockIndexBuilder;
-use crate::tree::spt_file::header_for;
+use crate::tree::spt_file::{file_bytes, header_for};
 use crate::tree::spt_write::{Hashed, write_hashed};
 use crate::tree::{NodeRecord, TreeMeta, attributes, build_above};
 
@@ -146,13 +147,13 @@ fn normals_turned(parts: &[Part], oriented: bool) -> NormalsTurned {
 }
 
 /// Writes the `.spt` file of the jobs' `parts`, joined by the top tree of `split`,
-/// atomically, flagged `two_sided` (an open mesh, [`TreeMeta::two_sided`]); returns its
-/// meta.
+/// atomically, flagged `two_sided` (an open mesh, [`TreeMeta::two_sided`]), its size and
+/// then its bytes as they go told to `progress`; returns its meta.
 pub fn write_file(
     path: &std::path::Path,
     model: &Model,
     (split, parts): (&Split, &[Part]),
-    two_sided: bool,
+    (two_sided, progress): (bool, &dyn Progress),
 ) -> anyhow::Result<TreeMeta> {
     let oriented = parts.iter().all(|p| p.oriented);
     let top = if parts.len() > 1 {
@@ -171,7 +172,8 @@ pub fn write_file(
     let layout = layout(parts, &top, &part_tables(parts, model.has_attributes)?);
     let chunks = chunk_table(&layout, &top);
     let header = header_for(&meta, &chunks, 0);
-    write_hashed(path, &header, &|_| {}, |out| {
+    progress.writing(file_bytes(&meta, &chunks));
+    write_hashed(path, &header, &|n| progress.advance(n), |out| {
         write_sections(out, (parts, &layout), &top, (&chunks, model.has_attributes))
     })?;
     Ok(meta)

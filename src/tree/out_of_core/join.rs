@@ -12,7 +12,7 @@ use super::checksums::Check;
 use super::job::{Model, Part};
 use super::manifest::Manifest;
 use super::record::{PartRecord, part_name};
-use super::{Built, SCALE_SLACK, assemble};
+use super::{Built, Progress, SCALE_SLACK, assemble};
 use crate::surfel::outward::Vote;
 
 /// What [`join`] did.
@@ -60,7 +60,12 @@ fn records(dir: &Path, m: &Manifest, check: Check) -> anyhow::Result<Vec<PartRec
 
 /// Joins the parts of the plan in `dir`, checked by `check`, into the `.spt` file
 /// `output`.
-pub fn join(dir: &Path, output: &Path, check: Check) -> anyhow::Result<Joined> {
+pub fn join(
+    dir: &Path,
+    output: &Path,
+    check: Check,
+    progress: &dyn Progress,
+) -> anyhow::Result<Joined> {
     let mut m = Manifest::read(dir)?;
     let records = records(dir, &m, check)?;
     let vote = (records.iter())
@@ -97,7 +102,8 @@ pub fn join(dir: &Path, output: &Path, check: Check) -> anyhow::Result<Joined> {
         ..m.model.clone()
     };
     let two_sided = m.input.mesh && !vote.closed();
-    let meta = assemble::write_file(output, &model, (&m.split_tree()?, &parts), two_sided)?;
+    let joined = (&m.split_tree()?, &parts[..]);
+    let meta = assemble::write_file(output, &model, joined, (two_sided, progress))?;
     Ok(Joined::Written(Built {
         meta,
         jobs: parts.len(),

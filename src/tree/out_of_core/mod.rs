@@ -140,6 +140,9 @@ pub trait Progress: Sync {
     /// The join wrote nothing: the jobs are built again, for `reason`
     /// ([`join::Joined::Rebuild`]).
     fn rebuild(&self, _reason: &str) {}
+    /// The join starts to write a file of `bytes` bytes: what [`Progress::advance`]
+    /// counts from now on is bytes written.
+    fn writing(&self, _bytes: u64) {}
 }
 
 /// Builds the `.spt` file of the model `input` (a LAS, LAZ or PLY cloud, or a PLY
@@ -160,7 +163,7 @@ pub fn build_file(
         progress.stage("build", manifest.input.points);
         run_jobs(dir.path(), &manifest, progress)?;
         progress.stage("write", 0);
-        match join::join(dir.path(), output, Check::Sizes)? {
+        match join::join(dir.path(), output, Check::Sizes, progress)? {
             Joined::Written(built) => return Ok(built),
             Joined::Rebuild(reason) => progress.rebuild(&reason),
         }
