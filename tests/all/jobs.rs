@@ -5,6 +5,7 @@
 //! that needs another error scale asks for the parts again (exit 3).
 
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::common;
@@ -31,16 +32,38 @@ fn options(dir: &Path) -> Options {
     }
 }
 
-/// A LAS tile of 25,600 points, planned into `dir/jobs` in jobs of 3,000 points.
+/// Each stage heard, with its total and the points counted in it.
+#[derive(Default)]
+struct Stages(Mutex<Vec<(&'static str, u64, u64)>>);
+
+impl Progress for Stages {
+    fn stage(&self, name: &'static str, total: u64) {
+        self.0.lock().unwrap().push((name, total, 0));
+    }
+    fn advance(&self, n: u64) {
+        self.0.lock().unwrap().last_mut().unwrap().2 += n;
+    }
+}
+
+/// A LAS tile of 25,600 points, planned into `dir/jobs` in jobs of 3,000 points; each of
+/// the plan's passes counts every point of the file, as its bar's total says.
 fn planned(dir: &Path) -> (PathBuf, PathBuf, Manifest) {
     let input = dir.join("tile.las");
     std::fs::write(&input, common::las_files::sample(64 * 400, false)).unwrap();
     let jobs = dir.join("jobs");
-    let planned = plan(&input, &jobs, &options(dir), &Quiet).unwrap();
+    let stages = Stages::default();
+    let planned = plan(&input, &jobs, &options(dir), &stages).unwrap();
     let Planned::New(m) = planned else {
         panic!("a fresh directory holds no plan")
     };
     assert!(m.jobs.len() >= 8, "{} jobs", m.jobs.len());
+    let heard = stages.0.into_inner().unwrap();
+    let names: Vec<&str> = heard.iter().map(|s| s.0).collect();
+    assert_eq!(names, ["scan", "count", "spill"]);
+    assert!(
+        heard.iter().all(|s| s.1 == 64 * 400 && s.2 == s.1),
+        "{heard:?}"
+    );
     (input, jobs, m)
 }
 

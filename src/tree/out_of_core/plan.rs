@@ -59,11 +59,13 @@ pub fn plan(
         remove_files(dir, m)?;
     }
     let stream = ModelStream::open(input)?;
-    progress.stage("scan", 0);
-    let scan = spill::scan(&stream, input)?;
-    progress.stage("count", scan.count);
+    // Both passes read every row of the file, kept or not.
+    let read = |n| progress.advance(n);
+    progress.stage("scan", stream.point_count());
+    let scan = spill::scan(&stream, input, &read)?;
+    progress.stage("count", stream.point_count());
     let grid = Grid::over(&scan.core);
-    let counts = spill::count_cells(&stream, &scan, &grid)?;
+    let counts = spill::count_cells(&stream, (&scan, &grid), &read)?;
     let mut boxes = Vec::new();
     let whole = (IVec3::ZERO, IVec3::splat(GRID));
     let split = spill::split(&counts, &grid, whole, options.job_points, &mut boxes);

@@ -80,13 +80,19 @@ impl Scan {
     /// point weighs as much as the decoding (the 200 M-point tile from a cold cache,
     /// 2 cores, 2026-12-02: the scan took 10.4 and 11.9 s decoding on this thread,
     /// 8.7 and 7.9 s so).
-    fn measure(&mut self, input: &ModelStream, window: Option<Bounds>) -> anyhow::Result<()> {
+    fn measure(
+        &mut self,
+        input: &ModelStream,
+        window: Option<Bounds>,
+        read: &dyn Fn(u64),
+    ) -> anyhow::Result<()> {
         let (mut sum, mut count, mut inliers) = (DVec3::ZERO, 0u64, 0u64);
         let (mut bounds, mut core) = (Bounds::empty(), Bounds::empty());
         let (mut has_color, mut eight_bit) = (false, true);
         let mut rows = 0u64;
         input.points_ahead(|b| {
             rows += b.xyz.len() as u64;
+            read(b.xyz.len() as u64);
             for p in self.kept(b) {
                 sum += p;
                 count += 1;
@@ -124,8 +130,9 @@ impl Scan {
 /// sampled records are read alone, not in a pass: on the 200 M-point tile the scan
 /// took 5.7–7.5 s instead of 11.2–14.8 s); a pass measures the finite points. When
 /// some lies beyond `MAX_OFFSET / 2` of the core's centre, only those within it of the
-/// sample's median are kept, measured again.
-pub fn scan(input: &ModelStream, path: &Path) -> anyhow::Result<Scan> {
+/// sample's median are kept, measured again. The first pass's rows are told to `read`
+/// batch by batch.
+pub fn scan(input: &ModelStream, path: &Path, read: &dyn Fn(u64)) -> anyhow::Result<Scan> {
     if input.point_count() == 0 {
         return Err(ModelError::Empty {
             path: path.to_owned(),
@@ -152,14 +159,14 @@ pub fn scan(input: &ModelStream, path: &Path) -> anyhow::Result<Scan> {
         eight_bit: true,
         anchor: None,
     };
-    scan.measure(input, window)?;
+    scan.measure(input, window, read)?;
     let reach = MAX_OFFSET / 2.0;
     let origin = scan.core.center();
     if !(within(scan.bounds.min, origin, reach) && within(scan.bounds.max, origin, reach)) {
         sample.retain(|&p| within(p, median, reach));
         let window = sample_window(&sample).and_then(|(_, w)| w);
         scan.anchor = Some(median);
-        scan.measure(input, window)?;
+        scan.measure(input, window, &|_| {})?;
     }
     anyhow::ensure!(
         scan.count > 0,
@@ -222,10 +229,15 @@ pub enum Split {
     Node(Box<Split>, Box<Split>),
 }
 
-/// Pass 3: kept points per cell.
-pub fn count_cells(input: &ModelStream, scan: &Scan, grid: &Grid) -> anyhow::Result<Vec<u64>> {
+/// Pass 3: kept points per cell; the rows read are told to `read` batch by batch.
+pub fn count_cells(
+    input: &ModelStream,
+    (scan, grid): (&Scan, &Grid),
+    read: &dyn Fn(u64),
+) -> anyhow::Result<Vec<u64>> {
     let mut counts = vec![0u64; (GRID * GRID * GRID) as usize];
     input.points(|b| {
+        read(b.xyz.len() as u64);
         for p in scan.kept(b) {
             counts[Grid::index(grid.locate(p).0)] += 1;
         }
