@@ -41,7 +41,7 @@ pub const BRIDGE_DECK: u8 = 17;
 /// as decks and the lone returns as vegetation, by their geometry. A sample's layer
 /// does not depend on which piece of an out-of-core job holds it but through its
 /// neighbours. With them, the TIN that the slabs and lone returns were found on.
-/// The stages tell `stages` their ends ([`Weights`]).
+/// Its stages are told to `stages` ([`Weights`]).
 pub fn labels(g: &Geometry, own: usize, scale: f32, stages: &Stages) -> (Vec<Layer>, FirstTin) {
     let class = |i: usize| class_of(g, i);
     let unclassified = |i: usize| matches!(class(i), 0 | 1);
