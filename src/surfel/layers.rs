@@ -41,11 +41,15 @@ pub const BRIDGE_DECK: u8 = 17;
 /// as decks and the lone returns as vegetation, by their geometry. A sample's layer
 /// does not depend on which piece of an out-of-core job holds it but through its
 /// neighbours. With them, the TIN that the slabs and lone returns were found on.
-/// Its stages are told to `stages` ([`Weights`]).
-pub fn labels(g: &Geometry, own: usize, scale: f32, stages: &Stages) -> (Vec<Layer>, FirstTin) {
+/// Its stages are told to `stages` ([`Weights`]); `scatter_tested`: [`tests_scatter`].
+pub fn labels(
+    g: &Geometry,
+    (own, scale): (usize, f32),
+    (stages, scatter_tested): (&Stages, bool),
+) -> (Vec<Layer>, FirstTin) {
     let class = |i: usize| class_of(g, i);
     let unclassified = |i: usize| matches!(class(i), 0 | 1);
-    let plants = if tests_scatter(g, own) {
+    let plants = if scatter_tested {
         let share = stages.share(WEIGHTS.scatter);
         cloud::scattered(&g.positions, scale, Progress::to(&share))
     } else {
@@ -192,13 +196,10 @@ pub const WEIGHTS: Weights = Weights {
 };
 
 impl Weights {
-    /// The sum of the weights of the stages that run on the first `own` samples of `g`.
-    pub fn running(&self, g: &Geometry, own: usize) -> u32 {
-        let scatter = if tests_scatter(g, own) {
-            self.scatter
-        } else {
-            0
-        };
+    /// The sum of the weights of the stages that run, the vegetation test's where
+    /// `scatter_tested`.
+    pub fn running(&self, scatter_tested: bool) -> u32 {
+        let scatter = if scatter_tested { self.scatter } else { 0 };
         scatter + self.first_tin + self.free_standing + self.ground_tin + self.layers
     }
 }

@@ -366,8 +366,9 @@ fn terrain_path(
     if given.is_some_and(|n| n.iter().all(|v| *v != Vec3::ZERO)) {
         return None;
     }
-    let stages = Stages::new(own, layers::WEIGHTS.running(g, own), progress);
-    let (labels, first) = layers::labels(g, own, scale, &stages);
+    let tested = layers::tests_scatter(g, own);
+    let stages = Stages::new(own, layers::WEIGHTS.running(tested), progress);
+    let (labels, first) = layers::labels(g, (own, scale), (&stages, tested));
     let layers = layers::Layers::of(&labels, own);
     let ground_layer = layers.get(Layer::Ground);
     if layers.all_ground() {
