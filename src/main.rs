@@ -136,15 +136,7 @@ fn main() -> ExitCode {
             output,
             memory,
             out_of_core,
-        } => {
-            use spt::apps::convert_large;
-            let memory = memory.map_or_else(convert_large::default_memory, |m| m << 20);
-            match convert_large::wanted(&input, memory, out_of_core) {
-                Ok(true) => convert_large::run(&input, &output, memory),
-                Ok(false) => spt::apps::convert::run(&input, &output),
-                Err(e) => Err(e),
-            }
-        }
+        } => spt::apps::convert::run_either(&input, &output, memory, out_of_core),
         Command::Render {
             model,
             output,

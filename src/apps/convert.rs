@@ -8,10 +8,12 @@ use rayon::prelude::*;
 
 use std::sync::Mutex;
 
+use crate::apps::convert_large;
 use crate::apps::progress::{Stage, total_line};
 use crate::apps::text::{count, walls};
 use crate::io::GeometryStats;
 use crate::io::PointAttributes;
+use crate::io::atomic::check_writable;
 use crate::surfel::shape::SplatShape;
 use crate::tree::NodeRecord;
 use crate::tree::report::{Finished, Report, Step};
@@ -109,6 +111,25 @@ fn dropped(st: &GeometryStats) -> String {
     .collect()
 }
 
+/// `spt convert`: once `output` is known to be writable (before any work), builds in
+/// memory, or out of core when asked or when the model would not fit in `memory_mib`
+/// (default: [`convert_large::default_memory`]).
+pub fn run_either(
+    input: &Path,
+    output: &Path,
+    memory_mib: Option<u64>,
+    out_of_core: bool,
+) -> anyhow::Result<()> {
+    check_writable(output, &[input])?;
+    let memory = memory_mib.map_or_else(convert_large::default_memory, |m| m << 20);
+    if convert_large::wanted(input, memory, out_of_core)? {
+        convert_large::run(input, output, memory)
+    } else {
+        run(input, output)
+    }
+}
+
+/// Builds `input`'s tree in memory and writes it to `output`.
 pub fn run(input: &Path, output: &Path) -> anyhow::Result<()> {
     let start = Instant::now();
     let set = ordered_from_file(input, &Steps::default())?;

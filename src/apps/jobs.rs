@@ -126,6 +126,7 @@ fn run_build(dir: &Path, jobs: &[usize]) -> anyhow::Result<()> {
 }
 
 fn run_join(dir: &Path, output: &Path, clean: bool) -> anyhow::Result<()> {
+    crate::io::atomic::check_writable(output, &[])?;
     let start = Instant::now();
     let bars = Bars::default();
     bars.stage("write", 0);

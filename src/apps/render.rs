@@ -14,6 +14,7 @@ use crate::tree::scene::Scene;
 use crate::tree::select::error_per_distance;
 
 pub fn run(model: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> {
+    crate::io::atomic::check_writable(output, &[model])?;
     let budget = args.gpu_budget();
     let scene = match budget {
         Some(_) => Scene::open_for_streaming(model, &Silent)?,

@@ -15,6 +15,7 @@ use crate::tree::report::Silent;
 use crate::tree::select::error_per_distance;
 
 pub fn run(path: &Path, output: &Path, args: &RenderArgs) -> anyhow::Result<()> {
+    crate::io::atomic::check_writable(output, &[path])?;
     if args.gpu_budget().is_some() {
         anyhow::bail!("--gpu-memory streams one model; a scene's models are uploaded whole");
     }

@@ -10,6 +10,7 @@ use clap::Args;
 use glam::DVec3;
 
 use crate::apps::text::count;
+use crate::io::atomic::check_writable;
 use crate::io::formats::read_model;
 use crate::io::triangulate;
 use crate::tree::instances::scatter::{Spread, Standing, scatter};
@@ -52,6 +53,15 @@ pub struct ScatterArgs {
 
 pub fn run(args: &ScatterArgs) -> anyhow::Result<()> {
     let spread = spread(args)?;
+    let table = instances_path(&args.output);
+    let read: Vec<&Path> = (std::iter::once(&args.base)
+        .chain(&args.models)
+        .chain(&args.draw_base))
+    .map(PathBuf::as_path)
+    .collect();
+    for written in [&args.output, &table] {
+        check_writable(written, &read)?;
+    }
     let (positions, triangles) = base_surface(&args.base)?;
     let models: Vec<Standing> = args
         .models
@@ -59,7 +69,6 @@ pub fn run(args: &ScatterArgs) -> anyhow::Result<()> {
         .map(|m| standing(m))
         .collect::<anyhow::Result<_>>()?;
     let instances = scatter(&positions, &triangles, &models, 1, &spread);
-    let table = instances_path(&args.output);
     write_instances(&table, &instances)?;
     let drawn_base = args.draw_base.as_ref().unwrap_or(&args.base);
     write_scene(&args.output, drawn_base, &args.models, &table)?;

@@ -6,7 +6,7 @@
 //! PATH: " and the cause (a full disk, a missing directory, or the closure's own).
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, ErrorKind, Write};
 use std::path::{Path, PathBuf};
 
 pub use super::syncing_file::SyncingFile;
@@ -61,4 +61,54 @@ pub fn write_atomically<T>(
     write: impl FnOnce(&mut dyn Write) -> std::io::Result<T>,
 ) -> std::io::Result<T> {
     write_atomically_seekable(path, |w| write(w))
+}
+
+/// Checks, before any work is done, that [`write_atomically`] can write `path`: it is not
+/// a directory, not the same file as any of `inputs` (whatever the path that names it:
+/// a command never replaces what it reads), and its directory exists and takes a new
+/// file (the temporary one is made there and removed). The errors read as the write's
+/// own: "cannot write PATH: " and why.
+pub fn check_writable(path: &Path, inputs: &[&Path]) -> std::io::Result<()> {
+    let fail = |kind, why: String| {
+        std::io::Error::new(kind, format!("cannot write {}: {why}", path.display()))
+    };
+    if path.is_dir() {
+        return Err(fail(ErrorKind::IsADirectory, "it is a directory".into()));
+    }
+    if let Some(input) = inputs
+        .iter()
+        .find(|i| same_file::is_same_file(path, i).unwrap_or(false))
+    {
+        let why = format!(
+            "it is the input {}, which the output would replace; name another file",
+            input.display()
+        );
+        return Err(fail(ErrorKind::AlreadyExists, why));
+    }
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        let what = if dir.exists() {
+            "is not a directory"
+        } else {
+            "does not exist"
+        };
+        return Err(fail(
+            ErrorKind::NotFound,
+            format!("{} {what}", dir.display()),
+        ));
+    }
+    let probe = temporary_path(path);
+    let made = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe);
+    match made {
+        Ok(_) => std::fs::remove_file(&probe).map_err(|e| fail(e.kind(), e.to_string())),
+        // A temporary file of this process is already there: the directory takes files.
+        Err(e) if e.kind() == ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => Err(fail(e.kind(), e.to_string())),
+    }
 }

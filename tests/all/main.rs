@@ -5,6 +5,7 @@
 mod common;
 
 mod bad_input;
+mod bad_outputs;
 mod bad_scenes;
 mod bench;
 mod cli_help;

@@ -90,6 +90,9 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
     if !model.exists() {
         anyhow::bail!("{}: no such file", model.display());
     }
+    if let Some(shot) = &args.screenshot {
+        crate::io::atomic::check_writable(shot, &[&model])?;
+    }
     let event_loop = winit::event_loop::EventLoop::<app::Wake>::with_user_event()
         .build()
         .context(
