@@ -8,9 +8,9 @@ use rayon::prelude::*;
 
 use std::sync::Mutex;
 
-use crate::apps::convert_large;
 use crate::apps::progress::{Stage, total_line};
 use crate::apps::text::{count, walls};
+use crate::apps::{convert_large, disk};
 use crate::io::GeometryStats;
 use crate::io::PointAttributes;
 use crate::io::atomic::check_writable;
@@ -122,9 +122,12 @@ pub fn run_either(
 ) -> anyhow::Result<()> {
     check_writable(output, &[input])?;
     let memory = memory_mib.map_or_else(convert_large::default_memory, |m| m << 20);
-    if convert_large::wanted(input, memory, out_of_core)? {
-        convert_large::run(input, output, memory)
+    let (out_of_core, points) = convert_large::wanted(input, memory, out_of_core)?;
+    if out_of_core {
+        convert_large::run(input, (output, points), memory)
     } else {
+        let needed = points.saturating_mul(disk::FILE_BYTES_PER_POINT);
+        disk::say_room(disk::folder_of(output), needed, "the .spt file", false);
         run(input, output)
     }
 }

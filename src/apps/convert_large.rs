@@ -7,6 +7,7 @@ use std::path::Path;
 use std::sync::Mutex;
 use std::time::Instant;
 
+use crate::apps::disk;
 use crate::apps::progress::{Stage, total_line};
 use crate::apps::text::{count, walls};
 use crate::io::formats::ModelStream;
@@ -32,15 +33,16 @@ pub fn default_memory() -> u64 {
 
 /// Whether `input` should be built out of core within `memory` bytes: when asked, or
 /// when the in-memory build would not fit (from the header's count alone: the file
-/// may be larger than memory).
-pub fn wanted(input: &Path, memory: u64, forced: bool) -> anyhow::Result<bool> {
+/// may be larger than memory); and the points the header declares.
+pub fn wanted(input: &Path, memory: u64, forced: bool) -> anyhow::Result<(bool, u64)> {
     let stream = ModelStream::open(input)?;
     let per_point = if stream.has_faces() {
         IN_MEMORY_BYTES_PER_VERTEX
     } else {
         IN_MEMORY_BYTES_PER_POINT
     };
-    Ok(forced || stream.point_count().saturating_mul(per_point) > memory)
+    let points = stream.point_count();
+    Ok((forced || points.saturating_mul(per_point) > memory, points))
 }
 
 /// Shows each stage of the build as a progress bar over its points, then its time and
@@ -143,10 +145,19 @@ pub fn keep_freed_memory_within(memory: u64) {
     heap::keep_freed_memory(memory / 4 * KEEP_FREED_QUARTERS);
 }
 
-pub fn run(input: &Path, output: &Path, memory: u64) -> anyhow::Result<()> {
+/// Builds `input` (of `points`, as its header declares) out of core within `memory`
+/// bytes and writes it to `output`.
+pub fn run(input: &Path, (output, points): (&Path, u64), memory: u64) -> anyhow::Result<()> {
     let start = Instant::now();
     keep_freed_memory_within(memory);
     let options = options(output, memory);
+    let needed = points.saturating_mul(disk::OUT_OF_CORE_BYTES_PER_POINT);
+    disk::say_room(
+        &options.temp_dir,
+        needed,
+        "the job files and the .spt file",
+        true,
+    );
     let bars = Bars::default();
     let built = build_file(input, output, &options, &bars)?;
     bars.finish_written(output);

@@ -9,6 +9,7 @@ use std::time::Instant;
 use clap::Subcommand;
 
 use crate::apps::convert_large::{Bars, keep_freed_memory_within, options, summary};
+use crate::apps::disk;
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::count;
 use crate::tree::out_of_core::checksums::Check;
@@ -78,6 +79,14 @@ pub fn run(command: &JobsCommand) -> anyhow::Result<()> {
 fn run_plan(input: &Path, dir: &Path, memory: Option<u64>) -> anyhow::Result<()> {
     let memory = memory.map_or_else(crate::apps::convert_large::default_memory, |m| m << 20);
     let options = options(dir, memory);
+    let points = crate::io::formats::ModelStream::open(input)?.point_count();
+    let per_point = disk::OUT_OF_CORE_BYTES_PER_POINT - disk::FILE_BYTES_PER_POINT;
+    disk::say_room(
+        dir,
+        points.saturating_mul(per_point),
+        "the job inputs and parts",
+        true,
+    );
     let bars = Bars::default();
     let planned = plan(input, dir, &options, &bars)?;
     bars.finish();

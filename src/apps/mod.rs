@@ -20,6 +20,7 @@ pub mod bench;
 pub mod cloud_quality;
 pub mod convert;
 pub mod convert_large;
+pub mod disk;
 pub mod frame_args;
 pub mod info;
 pub mod info_scene;

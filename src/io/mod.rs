@@ -9,6 +9,7 @@ pub mod atomic;
 pub(crate) mod bounds;
 pub mod delaunay;
 pub(crate) mod direct;
+pub mod disk_space;
 pub mod format;
 pub mod formats;
 pub(crate) mod geometry;

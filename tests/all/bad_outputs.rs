@@ -83,3 +83,27 @@ fn a_command_never_writes_over_its_input() {
         "the input changed"
     );
 }
+
+#[test]
+fn the_disk_check_s_estimate_holds_the_file() {
+    let dir = common::temp_dir();
+    let las = dir.path().join("tile.las");
+    std::fs::write(&las, common::las_files::sample(20_000, false)).unwrap();
+    for (model, points) in [(common::default_model(), 50_000), (las, 20_000)] {
+        let spt = dir.path().join("out.spt");
+        let (code, _, stderr) =
+            common::run_spt(&["convert".as_ref(), model.as_os_str(), spt.as_os_str()]);
+        assert_eq!(code, Some(0), "{stderr}");
+        let per_point = std::fs::metadata(&spt).unwrap().len() as f64 / points as f64;
+        let estimate = spt::apps::disk::FILE_BYTES_PER_POINT as f64;
+        println!(
+            "{}: {per_point:.1} bytes a point, estimate {estimate}",
+            model.display()
+        );
+        assert!(
+            per_point <= estimate && per_point > 0.85 * estimate,
+            "{}",
+            model.display()
+        );
+    }
+}
