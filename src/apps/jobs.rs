@@ -12,6 +12,7 @@ use crate::apps::convert_large::{Bars, keep_freed_memory_within, options, summar
 use crate::apps::disk;
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::count;
+use crate::tree::out_of_core::AfterRead;
 use crate::tree::out_of_core::checksums::Check;
 use crate::tree::out_of_core::join::{Joined, join};
 use crate::tree::out_of_core::manifest::Manifest;
@@ -80,13 +81,8 @@ fn run_plan(input: &Path, dir: &Path, memory: Option<u64>) -> anyhow::Result<()>
     let memory = memory.map_or_else(crate::apps::convert_large::default_memory, |m| m << 20);
     let options = options(dir, memory);
     let points = crate::io::formats::ModelStream::open(input)?.point_count();
-    let per_point = disk::OUT_OF_CORE_BYTES_PER_POINT - disk::FILE_BYTES_PER_POINT;
-    disk::say_room(
-        dir,
-        points.saturating_mul(per_point),
-        "the job inputs and parts",
-        true,
-    );
+    let needed = points.saturating_mul(disk::OUT_OF_CORE_BYTES_PER_POINT);
+    disk::say_room(dir, needed, "the job inputs and parts", true);
     let bars = Bars::default();
     let planned = plan(input, dir, &options, &bars)?;
     bars.finish();
@@ -139,7 +135,7 @@ fn run_join(dir: &Path, output: &Path, clean: bool) -> anyhow::Result<()> {
     let start = Instant::now();
     let bars = Bars::default();
     bars.stage("write", 0);
-    let joined = join(dir, output, Check::Checksums, &bars)?;
+    let joined = join(dir, output, (Check::Checksums, AfterRead::Keep), &bars)?;
     match joined {
         Joined::Rebuild(reason) => {
             bars.finish();

@@ -20,6 +20,7 @@ pub mod parallel;
 pub mod ply;
 pub mod png;
 pub mod rebase;
+pub mod release;
 pub(crate) mod rows;
 pub mod scalar;
 pub(crate) mod syncing_file;

@@ -15,7 +15,7 @@ use spt::tree::out_of_core::join::{Joined, join};
 use spt::tree::out_of_core::manifest::Manifest;
 use spt::tree::out_of_core::plan::{Planned, plan};
 use spt::tree::out_of_core::run_job::{Ran, run};
-use spt::tree::out_of_core::{Options, Progress, build_file};
+use spt::tree::out_of_core::{AfterRead, Options, Progress, build_file};
 
 struct Quiet;
 
@@ -85,10 +85,11 @@ impl Progress for Written {
     }
 }
 
-/// The file the join writes; it tells its size first and then every byte.
-fn joined(jobs: &Path, output: &Path) -> Vec<u8> {
+/// The file the join writes, the parts' bytes kept or freed once read (`after`); it
+/// tells its size first and then every byte.
+fn joined_then(jobs: &Path, output: &Path, after: AfterRead) -> Vec<u8> {
     let written = Written::default();
-    match join(jobs, output, Check::Checksums, &written).unwrap() {
+    match join(jobs, output, (Check::Checksums, after), &written).unwrap() {
         Joined::Written(_) => {
             let file = std::fs::read(output).unwrap();
             let size = file.len() as u64;
@@ -98,6 +99,11 @@ fn joined(jobs: &Path, output: &Path) -> Vec<u8> {
         }
         Joined::Rebuild(why) => panic!("asked for the parts again: {why}"),
     }
+}
+
+/// The file the join writes, the parts kept.
+fn joined(jobs: &Path, output: &Path) -> Vec<u8> {
+    joined_then(jobs, output, AfterRead::Keep)
 }
 
 #[test]
@@ -144,7 +150,7 @@ fn a_truncated_part_is_refused_by_the_join_and_built_again() {
     let part = jobs.join("job2.part");
     let bytes = std::fs::read(&part).unwrap();
     std::fs::write(&part, &bytes[..bytes.len() / 2]).unwrap();
-    let refused = join(&jobs, &output, Check::Checksums, &Quiet)
+    let refused = join(&jobs, &output, (Check::Checksums, AfterRead::Keep), &Quiet)
         .unwrap_err()
         .to_string();
     assert!(
@@ -275,4 +281,53 @@ fn the_commands_ask_for_the_parts_again_when_the_join_needs_another_error_scale(
         "{said}"
     );
     assert!(!said.contains("s  ;"), "{said}");
+}
+
+/// Bytes the file system holds for `path` (its blocks, not its length).
+#[cfg(unix)]
+fn held_bytes(path: &Path) -> u64 {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata(path).unwrap().blocks() * 512
+}
+
+#[test]
+#[cfg(unix)]
+fn a_join_that_frees_its_parts_writes_the_same_file_and_leaves_no_job_input() {
+    let dir = common::temp_dir();
+    let (_, jobs, m) = planned(dir.path());
+    for j in 0..m.jobs.len() {
+        run(&jobs, &m, j, Check::Checksums).unwrap();
+    }
+    let kept = joined(&jobs, &dir.path().join("kept.spt"));
+    let parts: Vec<PathBuf> = (0..m.jobs.len())
+        .map(|j| jobs.join(format!("job{j}.part")))
+        .collect();
+    let sizes: Vec<u64> = parts
+        .iter()
+        .map(|p| std::fs::metadata(p).unwrap().len())
+        .collect();
+    let before: u64 = parts.iter().map(|p| held_bytes(p)).sum();
+    let freed = joined_then(&jobs, &dir.path().join("freed.spt"), AfterRead::Free);
+    assert!(kept == freed, "the files differ");
+    for f in m.jobs.iter().flat_map(|j| &j.files) {
+        assert!(!jobs.join(&f.name).exists(), "{} is left", f.name);
+    }
+    let after: u64 = parts.iter().map(|p| held_bytes(p)).sum();
+    let lengths: Vec<u64> = parts
+        .iter()
+        .map(|p| std::fs::metadata(p).unwrap().len())
+        .collect();
+    assert_eq!(lengths, sizes, "a part's length changed");
+    // Whether this file system frees blocks at all: a file of its own freed whole.
+    let probe = dir.path().join("probe");
+    std::fs::write(&probe, vec![1u8; 1 << 20]).unwrap();
+    let mut releaser = spt::io::release::Releaser::open(&probe).unwrap();
+    releaser.mark_read(0..1 << 20);
+    releaser.flush();
+    println!("parts held {before} bytes before the join, {after} after");
+    if releaser.freed == 0 {
+        eprintln!("this file system frees no blocks: the parts' size is not checked");
+        return;
+    }
+    assert!(after * 4 < before, "{after} of {before} bytes left");
 }

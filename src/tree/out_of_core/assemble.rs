@@ -16,7 +16,7 @@ use glam::Vec3;
 use super::Progress;
 use super::job::{Model, Part};
 use super::order::Layout;
-use super::read_ahead::{PartFile, Span, read_buffer, stream};
+use super::read_ahead::{AfterRead, PartFile, Span, read_buffer, stream};
 use super::spill::Split;
 use crate::io::PointAttributes;
 use crate::surfel::NormalsTurned;
@@ -148,11 +148,12 @@ fn normals_turned(parts: &[Part], oriented: bool) -> NormalsTurned {
 
 /// Writes the `.spt` file of the jobs' `parts`, joined by the top tree of `split`,
 /// atomically, flagged `two_sided` (an open mesh, [`TreeMeta::two_sided`]), its size and
-/// then its bytes as they go told to `progress`; returns its meta.
+/// then its bytes as they go told to `progress`, the parts' bytes kept or freed once
+/// read (`after`); returns its meta.
 pub fn write_file(
     path: &std::path::Path,
     model: &Model,
-    (split, parts): (&Split, &[Part]),
+    (split, parts, after): (&Split, &[Part], AfterRead),
     (two_sided, progress): (bool, &dyn Progress),
 ) -> anyhow::Result<TreeMeta> {
     let oriented = parts.iter().all(|p| p.oriented);
@@ -174,7 +175,14 @@ pub fn write_file(
     let header = header_for(&meta, &chunks, 0);
     progress.writing(file_bytes(&meta, &chunks));
     write_hashed(path, &header, &|n| progress.advance(n), |out| {
-        write_sections(out, (parts, &layout), &top, (&chunks, model.has_attributes))
+        let files = parts.iter().map(|p| PartFile::open_for_join(p, after));
+        let mut files: Vec<PartFile> = files.collect::<Result<_, _>>()?;
+        write_sections(
+            out,
+            (&mut files, parts, &layout),
+            &top,
+            (&chunks, model.has_attributes),
+        )
     })?;
     Ok(meta)
 }
@@ -241,11 +249,10 @@ fn chunk_table(layout: &Layout, top: &Top) -> Vec<Chunk> {
 /// read ahead ([`read_ahead::stream`]).
 fn write_sections(
     out: &mut Hashed,
-    (parts, layout): (&[Part], &Layout),
+    (files, parts, layout): (&mut [PartFile], &[Part], &Layout),
     top: &Top,
     (chunks, has_attributes): (&[Chunk], bool),
 ) -> std::io::Result<()> {
-    let mut files: Vec<PartFile> = parts.iter().map(PartFile::open).collect::<Result<_, _>>()?;
     let offsets: Vec<_> = parts
         .iter()
         .map(|p| part_offsets(p.nodes, has_attributes))
@@ -265,7 +272,7 @@ fn write_sections(
     out.put(bytemuck::cast_slice(&top.records))?;
     blocks.feed(&top.records);
     let records = spans(&|_| 0, std::mem::size_of::<NodeRecord>());
-    stream::<NodeRecord>(&mut files, &records, out, |k, first, slab| {
+    stream::<NodeRecord>(files, &records, out, |k, first, slab| {
         let (root, _) = top.roots[piece(k).part];
         for r in slab.iter_mut() {
             r.level += root.level;
@@ -279,7 +286,7 @@ fn write_sections(
     let parents = spans(&|part| offsets[part].0, 4);
     // Each piece's lookups start from its first chunk.
     let mut finger = 0;
-    stream::<u32>(&mut files, &parents, out, |k, first, slab| {
+    stream::<u32>(files, &parents, out, |k, first, slab| {
         let p = piece(k);
         let up = top.roots[p.part].1;
         if first == 0 {
@@ -294,12 +301,12 @@ fn write_sections(
     })?;
     out.put(bytemuck::cast_slice(&top.shapes))?;
     let shapes = spans(&|part| offsets[part].1, std::mem::size_of::<SplatShape>());
-    stream::<SplatShape>(&mut files, &shapes, out, |_, _, _| {})?;
+    stream::<SplatShape>(files, &shapes, out, |_, _, _| {})?;
     if has_attributes {
         out.put(bytemuck::cast_slice(&top.attributes))?;
         let size = std::mem::size_of::<PointAttributes>();
         let attributes = spans(&|part| offsets[part].2, size);
-        stream::<PointAttributes>(&mut files, &attributes, out, |_, _, _| {})?;
+        stream::<PointAttributes>(files, &attributes, out, |_, _, _| {})?;
     }
     out.put(bytemuck::cast_slice(chunks))?;
     let (suffix, heads) = blocks.finish();

@@ -11,6 +11,8 @@ use std::path::Path;
 use super::checksums::Check;
 use super::job::{Model, Part};
 use super::manifest::Manifest;
+use super::plan::remove_inputs;
+use super::read_ahead::AfterRead;
 use super::record::{PartRecord, part_name};
 use super::{Built, Progress, SCALE_SLACK, assemble};
 use crate::surfel::outward::Vote;
@@ -59,11 +61,12 @@ fn records(dir: &Path, m: &Manifest, check: Check) -> anyhow::Result<Vec<PartRec
 }
 
 /// Joins the parts of the plan in `dir`, checked by `check`, into the `.spt` file
-/// `output`.
+/// `output`. With [`AfterRead::Free`], once nothing can send the jobs back to be built
+/// again, the job inputs are removed and each part's bytes freed as they are read.
 pub fn join(
     dir: &Path,
     output: &Path,
-    check: Check,
+    (check, after): (Check, AfterRead),
     progress: &dyn Progress,
 ) -> anyhow::Result<Joined> {
     let mut m = Manifest::read(dir)?;
@@ -102,7 +105,10 @@ pub fn join(
         ..m.model.clone()
     };
     let two_sided = m.input.mesh && !vote.closed();
-    let joined = (&m.split_tree()?, &parts[..]);
+    if after == AfterRead::Free {
+        remove_inputs(dir, &m)?;
+    }
+    let joined = (&m.split_tree()?, &parts[..], after);
     let meta = assemble::write_file(output, &model, joined, (two_sided, progress))?;
     Ok(Joined::Written(Built {
         meta,

@@ -59,6 +59,7 @@ use checksums::Check;
 use join::Joined;
 pub use lanes::{Behind, in_lanes};
 use manifest::Manifest;
+pub use read_ahead::AfterRead;
 
 /// Bytes of memory a job takes per point at its peak (its surfels, k-d tree, nodes and
 /// list), halo included. Measured on the 200 M-point `gen_cloud` tile's jobs of 6.7 M
@@ -163,7 +164,12 @@ pub fn build_file(
         progress.stage("build", manifest.input.points);
         run_jobs(dir.path(), &manifest, progress)?;
         progress.stage("write", 0);
-        match join::join(dir.path(), output, Check::Sizes, progress)? {
+        match join::join(
+            dir.path(),
+            output,
+            (Check::Sizes, AfterRead::Free),
+            progress,
+        )? {
             Joined::Written(built) => return Ok(built),
             Joined::Rebuild(reason) => progress.rebuild(&reason),
         }

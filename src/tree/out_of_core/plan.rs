@@ -150,16 +150,30 @@ fn model_of(stream: &ModelStream, scan: &Scan) -> Model {
 
 /// Removes the files of an earlier plan in `dir`: its jobs' inputs, parts and records.
 pub fn remove_files(dir: &Path, m: &Manifest) -> anyhow::Result<()> {
-    for (j, job) in m.jobs.iter().enumerate() {
-        let names = job.files.iter().map(|f| f.name.clone());
-        let built = [record::part_name(j), record::record_name(j)];
-        for name in names.chain(built) {
-            match std::fs::remove_file(dir.join(&name)) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                    anyhow::bail!("{}: {e}", dir.join(name).display())
-                }
-                _ => {}
+    let built = (0..m.jobs.len()).flat_map(|j| [record::part_name(j), record::record_name(j)]);
+    remove_named(dir, input_names(m).chain(built))
+}
+
+/// Removes the jobs' inputs of the plan in `dir`.
+pub fn remove_inputs(dir: &Path, m: &Manifest) -> anyhow::Result<()> {
+    remove_named(dir, input_names(m))
+}
+
+/// The names of the jobs' input files.
+fn input_names(m: &Manifest) -> impl Iterator<Item = String> + '_ {
+    m.jobs
+        .iter()
+        .flat_map(|job| job.files.iter().map(|f| f.name.clone()))
+}
+
+/// Removes the files `names` of `dir`; one already gone is no error.
+fn remove_named(dir: &Path, names: impl Iterator<Item = String>) -> anyhow::Result<()> {
+    for name in names {
+        match std::fs::remove_file(dir.join(&name)) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                anyhow::bail!("{}: {e}", dir.join(name).display())
             }
+            _ => {}
         }
     }
     Ok(())

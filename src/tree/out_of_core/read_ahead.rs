@@ -11,6 +11,7 @@ use bytemuck::Pod;
 
 use super::job::Part;
 use crate::io::direct::{DirectFile, ReadBuffer};
+use crate::io::release::Releaser;
 use crate::tree::spt_write::Hashed;
 
 /// Bytes per slab, at most.
@@ -28,17 +29,39 @@ pub fn read_buffer() -> ReadBuffer {
     ReadBuffer::new(READ_BYTES)
 }
 
+/// What becomes of a part file's bytes once the join has read them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AfterRead {
+    /// Kept: `spt jobs join` may be run again over the same parts.
+    Keep,
+    /// Freed as they are read ([`Releaser`]): `spt convert`, whose parts nothing reads
+    /// again, then holds its parts and its file on the disk about once, not twice.
+    Free,
+}
+
 /// An open part file and its path, which its read errors name.
 pub struct PartFile<'a> {
     file: DirectFile,
     path: &'a Path,
     /// Where the last read ended.
     position: u64,
+    /// Frees what has been read ([`AfterRead::Free`]).
+    releaser: Option<Releaser>,
 }
 
 impl<'a> PartFile<'a> {
     pub fn open(part: &'a Part) -> std::io::Result<PartFile<'a>> {
         PartFile::at(&part.path)
+    }
+
+    /// Opens `part` for the join's reads, its bytes freed or kept once read.
+    pub fn open_for_join(part: &'a Part, after: AfterRead) -> std::io::Result<PartFile<'a>> {
+        let mut file = PartFile::at(&part.path)?;
+        if after == AfterRead::Free {
+            let releaser = Releaser::open(&part.path).map_err(|e| cannot_read(&part.path, e))?;
+            file.releaser = Some(releaser);
+        }
+        Ok(file)
     }
 
     fn at(path: &'a Path) -> std::io::Result<PartFile<'a>> {
@@ -47,6 +70,7 @@ impl<'a> PartFile<'a> {
             file,
             path,
             position: 0,
+            releaser: None,
         })
     }
 
@@ -63,7 +87,19 @@ impl<'a> PartFile<'a> {
         let read = self.file.read_exact_at((at, ahead), into, buffer);
         read.map_err(|e| cannot_read(self.path, e))?;
         self.position = at + into.len() as u64;
+        if let Some(releaser) = &mut self.releaser {
+            releaser.mark_read(at..self.position);
+        }
         Ok(())
+    }
+}
+
+impl Drop for PartFile<'_> {
+    /// Frees the last of what was read, when the part's bytes go once read.
+    fn drop(&mut self) {
+        if let Some(releaser) = &mut self.releaser {
+            releaser.flush();
+        }
     }
 }
 
