@@ -58,8 +58,8 @@ impl<'a> PartFile<'a> {
     pub fn open_for_join(part: &'a Part, after: AfterRead) -> std::io::Result<PartFile<'a>> {
         let mut file = PartFile::at(&part.path)?;
         if after == AfterRead::Free {
-            let releaser = Releaser::open(&part.path).map_err(|e| cannot_read(&part.path, e))?;
-            file.releaser = Some(releaser);
+            // A part that cannot be opened for writing is read all the same, and kept.
+            file.releaser = Releaser::open(&part.path).ok();
         }
         Ok(file)
     }
