@@ -35,7 +35,9 @@ pub fn say_room(dir: &Path, needed: u64, what: &str, loud: bool) {
         .ancestors()
         .find(|a| a.exists())
         .unwrap_or(Path::new("."));
-    let (line, warning) = room_lines(dir, needed, available_bytes(existing), what);
+    // Named whole: "in ." says little in a log.
+    let named = std::path::absolute(dir).unwrap_or_else(|_| dir.to_owned());
+    let (line, warning) = room_lines(&named, needed, available_bytes(existing), what);
     if loud {
         say!("{line}");
     }
