@@ -120,11 +120,7 @@ impl Progress for Bars {
 /// The options for a budget of `memory` bytes, the job files beside `output`; says the
 /// budget and the jobs' size.
 pub fn options(output: &Path, memory: u64) -> Options {
-    let temp_dir = output
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."))
-        .to_owned();
+    let temp_dir = crate::io::atomic::folder_of(output).to_owned();
     let options = Options::for_memory(memory, temp_dir);
     say!(
         "out of core: budget {:.2} GiB, jobs of at most {} points ({} bytes per point)",

@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+pub use crate::io::atomic::folder_of;
 use crate::io::disk_space::available_bytes;
 
 /// The `.spt` file's bytes per input point: about 1.5 nodes a point, 60 bytes a node
@@ -18,13 +19,6 @@ pub const FILE_BYTES_PER_POINT: u64 = 97;
 /// cloud, 137.9 for the mesh (1.17, 1.27 and 1.53 times the file; 2.17, 2.24 and 2.61
 /// with the parts and the file both whole).
 pub const OUT_OF_CORE_BYTES_PER_POINT: u64 = 140;
-
-/// The folder a file is written in.
-pub fn folder_of(path: &Path) -> &Path {
-    path.parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."))
-}
 
 /// Says on standard output (when `loud`) how much `what` takes in `dir` at its peak,
 /// `needed` bytes, and how much is free there; and on standard error, loud or not, that

@@ -85,10 +85,7 @@ pub fn check_writable(path: &Path, inputs: &[&Path]) -> std::io::Result<()> {
         );
         return Err(fail(ErrorKind::AlreadyExists, why));
     }
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
+    let dir = folder_of(path);
     if !dir.is_dir() {
         let what = if dir.exists() {
             "is not a directory"
@@ -111,4 +108,11 @@ pub fn check_writable(path: &Path, inputs: &[&Path]) -> std::io::Result<()> {
         Err(e) if e.kind() == ErrorKind::AlreadyExists => Ok(()),
         Err(e) => Err(fail(e.kind(), e.to_string())),
     }
+}
+
+/// The folder a file is written in: its parent, or "." for a bare name.
+pub fn folder_of(path: &Path) -> &Path {
+    path.parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
 }
