@@ -127,7 +127,12 @@ pub fn run_either(
         convert_large::run(input, (output, points), memory)
     } else {
         let needed = points.saturating_mul(disk::FILE_BYTES_PER_POINT);
-        disk::say_room(disk::folder_of(output), needed, "the .spt file", false);
+        disk::say_room(
+            crate::io::atomic::folder_of(output),
+            needed,
+            "the .spt file",
+            false,
+        );
         run(input, output)
     }
 }

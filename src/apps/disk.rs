@@ -4,7 +4,6 @@
 
 use std::path::Path;
 
-pub use crate::io::atomic::folder_of;
 use crate::io::disk_space::available_bytes;
 
 /// The `.spt` file's bytes per input point: about 1.5 nodes a point, 60 bytes a node
