@@ -8,7 +8,7 @@ use rayon::prelude::*;
 
 use std::sync::Mutex;
 
-use crate::apps::progress::{Stage, total_line};
+use crate::apps::progress::{BYTES, Stage, total_line};
 use crate::apps::text::{count, walls};
 use crate::apps::{convert_large, disk};
 use crate::io::GeometryStats;
@@ -41,7 +41,7 @@ impl Steps {
 impl Report for Steps {
     fn step(&self, step: Step, total: u64) {
         let (name, unit) = match step {
-            Step::Read => ("load", ""),
+            Step::Read => ("load", BYTES),
             Step::Surfels => ("surfels", "samples"),
             Step::Hierarchy => ("tree", "leaves"),
             Step::Errors => ("errors", "nodes"),

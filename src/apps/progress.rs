@@ -95,11 +95,18 @@ impl Stage {
     }
 }
 
-/// A bar's look: `name [====>    ] done/total unit elapsed ETA left`.
+/// The unit of a stage whose work is counted in bytes, which its bar shows in kB, MB
+/// or GB.
+pub const BYTES: &str = "bytes";
+
+/// A bar's look: `name [====>    ] done/total unit elapsed ETA left` (in bytes: `done
+/// MB/total MB`).
 fn bar_style(unit: &str) -> ProgressStyle {
-    let template = format!(
-        "{{prefix:>8}} [{{bar:40}}] {{human_pos}}/{{human_len}} {unit} {{elapsed}} ETA {{eta}}"
-    );
+    let counts = match unit {
+        BYTES => "{bytes}/{total_bytes}".to_string(),
+        _ => format!("{{human_pos}}/{{human_len}} {unit}"),
+    };
+    let template = format!("{{prefix:>8}} [{{bar:40}}] {counts} {{elapsed}} ETA {{eta}}");
     ProgressStyle::with_template(&template)
         .unwrap()
         .progress_chars("=> ")

@@ -15,6 +15,10 @@ use super::model::{Model, ModelError};
 use super::scalar::Scalar;
 use super::up::UpAxis;
 
+/// Hears a read's progress: each call adds that many bytes of the file to those read,
+/// and all of them add up to at most its size.
+pub type Told<'a> = &'a dyn Fn(u64);
+
 /// How many of a file's first bytes [`Format::recognises`] is shown.
 pub const HEAD_BYTES: usize = 16;
 
@@ -24,8 +28,9 @@ pub trait Format: Sync {
     /// format.
     fn recognises(&self, head: &[u8]) -> bool;
 
-    /// Reads the whole file: its rebased geometry and what the file says of itself.
-    fn read(&self, path: &Path) -> Result<Model, ModelError>;
+    /// Reads the whole file: its rebased geometry and what the file says of itself,
+    /// telling `told` the file's bytes as they are read ([`Told`]).
+    fn read(&self, path: &Path, told: Told) -> Result<Model, ModelError>;
 
     /// Opens the file to be read a batch of points at a time.
     fn stream(&self, path: &Path) -> Result<Box<dyn PointStream>, ModelError>;

@@ -1,11 +1,11 @@
 //! The formats the engine reads, and a file read in its own: [`FORMATS`] in the order
 //! they are tried, [`format_of`] a file by its first bytes, [`read_model`] the whole
-//! file, [`ModelStream`] a batch at a time.
+//! file ([`read_model_telling`] with its progress), [`ModelStream`] a batch at a time.
 
 use std::io::Read;
 use std::path::Path;
 
-use super::format::{Format, HEAD_BYTES, PointBatch, PointStream};
+use super::format::{Format, HEAD_BYTES, PointBatch, PointStream, Told};
 use super::las::LasFormat;
 use super::model::{Model, ModelError};
 use super::ply::PlyFormat;
@@ -32,7 +32,12 @@ pub fn format_of(path: &Path) -> Result<&'static dyn Format, ModelError> {
 /// Reads a model file of any format the engine reads, by its first bytes (a file that
 /// no format recognises is read as PLY, whose reader says what is wrong with it).
 pub fn read_model(path: &Path) -> Result<Model, ModelError> {
-    format_of(path)?.read(path)
+    read_model_telling(path, &|_| {})
+}
+
+/// [`read_model`], telling `told` the file's bytes as they are read.
+pub fn read_model_telling(path: &Path, told: Told) -> Result<Model, ModelError> {
+    format_of(path)?.read(path, told)
 }
 
 /// Batches a [`ModelStream::points_ahead`] pass decodes ahead of its consumer.

@@ -9,7 +9,7 @@ use super::TreeMeta;
 /// A step of opening a model, in the order they come.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Step {
-    /// A PLY file read into geometry.
+    /// A model file read into geometry (work: the file's bytes).
     Read,
     /// Leaf surfels made.
     Surfels,

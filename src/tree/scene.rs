@@ -15,7 +15,7 @@ use super::report::{Finished, Report, Silent, Step};
 use super::select::PrefixIndex;
 use super::spt_file::{SptFile, is_spt};
 use super::{NodeRecord, OrderedSet, SequentialList, TreeMeta, build_list, build_ordered};
-use crate::io::formats::read_model;
+use crate::io::formats::read_model_telling;
 use crate::io::model::Model;
 use crate::io::{Geometry, PointAttributes};
 use crate::surfel::progress::Progress;
@@ -169,10 +169,11 @@ pub fn ordered_from_file(path: &Path, report: &dyn Report) -> anyhow::Result<Ord
     Ok(set)
 }
 
-/// The read step: the model in `path`.
+/// The read step: the model in `path`, its bytes told as they are read.
 fn read_step(path: &Path, report: &dyn Report) -> anyhow::Result<Model> {
-    report.step(Step::Read, 0);
-    let model = read_model(path)?.drawable(path)?;
+    let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+    report.step(Step::Read, bytes);
+    let model = read_model_telling(path, &|n| report.advance(n))?.drawable(path)?;
     report.finished(Finished::Read(&model));
     Ok(model)
 }

@@ -21,6 +21,7 @@ mod mesh_sides;
 mod out_of_core;
 mod ply_roundtrip;
 mod ply_tristrips;
+mod read_progress;
 mod render_chunks;
 mod render_compute;
 mod render_flip;

@@ -4,8 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use super::in_order::{BLOCK, points_in_order};
-use super::{LasBatches, read_las};
-use crate::io::format::{Format, PointStream};
+use super::{LasBatches, read_las_telling};
+use crate::io::format::{Format, PointStream, Told};
 use crate::io::format::{PointBatch, every_stride_th};
 use crate::io::model::{Model, ModelError, Summary};
 use crate::io::up::UpAxis;
@@ -18,8 +18,8 @@ impl Format for LasFormat {
         head.starts_with(b"LASF")
     }
 
-    fn read(&self, path: &Path) -> Result<Model, ModelError> {
-        let m = read_las(path)?;
+    fn read(&self, path: &Path, told: Told) -> Result<Model, ModelError> {
+        let m = read_las_telling(path, told)?;
         let kind = if m.summary.compressed { "LAZ" } else { "LAS" };
         let format = format!(
             "{kind} {}, point format {}",

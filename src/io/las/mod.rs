@@ -91,13 +91,19 @@ pub struct LasModel {
 
 /// Reads a LAS or LAZ file.
 pub fn read_las(path: &Path) -> Result<LasModel, LasError> {
+    read_las_telling(path, &|_| {})
+}
+
+/// [`read_las`], telling `told` the file's bytes as its points are decoded (in
+/// proportion to the points: a LAZ file's bytes per point vary).
+pub fn read_las_telling(path: &Path, told: &dyn Fn(u64)) -> Result<LasModel, LasError> {
     let start = Instant::now();
     let fail = |message: String| LasError {
         path: path.to_owned(),
         message,
     };
     let (mut reader, file_bytes) = open_checked(path)?;
-    let points = decode(&mut reader, file_bytes).map_err(fail)?;
+    let points = decode(&mut reader, file_bytes, told).map_err(fail)?;
     let eight_bit = points.eight_bit_rgb();
     let summary = summarize(reader.header(), &points, eight_bit);
     let (mut geometry, stats) = assemble(&points, &points.fields(eight_bit), None).map_err(fail)?;
@@ -203,7 +209,7 @@ impl VertexRows for LasPoints {
 
 /// Decodes every point of a file of `file_bytes`, [`BATCH`] (LAZ: up to [`LAZ_BATCH`])
 /// at a time.
-fn decode(reader: &mut Reader, file_bytes: u64) -> Result<LasPoints, String> {
+fn decode(reader: &mut Reader, file_bytes: u64, told: &dyn Fn(u64)) -> Result<LasPoints, String> {
     let header = reader.header();
     let expected = header.number_of_points();
     let has_rgb = header.point_format().has_color;
@@ -223,7 +229,13 @@ fn decode(reader: &mut Reader, file_bytes: u64) -> Result<LasPoints, String> {
         return_number: Vec::with_capacity(n),
         number_of_returns: Vec::with_capacity(n),
     };
+    // The file's bytes up to the points decoded so far: ⌊file_bytes · decoded / expected⌋.
+    let bytes_to = |decoded: usize| {
+        let decoded = (decoded as u64).min(expected);
+        (file_bytes as u128 * decoded as u128 / expected.max(1) as u128) as u64
+    };
     while (points.xyz.len() as u64) < expected {
+        let before = points.xyz.len();
         let n = fill_contained(reader, batch_points, &mut batch).map_err(|e| {
             format!(
                 "the header announces {expected} points; decoding failed after {} ({e}): \
@@ -248,6 +260,7 @@ fn decode(reader: &mut Reader, file_bytes: u64) -> Result<LasPoints, String> {
         points.classification.extend(batch.classification());
         points.return_number.extend(batch.return_number());
         points.number_of_returns.extend(batch.number_of_returns());
+        told(bytes_to(points.xyz.len()) - bytes_to(before));
     }
     Ok(points)
 }

@@ -156,6 +156,9 @@ fn declared(e: &Element) -> String {
     names.join(" ")
 }
 
+/// Rows between two tellings of the bytes decoded.
+const TOLD_ROWS: u64 = 1 << 14;
+
 /// The decoded parts of an ASCII payload.
 pub struct Decoded {
     pub vertices: ColumnRows,
@@ -165,9 +168,9 @@ pub struct Decoded {
 /// Decodes the vertex and face elements of an ASCII payload; skips the others.
 pub fn decode(
     data: &[u8],
-    header: &Header,
-    plan: &Plan,
+    (header, plan): (&Header, &Plan),
     first_line: usize,
+    told: &dyn Fn(u64),
 ) -> Result<Decoded, Problem> {
     let mut tokens = Tokens {
         data,
@@ -181,6 +184,7 @@ pub fn decode(
     let mut columns = vec![Vec::with_capacity(bound(vertex_count)); fields.len()];
     let mut faces = None;
     let mut values = Vec::new();
+    let mut reported = 0;
     let needed = plan
         .faces
         .map_or(plan.vertex_element, |(f, _)| f.max(plan.vertex_element));
@@ -194,6 +198,10 @@ pub fn decode(
         let mut element_faces = face_list.map(|_| Faces::with_capacity(bound(e.count)));
         let mut indices = Vec::new();
         for row in 0..e.count {
+            if row % TOLD_ROWS == 0 {
+                told((tokens.pos - reported) as u64);
+                reported = tokens.pos;
+            }
             tokens.row(e, row, &mut values, |pi, v| {
                 if ei == plan.vertex_element {
                     for (f, field) in fields.iter().enumerate() {
@@ -221,6 +229,8 @@ pub fn decode(
                     .map_err(|p| p.at_line(tokens.line))?;
             }
         }
+        told((tokens.pos - reported) as u64);
+        reported = tokens.pos;
         if element_faces.is_some() {
             faces = element_faces;
         }

@@ -4,9 +4,9 @@
 use std::path::Path;
 
 use super::fields::Plan;
-use super::{Header, PlyStream, read_ply};
+use super::{Header, PlyStream, read_ply_telling};
 use crate::io::format::PointBatch;
-use crate::io::format::{Format, PointStream};
+use crate::io::format::{Format, PointStream, Told};
 use crate::io::model::{ElementSummary, Model, ModelError, Summary};
 use crate::io::up::UpAxis;
 
@@ -18,8 +18,8 @@ impl Format for PlyFormat {
         head.starts_with(b"ply")
     }
 
-    fn read(&self, path: &Path) -> Result<Model, ModelError> {
-        let m = read_ply(path)?;
+    fn read(&self, path: &Path, told: Told) -> Result<Model, ModelError> {
+        let m = read_ply_telling(path, told)?;
         Ok(Model {
             summary: summary(&m.header),
             geometry: m.geometry,

@@ -42,6 +42,11 @@ pub struct PlyModel {
 /// Reads a PLY file. Errors name the file and, where they can, the header line or the
 /// element and row at fault.
 pub fn read_ply(path: &Path) -> Result<PlyModel, PlyError> {
+    read_ply_telling(path, &|_| {})
+}
+
+/// [`read_ply`], telling `told` the file's bytes as they are decoded.
+pub fn read_ply_telling(path: &Path, told: &dyn Fn(u64)) -> Result<PlyModel, PlyError> {
     let start = Instant::now();
     let io_err = |e: std::io::Error| Problem::file(format!("cannot read: {e}")).in_file(path);
     let file = std::fs::File::open(path).map_err(io_err)?;
@@ -52,7 +57,7 @@ pub fn read_ply(path: &Path) -> Result<PlyModel, PlyError> {
     // SAFETY: the map is only read, and only for the duration of this call; a file that
     // another process truncates meanwhile is outside what a reader can guard against.
     let map = unsafe { memmap2::MmapOptions::new().populate().map(&file) }.map_err(io_err)?;
-    let (header, geometry, stats) = parse(&map).map_err(|p| p.in_file(path))?;
+    let (header, geometry, stats) = parse(&map, told).map_err(|p| p.in_file(path))?;
     Ok(PlyModel {
         header,
         geometry,
@@ -62,10 +67,13 @@ pub fn read_ply(path: &Path) -> Result<PlyModel, PlyError> {
     })
 }
 
-/// Parses a whole PLY file held in memory.
-pub(crate) fn parse(bytes: &[u8]) -> Result<(Header, Geometry, GeometryStats), Problem> {
+/// Parses a whole PLY file held in memory, telling `told` the bytes decoded: the
+/// header's, then an ASCII payload's row by row, or a binary one's once decoded whole
+/// (its decoding takes little beside the read of the file).
+fn parse(bytes: &[u8], told: &dyn Fn(u64)) -> Result<(Header, Geometry, GeometryStats), Problem> {
     let header = header::parse_header(bytes)?;
     let plan = Plan::new(&header)?;
+    told(header.payload_offset as u64);
     let payload = &bytes[header.payload_offset..];
     let (geometry, stats) = match header.encoding {
         Encoding::Ascii => {
@@ -74,11 +82,12 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<(Header, Geometry, GeometryStats), P
                 .filter(|&&b| b == b'\n')
                 .count()
                 + 1;
-            let d = ascii::decode(payload, &header, &plan, first_line)?;
+            let d = ascii::decode(payload, (&header, &plan), first_line, told)?;
             assemble(&d.vertices, &plan.vertex_fields, d.faces)
         }
         Encoding::BinaryLittleEndian | Encoding::BinaryBigEndian => {
             let d = binary::decode(payload, &header, &plan)?;
+            told(payload.len() as u64);
             match d.vertices {
                 binary::VertexSource::Fixed(rows) => assemble(&rows, &plan.vertex_fields, d.faces),
                 binary::VertexSource::Columns(rows) => {
