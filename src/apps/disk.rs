@@ -12,11 +12,12 @@ use crate::io::disk_space::available_bytes;
 pub const FILE_BYTES_PER_POINT: u64 = 97;
 
 /// The disk an out-of-core build takes beside its output at its peak, per input point:
-/// the job inputs and the parts once every job is built (the join then removes the
-/// inputs and frees each part's bytes as it writes them into the file). Measured
-/// 2026-12-04, blocks held: 112.6 bytes a point for the LiDAR tile, 114.0 for the
-/// cloud, 137.9 for the mesh (1.17, 1.27 and 1.53 times the file; 2.17, 2.24 and 2.61
-/// with the parts and the file both whole).
+/// the parts and the job inputs not yet built, then the file as the join writes it and
+/// frees each part's bytes. Measured 2026-12-04 (blocks held, `tools/peak_disk.sh`):
+/// 112.8 bytes a point for a 20 M-point LiDAR tile, 98.1 for the Lucy-size cloud,
+/// 86–124 for a 3 M-vertex mesh (1.17, 1.09 and 0.95–1.38 times the file; with the
+/// job inputs kept until the join 117.5, 106.4 and 113–127; with the parts and the
+/// file both whole, 2.17, 2.24 and 2.61 times the file).
 pub const OUT_OF_CORE_BYTES_PER_POINT: u64 = 140;
 
 /// Says on standard output (when `loud`) how much `what` takes in `dir` at its peak,

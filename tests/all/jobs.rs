@@ -2,7 +2,8 @@
 //! functions under them): the same file as one process, byte for byte, whatever the
 //! order of the jobs; a job run twice writes the same bytes; a truncated part is refused
 //! by the join and built again; a damaged job input is refused by its checksum; a join
-//! that needs another error scale asks for the parts again (exit 3).
+//! that needs another error scale asks for the parts again (exit 3). `spt convert`
+//! removes each job's inputs as its part is built, and its parts as the join reads them.
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -330,4 +331,59 @@ fn a_join_that_frees_its_parts_writes_the_same_file_and_leaves_no_job_input() {
         return;
     }
     assert!(after * 4 < before, "{after} of {before} bytes left");
+}
+
+/// The job inputs in the build directories under `dir` (`spt-build-*`): files named
+/// `jobN.KIND` other than parts and their records.
+fn job_inputs_under(dir: &Path) -> usize {
+    let builds = std::fs::read_dir(dir).unwrap().flatten();
+    let builds = builds.filter(|e| e.file_name().to_string_lossy().starts_with("spt-build-"));
+    let files = builds.flat_map(|b| std::fs::read_dir(b.path()).unwrap().flatten());
+    files
+        .filter(|f| {
+            let name = f.file_name().to_string_lossy().into_owned();
+            name.starts_with("job") && !name.contains(".part")
+        })
+        .count()
+}
+
+/// Counts the job inputs left under `dir` each time a job of the build ends.
+struct InputsLeft<'a> {
+    dir: &'a Path,
+    building: Mutex<bool>,
+    left: Mutex<Vec<usize>>,
+}
+
+impl Progress for InputsLeft<'_> {
+    fn stage(&self, name: &'static str, _: u64) {
+        *self.building.lock().unwrap() = name == "build";
+    }
+    fn advance(&self, _: u64) {
+        if *self.building.lock().unwrap() {
+            self.left.lock().unwrap().push(job_inputs_under(self.dir));
+        }
+    }
+}
+
+#[test]
+fn spt_convert_removes_each_job_s_inputs_once_its_part_is_built() {
+    let dir = common::temp_dir();
+    let input = dir.path().join("tile.las");
+    std::fs::write(&input, common::las_files::sample(64 * 400, false)).unwrap();
+    let temp = dir.path().join("temp");
+    std::fs::create_dir(&temp).unwrap();
+    let heard = InputsLeft {
+        dir: &temp,
+        building: Mutex::new(false),
+        left: Mutex::new(Vec::new()),
+    };
+    let output = dir.path().join("tile.spt");
+    build_file(&input, &output, &options(&temp), &heard).unwrap();
+    let left = heard.left.into_inner().unwrap();
+    // Each job's inputs are gone by the time it is told done (two run at once, so two
+    // may go between two tellings): the count falls to none, from some left when the
+    // first job ends.
+    assert!(left.len() >= 8, "{} jobs", left.len());
+    assert!(left.windows(2).all(|w| w[1] <= w[0]), "{left:?}");
+    assert!(left[0] > 0 && *left.last().unwrap() == 0, "{left:?}");
 }

@@ -148,7 +148,10 @@ pub trait Progress: Sync {
 
 /// Builds the `.spt` file of the model `input` (a LAS, LAZ or PLY cloud, or a PLY
 /// mesh) at `output` within `options`: the three steps in one process, in a temporary
-/// job directory.
+/// job directory. Each job's inputs are removed once its part is built, and the join
+/// frees each part's blocks as it copies them, so the directory never holds the inputs,
+/// the parts and the file whole together; where the join sends the jobs back, the
+/// input is planned again ([`plan::plan_again`]).
 pub fn build_file(
     input: &Path,
     output: &Path,
@@ -171,17 +174,22 @@ pub fn build_file(
             progress,
         )? {
             Joined::Written(built) => return Ok(built),
-            Joined::Rebuild(reason) => progress.rebuild(&reason),
+            Joined::Rebuild(reason) => {
+                progress.rebuild(&reason);
+                plan::plan_again(input, dir.path(), options, progress)?;
+            }
         }
     }
 }
 
 /// Runs every job of `manifest` (in `dir`), [`LANES`] at a time ([`in_lanes`]), the
-/// memory each frees given back as [`heap::give_back_freed_memory`] decides.
+/// memory each frees given back as [`heap::give_back_freed_memory`] decides, and its
+/// inputs removed once it has read them.
 fn run_jobs(dir: &Path, manifest: &Manifest, progress: &dyn Progress) -> anyhow::Result<()> {
     let all: Vec<usize> = (0..manifest.jobs.len()).collect();
     in_lanes(&all, &|j, behind| {
         run_job::run_behind(dir, manifest, j, Check::Sizes, behind)?;
+        plan::remove_job_inputs(dir, &manifest.jobs[j])?;
         heap::give_back_freed_memory();
         progress.advance(manifest.jobs[j].points);
         Ok(())

@@ -125,6 +125,25 @@ pub fn plan(
     Ok(Planned::New(manifest))
 }
 
+/// Plans `input` in `dir` again with the build parameters that the join wrote into its
+/// manifest, for a build that removed each job's inputs once its part was built
+/// (`spt convert`) and must build every job again: the same input and options give the
+/// same jobs and files.
+pub fn plan_again(
+    input: &Path,
+    dir: &Path,
+    options: &Options,
+    progress: &dyn Progress,
+) -> anyhow::Result<()> {
+    let build = Manifest::read(dir)?.build;
+    // Without its manifest the directory holds no plan to keep: the input is read again.
+    let path = Manifest::path(dir);
+    std::fs::remove_file(&path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let (Planned::New(mut m) | Planned::Kept(mut m)) = plan(input, dir, options, progress)?;
+    m.build = build;
+    m.write(dir)
+}
+
 /// A file's modification time in nanoseconds since the Unix epoch; 0 where unknown.
 fn modified_nanos(metadata: &std::fs::Metadata) -> u64 {
     let since = |t: std::time::SystemTime| t.duration_since(std::time::UNIX_EPOCH).ok();
@@ -157,6 +176,11 @@ pub fn remove_files(dir: &Path, m: &Manifest) -> anyhow::Result<()> {
 /// Removes the jobs' inputs of the plan in `dir`.
 pub fn remove_inputs(dir: &Path, m: &Manifest) -> anyhow::Result<()> {
     remove_named(dir, input_names(m))
+}
+
+/// Removes the input files of `job` (of the plan in `dir`).
+pub fn remove_job_inputs(dir: &Path, job: &JobEntry) -> anyhow::Result<()> {
+    remove_named(dir, job.files.iter().map(|f| f.name.clone()))
 }
 
 /// The names of the jobs' input files.
