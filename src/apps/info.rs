@@ -8,15 +8,17 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::apps::progress::{BYTES, Stage};
 use crate::apps::stats::peak_memory_bytes;
 use crate::apps::text::{bytes, count, readable};
-use crate::io::formats::read_model;
+use crate::io::formats::read_model_telling;
 use crate::io::las::LasSummary;
 use crate::io::model::{ElementSummary, Model, Summary};
 use crate::io::rebase::MAX_OFFSET;
 use crate::io::{Bounds, GeometryStats};
 use crate::surfel::outward::{OPEN_AREA, Sides};
-use crate::surfel::{LeafSurfels, NormalsTurned, SurfelStats, leaf_surfels};
+use crate::surfel::progress::Progress;
+use crate::surfel::{LeafSurfels, NormalsTurned, SurfelStats, leaf_surfels_with_progress};
 use crate::tree::spt_file::{SptFile, is_spt};
 use crate::tree::{NodeRecord, TreeMeta};
 
@@ -124,10 +126,18 @@ pub struct ModelInfo {
 }
 
 impl ModelInfo {
+    /// Reads `path` and makes its leaf surfels, with a bar for each on a terminal
+    /// (stderr; the report is printed on stdout).
     pub fn gather(path: &Path) -> anyhow::Result<ModelInfo> {
-        let model: Model = read_model(path)?;
+        let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+        let read = Stage::start("read", bytes, BYTES);
+        let model: Model = read_model_telling(path, &|n| read.advance(n))?;
+        read.clear();
         let start = Instant::now();
-        let leaves: LeafSurfels = leaf_surfels(&model.geometry);
+        let made = Stage::start("surfels", model.geometry.positions.len() as u64, "samples");
+        let done = |n: u64| made.advance(n);
+        let leaves: LeafSurfels = leaf_surfels_with_progress(&model.geometry, Progress::to(&done));
+        made.clear();
         let surfels_seconds = start.elapsed().as_secs_f64();
         let (radius_min, radius_median, radius_max) = leaves.radius_range().unwrap_or_default();
         let load_seconds = model.load_time.as_secs_f64();

@@ -66,6 +66,12 @@ impl Stage {
         self.bar.set_position(done);
     }
 
+    /// Ends the stage without a line: its bar cleared, for a command whose standard
+    /// output is a report of its own.
+    pub fn clear(&self) {
+        self.bar.finish_and_clear();
+    }
+
     /// Seconds since the stage started.
     pub fn seconds(&self) -> f64 {
         self.start.elapsed().as_secs_f64()
