@@ -165,7 +165,8 @@ pub struct Decoded {
     pub faces: Option<Faces>,
 }
 
-/// Decodes the vertex and face elements of an ASCII payload; skips the others.
+/// Decodes the vertex and face elements of an ASCII payload; skips the others. Tells
+/// `told` the payload's bytes decoded, every [`TOLD_ROWS`] rows and at each element's end.
 pub fn decode(
     data: &[u8],
     (header, plan): (&Header, &Plan),
