@@ -13,7 +13,7 @@ use crate::apps::text::{count, walls};
 use crate::apps::{convert_large, disk};
 use crate::io::GeometryStats;
 use crate::io::PointAttributes;
-use crate::io::atomic::check_writable;
+use crate::io::atomic::{check_writable, folder_of};
 use crate::surfel::shape::SplatShape;
 use crate::tree::NodeRecord;
 use crate::tree::report::{Finished, Report, Step};
@@ -127,12 +127,7 @@ pub fn run_either(
         convert_large::run(input, (output, points), memory)
     } else {
         let needed = points.saturating_mul(disk::FILE_BYTES_PER_POINT);
-        disk::say_room(
-            crate::io::atomic::folder_of(output),
-            needed,
-            "the .spt file",
-            false,
-        );
+        disk::say_room(folder_of(output), needed, "the .spt file", false);
         run(input, output)
     }
 }

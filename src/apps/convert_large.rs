@@ -10,6 +10,7 @@ use std::time::Instant;
 use crate::apps::disk;
 use crate::apps::progress::{Stage, total_line};
 use crate::apps::text::{count, walls};
+use crate::io::atomic::folder_of;
 use crate::io::formats::ModelStream;
 use crate::io::heap;
 use crate::tree::out_of_core::{BYTES_PER_JOB_POINT, Built, Options, Progress, build_file};
@@ -120,7 +121,7 @@ impl Progress for Bars {
 /// The options for a budget of `memory` bytes, the job files beside `output`; says the
 /// budget and the jobs' size.
 pub fn options(output: &Path, memory: u64) -> Options {
-    let temp_dir = crate::io::atomic::folder_of(output).to_owned();
+    let temp_dir = folder_of(output).to_owned();
     let options = Options::for_memory(memory, temp_dir);
     say!(
         "out of core: budget {:.2} GiB, jobs of at most {} points ({} bytes per point)",
