@@ -107,6 +107,8 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // Before any thread starts: an out-of-core build's jobs reuse what each other frees.
+    spt::io::heap::share_one_heap();
     // The LAZ decoder's threads get deep stacks (spt::io::las::DECODER_STACK); the
     // pool is not made yet, so this cannot fail.
     let _ = spt::io::las::use_decoder_stacks();

@@ -132,12 +132,33 @@ pub fn total_line(total: f64, points: u64) -> String {
     )
 }
 
+/// Wall times shorter than this say nothing of the threads busy: the CPU clock counts in
+/// ticks of the scheduler, and a stage of a few milliseconds read "2.3 of 2 threads".
+const MIN_BUSY_WALL_S: f64 = 0.1;
+
 /// "; 22.1 CPU-s, 1.9 of 2 threads busy": `cpu` seconds of CPU over `wall` seconds, and
-/// the threads of the pool that the parallel work runs on.
+/// the threads of the pool that the parallel work runs on; the CPU time alone where
+/// `wall` is under [`MIN_BUSY_WALL_S`].
 fn busy_threads(cpu: f64, wall: f64) -> String {
+    if wall < MIN_BUSY_WALL_S {
+        return format!("; {cpu:.1} CPU-s");
+    }
     format!(
         "; {cpu:.1} CPU-s, {:.1} of {} threads busy",
         cpu / wall.max(1e-9),
         rayon::current_num_threads()
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn threads_busy_are_told_only_over_a_measurable_wall_time() {
+        assert_eq!(busy_threads(0.03, 0.01), "; 0.0 CPU-s");
+        let told = busy_threads(3.6, 2.0);
+        assert!(told.starts_with("; 3.6 CPU-s, 1.8 of "), "{told}");
+        assert!(told.ends_with(" threads busy"), "{told}");
+    }
 }
