@@ -25,9 +25,10 @@ static KEEP_UP_TO: AtomicU64 = AtomicU64::new(0);
 /// with, where what any thread frees can serve any other. glibc fixes a thread's
 /// arena at its first allocation, so call it before any other thread starts: before
 /// rayon's pool is built (the pool's threads allocate as they start). On its own it
-/// changes nothing measurable in an in-memory build (the Lucy-size cloud: 18.86–18.91
-/// s against 18.90–19.48 s, the same 2.02 GiB peak and 1.36 M faults, alternated; 2
-/// Intel Xeon cores, 2026-12-04), whose large lists glibc maps one by one anyway.
+/// changes nothing measurable in an in-memory build, whose large lists glibc maps one
+/// by one anyway (the Lucy-size cloud: 18.90–19.48 s with one arena against
+/// 18.86–18.91 s with glibc's arenas, the same 2.02 GiB peak and 1.36 M faults,
+/// alternated; 2 Intel Xeon cores, 2026-12-04).
 pub fn share_one_heap() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: mallopt only sets the allocator's parameters; the value is in range.
