@@ -145,7 +145,7 @@ fn busy_threads(cpu: f64, wall: f64) -> String {
     }
     format!(
         "; {cpu:.1} CPU-s, {:.1} of {} threads busy",
-        cpu / wall.max(1e-9),
+        cpu / wall,
         rayon::current_num_threads()
     )
 }
