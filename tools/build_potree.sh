@@ -13,8 +13,13 @@ mkdir -p "$root"
 if [ -n "${POTREE_SRC:-}" ]; then
   rm -rf "$root/src" && mkdir -p "$root/src"
   if [ -d "$POTREE_SRC/.git" ] || git -C "$POTREE_SRC" rev-parse --git-dir > /dev/null 2>&1; then
-    # What the build reads (a snapshot may lack the web viewer's large files).
-    git -C "$POTREE_SRC" archive HEAD CMakeLists.txt Converter LICENSE README.md | tar -x -C "$root/src"
+    # What the build reads, and no more: a snapshot may lack the web viewer's large
+    # files, and `git archive HEAD <paths>` fails on them even when they are not asked
+    # for, so the one folder is archived from its own tree and the files shown.
+    git -C "$POTREE_SRC" archive --prefix=Converter/ HEAD:Converter | tar -x -C "$root/src"
+    for f in CMakeLists.txt LICENSE README.md; do
+      git -C "$POTREE_SRC" show "HEAD:$f" > "$root/src/$f"
+    done
   else
     cp -r "$POTREE_SRC"/. "$root/src"
   fi
